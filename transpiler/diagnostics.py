@@ -1,0 +1,212 @@
+"""Diagnostics: source spans, the registry of diagnostic codes, and the collector every stage reports into."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from typing import Iterable
+
+
+class Severity(enum.Enum):
+    ERROR = "error"
+    WARNING = "warning"
+    NOTE = "note"
+
+
+@dataclasses.dataclass(frozen=True, order=True)
+class Span:
+    """A position in an original source file (1-based line and column)."""
+
+    file: str
+    line: int
+    col: int = 1
+    end_line: int = 0
+    end_col: int = 0
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
+
+
+NO_SPAN = Span("<command line>", 1, 1)
+
+
+@dataclasses.dataclass(frozen=True)
+class CodeInfo:
+    """What a diagnostic code means, its default severity, and a small example that triggers it."""
+
+    code: str
+    severity: Severity
+    summary: str
+    example: str = ""
+
+
+def _c(code: str, sev: str, summary: str, example: str = "") -> CodeInfo:
+    return CodeInfo(code, Severity(sev), summary, example)
+
+
+# The one registry of diagnostic codes (spec sections 1-17b plus the tool's own).
+CODES: dict[str, CodeInfo] = {
+    info.code: info
+    for info in (
+        # preprocessor and configuration
+        _c("E-PP-NEST", "error", "unbalanced #if/#else/#endif", "#if A = 1\nL I1\n; missing #endif"),
+        _c("E-PP-UNDEF", "warning", "#if tests a DEFINE name that is not defined (compares as the empty string)",
+           '#if CFG_NOT_SET = "x"\n#endif'),
+        _c("E-PP-UNDEF-REF", "warning", "&name refers to an undefined DEFINE; it evaluates to the string \"name\"",
+           "DEFINE A = &undefined_name"),
+        _c("E-PP-SYNTAX", "error", "malformed preprocessor directive", "#if = 3"),
+        _c("E-DEF-REDEFINE", "warning", "a DEFINE is defined again; the later value wins", "DEFINE A = 1\nDEFINE A = 2"),
+        _c("E-CFG-SYNTAX", "error", "malformed configuration line (a DEFINE value that is not a string, integer, %binary, $hex or &name is an error; free text is a warning)",
+           "DEFINE A = 1.5"),
+        _c("E-MP-VALUE", "error", "malformed machine-parameter line or value", "MP4110.0 : fast"),
+        # files
+        _c("E-FILE-NOT-FOUND", "error", "a file named by the command line, USES, #define or INCLUDE does not exist",
+           "USES missing_module.src"),
+        _c("E-FILE-ESCAPE", "error", "a file path leaves the project folders (.., absolute path or symlink)",
+           "USES ../outside.src"),
+        _c("E-FILE-READ", "error", "a file could not be read", ""),
+        _c("E-FILE-INCLUDE-CYCLE", "error", "a file includes itself (directly or indirectly)", 'INCLUDE "self.src"'),
+        # lexical and syntax
+        _c("E-SYNTAX", "error", "the line is not a valid instruction, directive or definition", "L I1 I2"),
+        _c("E-UNSUPPORTED", "error", "a construct that hh2iec does not support (first word is no mnemonic, directive or label; structured symbols)",
+           "ERROR_MACRO 12"),
+        _c("E-LIT-RANGE", "error", "a literal does not fit in 32 bits", "L K4294967296"),
+        _c("E-MOD-UNREACHABLE", "warning", "executable statement in a module file before its first LBL (never executed)",
+           "GLOBAL Fn\nL I1\nLBL Fn\nEM"),
+        # operands and addresses
+        _c("E-OPERAND-KIND", "error", "the operand kind is not allowed for this instruction", "L K5\n= K6"),
+        _c("E-ADDR-RANGE", "error", "operand address outside the profile's range", "L M99999"),
+        _c("E-ADDR-ALIGN", "error", "W address not even or D address not a multiple of 4", "L W3"),
+        # symbols and labels
+        _c("E-SYM-UNDEF", "error", "unknown symbol", "L I_not_defined"),
+        _c("E-SYM-RESERVED", "error", "a .def symbol name is literal operand syntax", "M12 M"),
+        _c("E-SYM-DUP", "error", "a symbol is defined twice with different meanings", "A_x M 1\nA_x M 2"),
+        _c("E-SYM-CASE", "warning", "two symbols or labels differ only in case (IEC names are case-insensitive)",
+           "MG_a M 1\nMG_A M 2"),
+        _c("E-SYM-DUP-LABEL", "error", "a label is defined twice in one file", "LBL A\nEM\nLBL A\nEM"),
+        _c("E-SYM-GLOBAL-UNDEF", "error", "GLOBAL names a label that the file does not define", "GLOBAL Fn"),
+        _c("E-SYM-UNRESOLVED", "error", "a called label is neither in the file nor imported with EXTERN from a GLOBAL export",
+           "CM Fn_in_other_file"),
+        _c("E-SYM-DUP-GLOBAL", "error", "two files export the same label with GLOBAL", ""),
+        _c("E-DEF-DUP-ADDR", "warning", "two symbols name the same operand without /c", "I_a I 5\nI_b I 5"),
+        _c("E-DEF-ALIAS", "error", "an & alias names an unknown symbol or one of another kind", "M_x M &I_y"),
+        _c("E-DEF-POOL", "error", "no free operand left for an auto-assigned symbol", ""),
+        # structure
+        _c("E-BRACKET-DEPTH", "error", "brackets nested deeper than 16", ""),
+        _c("E-BRACKET-BALANCE", "error", "unbalanced bracket", "L I1\nA[\nL I2\nEM"),
+        _c("E-BRACKET-MODE", "error", "bracket in the wrong accumulator mode (string, or arithmetic/compare after a logic instruction)",
+           "L I1\n+[\nL K1\n]"),
+        _c("E-BRACKET-SPAN", "error", "label, jump, call, EM, CASE or structured keyword inside a bracket", "L I1\nA[\nJP X\n]"),
+        _c("E-STRUCT-NEST", "error", "structured statements (IFT/IFF/ELSE/ENDI, WHILE/ENDW, REPEAT/UNTIL) do not nest properly",
+           "ELSE"),
+        _c("E-CASE-BODY", "error", "something other than CM label inside CASE ... ENDC", "CASE B0\nL I1\nENDC"),
+        _c("E-KF-PLACEMENT", "error", "KFIELD not directly after an unconditional EM or JP", "L I1\nKFIELD T\nK1\nENDK"),
+        _c("E-JUMP-SCOPE", "error", "jump to a label of another file or an unknown label", "JP Nowhere"),
+        _c("E-FALL-OFF-END", "error", "a path reaches the end of the file without EM", "L I1\n= O1"),
+        _c("E-CALL-RECURSION", "error", "recursive subprogram calls", "LBL A\nCM A\nEM"),
+        _c("E-CALL-DEPTH", "error", "static call depth exceeds the limit", ""),
+        _c("E-MODULE-UNKNOWN", "warning", "a PLC module number without a model; it runs as a stub (A-46)", "CM 9999"),
+        # lints
+        _c("W-LINT", "warning", "the program depends on a corner of the semantics (spec [LINT])", "L I1\n= O1\nA I2"),
+        # runtime (interpreter)
+        _c("E-RT-STACK-OVERFLOW", "error", "data stack overflow", ""),
+        _c("E-RT-STACK-UNDERFLOW", "error", "data stack underflow", "PL D0\nEM"),
+        _c("E-RT-INDEX", "error", "indexed operand or KF index out of range", ""),
+        _c("E-RT-ALIGN", "error", "indexed W/D address misaligned", ""),
+        _c("E-RT-CALL-DEPTH", "error", "call depth exceeded at run time", ""),
+        _c("E-RT-WATCHDOG", "error", "instruction budget of one cycle exceeded", "LBL L\nJP L"),
+        _c("E-RT-STRING", "warning", "string result longer than 128 characters (truncated)", ""),
+        _c("E-RT-MODULE", "error", "PLC module without simulation model", ""),
+        _c("E-RT-STACK-LEFTOVER", "warning", "data stack not empty at the end of a cycle", "PS K1\nEM"),
+        _c("E-SIM-HANDSHAKE-TIMEOUT", "error", "the PLC did not acknowledge an NC strobe within 10 s", ""),
+        # scenarios and tool
+        _c("E-SCENARIO", "error", "malformed scenario file (unknown key, unknown name, value out of range)", "cycles: -1"),
+        _c("E-ST-PARSE", "error", "the ST file could not be parsed by the built-in ST executor", ""),
+        _c("E-TOOL", "error", "internal tool error or missing tool (a bug in hh2iec or a missing dependency)", ""),
+        _c("E-USAGE", "error", "bad command-line usage", ""),
+        _c("E-XSD", "error", "emitted PLCopen XML does not validate against the TC6 schema (a bug in hh2iec)", ""),
+    )
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Diagnostic:
+    code: str
+    severity: Severity
+    span: Span
+    message: str
+    notes: tuple[str, ...] = ()
+
+    def render(self) -> str:
+        text = f"{self.span}: {self.severity.value}[{self.code}]: {self.message}"
+        for note in self.notes:
+            text += f"\n  note: {note}"
+        return text
+
+
+class CompileFailed(Exception):
+    """Raised by a stage that cannot continue; carries every diagnostic collected so far."""
+
+    def __init__(self, diagnostics: Iterable[Diagnostic]):
+        self.diagnostics = list(diagnostics)
+        super().__init__("\n".join(d.render() for d in self.diagnostics))
+
+
+class Diagnostics:
+    """Collects diagnostics of one run; suppresses exact duplicates so that one fault yields one message."""
+
+    def __init__(self, warnings_as_errors: bool = False) -> None:
+        self._items: list[Diagnostic] = []
+        self._seen: set[tuple[str, Span, str]] = set()
+        self.warnings_as_errors = warnings_as_errors
+
+    def report(self, code: str, span: Span, message: str, *notes: str, severity: Severity | None = None) -> None:
+        info = CODES.get(code)
+        if info is None:
+            raise KeyError(f"unregistered diagnostic code {code}")
+        sev = severity or info.severity
+        key = (code, span, message)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        self._items.append(Diagnostic(code, sev, span, message, tuple(notes)))
+
+    def error(self, code: str, span: Span, message: str, *notes: str) -> None:
+        self.report(code, span, message, *notes, severity=Severity.ERROR)
+
+    def warning(self, code: str, span: Span, message: str, *notes: str) -> None:
+        self.report(code, span, message, *notes, severity=Severity.WARNING)
+
+    def extend(self, items: Iterable[Diagnostic]) -> None:
+        for d in items:
+            self.report(d.code, d.span, d.message, *d.notes, severity=d.severity)
+
+    @property
+    def items(self) -> list[Diagnostic]:
+        return sorted(self._items, key=lambda d: (d.span.file, d.span.line, d.span.col, d.code))
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.items if d.severity is Severity.ERROR]
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        return [d for d in self.items if d.severity is Severity.WARNING]
+
+    def has_errors(self) -> bool:
+        return any(d.severity is Severity.ERROR for d in self._items)
+
+    def raise_if_errors(self) -> None:
+        if self.has_errors():
+            raise CompileFailed(self.items)
+
+
+def explain(code: str) -> str | None:
+    """Text for `hh2iec explain CODE`: meaning, severity and a small failing example."""
+    info = CODES.get(code.upper())
+    if info is None:
+        return None
+    text = f"{info.code} ({info.severity.value}): {info.summary}\n"
+    if info.example:
+        text += "\nExample:\n" + "".join(f"    {line}\n" for line in info.example.splitlines())
+    return text
