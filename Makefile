@@ -1,0 +1,40 @@
+# hh2iec — every target sets itself up: a local venv with every dependency from the package registry.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+SAMPLE := samples/basic_program
+OUT := out/basic_program
+
+.PHONY: all venv shim test demo bench fuzz mutants difftest clean
+
+all: test
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+shim:
+	$(MAKE) -C runtime_shim lib
+
+test: venv shim
+	$(MAKE) -C runtime_shim test
+	$(PY) -m pytest -q
+
+demo: venv shim
+	$(VENV)/bin/hh2iec check $(SAMPLE)/Main_PGM.src
+	$(VENV)/bin/hh2iec transpile $(SAMPLE)/Main_PGM.src --out $(OUT)
+	$(VENV)/bin/hh2iec equiv $(SAMPLE)/Main_PGM.src --scenario $(SAMPLE)/scenarios/spindle_m3_m5.yaml --random-cycles 500 --seed 1
+
+bench: venv shim
+	$(PY) -m tests.bench
+
+fuzz: venv
+	$(PY) -m tests.fuzz --mutations 10000
+
+clean:
+	rm -rf out build runtime_shim/build .pytest_cache

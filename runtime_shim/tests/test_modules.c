@@ -1,0 +1,295 @@
+/* test_modules.c - unit tests of the module table, the module models and the 9006 timers. */
+#include <string.h>
+
+#include "hh_modules.h"
+#include "hh_test.h"
+
+static int32_t results[HH_MODULE_MAX_RESULTS];
+static int32_t code;
+
+static int call(hh_sys *sys, int32_t number, int32_t p0, int32_t p1, int32_t p2)
+{
+    int32_t params[3];
+    params[0] = p0;
+    params[1] = p1;
+    params[2] = p2;
+    memset(results, 0x5a, sizeof results); /* garbage a model must overwrite */
+    code = -99;
+    return hh_module_call(sys, number, params, results, &code);
+}
+
+static void module_table(void)
+{
+    static const int32_t rows[][4] = {
+        /* number, kind, nparams, nresults */
+        {9006, HH_MODULE_MODELLED, 1, 0}, {9031, HH_MODULE_MODELLED, 3, 1},
+        {9032, HH_MODULE_MODELLED, 2, 1}, {9035, HH_MODULE_MODELLED, 1, 1},
+        {9036, HH_MODULE_MODELLED, 2, 1}, {9192, HH_MODULE_MODELLED, 1, 1},
+        {9195, HH_MODULE_MODELLED, 0, 1}, {9040, HH_MODULE_STUB, 2, 0},
+        {9094, HH_MODULE_STUB, 4, 1},     {9097, HH_MODULE_STUB, 2, 1},
+        {9042, HH_MODULE_STUB, 0, 0},     {9194, HH_MODULE_STUB, 0, 0},
+        {9999, HH_MODULE_UNKNOWN, 0, 0},  {0, HH_MODULE_UNKNOWN, 0, 0},
+    };
+    size_t i;
+    int32_t k, seen_9429 = 0;
+    for (i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        int32_t np = -1, nr = -1;
+        CHECK_EQ(hh_module_info(rows[i][0], &np, &nr), rows[i][1]);
+        CHECK_EQ(np, rows[i][2]);
+        CHECK_EQ(nr, rows[i][3]);
+    }
+    CHECK(strlen(hh_module_purpose(9192)) > 0);
+    CHECK_EQ(strlen(hh_module_purpose(9999)), 0);
+    for (k = 0; k < hh_module_count(); k++) {
+        CHECK(hh_module_info(hh_module_number_at(k), NULL, NULL) != HH_MODULE_UNKNOWN);
+        seen_9429 |= hh_module_number_at(k) == 9429;
+    }
+    CHECK(seen_9429);
+}
+
+static void unknown_and_stub_calls(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    CHECK_EQ(call(sys, 9999, 0, 0, 0), -1);
+    CHECK_EQ(code, 0);
+    CHECK_EQ(call(sys, 9094, 1, 2, 3), 0); /* stub rule A-46: results 0, no error */
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(code, 0);
+    hh_sys_free(sys);
+}
+
+/* Runs phase 3 for the additional timers, returning the running bit of T96 as written. */
+static int32_t service_t96(hh_sys *sys)
+{
+    hh_write out[HH_EXTRA_TIMER_COUNT];
+    int n = hh_sys_service(sys, out, HH_EXTRA_TIMER_COUNT);
+    CHECK(n >= 1);
+    CHECK(out[0].kind == 'T' && out[0].addr == 96);
+    CHECK_EQ(out[0].value, hh_sys_timer_running(sys, 96));
+    return out[0].value;
+}
+
+static void timer_9006_needs_numbermp4111(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    CHECK_EQ(call(sys, 9006, 96, 0, 0), 1); /* NUMBERMP4111 defaults to 0 (17b.10) */
+    CHECK_EQ(code, HH_MODERR_PARAM);
+    CHECK_EQ(hh_sys_service(sys, NULL, 0), 0);
+    CHECK_EQ(hh_sys_timer_running(sys, 96), 0);
+    CHECK_EQ(hh_sys_set_number_mp4111(sys, 4), 0);
+    CHECK_EQ(hh_sys_set_number_mp4111(sys, 905), -1);
+    CHECK_EQ(call(sys, 9006, 99, 0, 0), 0);
+    CHECK_EQ(code, 0);
+    CHECK_EQ(call(sys, 9006, 100, 0, 0), 1);
+    CHECK_EQ(call(sys, 9006, 95, 0, 0), 1);
+    CHECK_EQ(call(sys, 9006, 5, 0, 0), 1);
+    hh_sys_free(sys);
+}
+
+/* 9.2 rule: started in cycle k, Tn = 1 in cycles k+1 ... k+P. */
+static void timer_9006_counts_like_9_2(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    int c;
+    hh_write out[8];
+    CHECK_EQ(hh_sys_set_number_mp4111(sys, 2), 0);
+    CHECK_EQ(hh_sys_set_mp(sys, 4111, 96, 1, 1), 0); /* 0.1 s at 20 ms -> 5 cycles */
+    for (c = 0; c < 9; c++) {
+        int32_t running = service_t96(sys);
+        CHECK_EQ(running, c >= 1 && c <= 5);
+        if (c == 0)
+            CHECK_EQ(call(sys, 9006, 96, 0, 0), 0);
+        hh_sys_tick(sys);
+    }
+    CHECK_EQ(hh_sys_service(sys, out, 1), -1); /* two timers configured */
+    CHECK_EQ(hh_sys_service(sys, out, 8), 2);
+    CHECK(out[1].kind == 'T' && out[1].addr == 97 && out[1].value == 0);
+    hh_sys_free(sys);
+}
+
+static int32_t run_length(int32_t cycle_time, int64_t mantissa, int32_t decimals, int cycles_unit)
+{
+    hh_sys *sys = hh_sys_new(cycle_time);
+    int32_t c, count = 0;
+    hh_sys_set_number_mp4111(sys, 1);
+    hh_sys_set_timer_unit(sys, cycles_unit);
+    if (mantissa >= 0)
+        hh_sys_set_mp(sys, 4111, 96, mantissa, decimals);
+    call(sys, 9006, 96, 0, 0);
+    for (c = 0; c < 200; c++) {
+        hh_sys_service(sys, NULL, 0);
+        count += hh_sys_timer_running(sys, 96);
+    }
+    hh_sys_free(sys);
+    return count;
+}
+
+static void timer_presets(void)
+{
+    CHECK_EQ(run_length(20, 125, 3, 0), 7); /* spec 9.3: 0.125 s at 20 ms */
+    CHECK_EQ(run_length(20, 1, 1, 0), 5);   /* 0.1 s */
+    CHECK_EQ(run_length(20, 2, 0, 0), 100); /* 2 s */
+    CHECK_EQ(run_length(30, 1, 1, 0), 4);   /* ceil(100 / 30) */
+    CHECK_EQ(run_length(20, 3, 0, 1), 3);   /* cycles unit */
+    CHECK_EQ(run_length(20, 0, 0, 0), 0);   /* P = 0: never runs */
+    CHECK_EQ(run_length(20, -1, 0, 0), 0);  /* MP4111.96 missing */
+}
+
+static void timer_retrigger(void)
+{
+    int restart;
+    for (restart = 1; restart >= 0; restart--) {
+        hh_sys *sys = hh_sys_new(20);
+        int c, last = -1;
+        hh_sys_set_number_mp4111(sys, 1);
+        hh_sys_set_timer_restart(sys, restart);
+        hh_sys_set_mp(sys, 4111, 96, 1, 1); /* 5 cycles */
+        for (c = 0; c < 12; c++) {
+            if (service_t96(sys))
+                last = c;
+            if (c == 0 || c == 3)
+                call(sys, 9006, 96, 0, 0);
+        }
+        CHECK_EQ(last, restart ? 8 : 5); /* started in cycles 0 and 3, P = 5 */
+        hh_sys_free(sys);
+    }
+}
+
+static void machine_parameters_9031_9032(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    int64_t m = 0;
+    int32_t d = -1;
+    CHECK_EQ(hh_sys_set_mp(sys, 4110, 3, 5, 1), 0); /* 0.5 */
+    CHECK_EQ(hh_sys_set_mp(sys, 4110, 3, 5, 10), -1);
+    CHECK_EQ(hh_sys_set_mp(sys, 4110, 3, 1000000000000000LL, 0), -1);
+    CHECK_EQ(call(sys, 9032, 4110, 3, 0), 0);
+    CHECK_EQ(results[0], 5);
+    CHECK_EQ(call(sys, 9031, 4110, 3, 12), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9032, 4110, 3, 0), 0);
+    CHECK_EQ(results[0], 12);
+    CHECK_EQ(hh_sys_get_mp(sys, 4110, 3, &m, &d), 1);
+    CHECK_EQ(m, 12);
+    CHECK_EQ(d, 1);
+    CHECK_EQ(hh_sys_get_mp(sys, 4110, 4, &m, &d), 0);
+    CHECK_EQ(call(sys, 9031, 4110, 4, 1), 1); /* missing MP */
+    CHECK_EQ(results[0], 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9032, 4110, 4, 0), 1);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(code, HH_MODERR_PARAM);
+    hh_sys_free(sys);
+}
+
+static void run_time_mp_changes_timer_preset(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    int c, count = 0;
+    hh_sys_set_number_mp4111(sys, 1);
+    hh_sys_set_mp(sys, 4111, 96, 1, 1);
+    CHECK_EQ(call(sys, 9031, 4111, 96, 3), 0); /* 0.3 s -> 15 cycles */
+    call(sys, 9006, 96, 0, 0);
+    for (c = 0; c < 40; c++) {
+        hh_sys_service(sys, NULL, 0);
+        count += hh_sys_timer_running(sys, 96);
+    }
+    CHECK_EQ(count, 15);
+    hh_sys_free(sys);
+}
+
+static void status_9035_9036(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    CHECK_EQ(call(sys, 9036, 7, 42, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9035, 7, 0, 0), 0);
+    CHECK_EQ(results[0], 42);
+    CHECK_EQ(call(sys, 9035, 8, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(hh_sys_set_status(sys, 8, -3), 0);
+    CHECK_EQ(call(sys, 9035, 8, 0, 0), 0);
+    CHECK_EQ(results[0], -3);
+    CHECK_EQ(call(sys, 9036, HH_STATUS_SIZE, 1, 0), 1);
+    CHECK_EQ(results[0], 1);
+    CHECK_EQ(code, HH_MODERR_PARAM);
+    CHECK_EQ(call(sys, 9035, -1, 0, 0), 1);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(hh_sys_set_status(sys, HH_STATUS_SIZE, 1), -1);
+    hh_sys_free(sys);
+}
+
+static void clock_9192_9195(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    int i;
+    int32_t n;
+    for (i = 0; i < 49; i++)
+        hh_sys_tick(sys);
+    CHECK_EQ(hh_sys_time_ms(sys), 980);
+    CHECK_EQ(call(sys, 9195, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    hh_sys_tick(sys);
+    CHECK_EQ(hh_sys_cycle(sys), 50);
+    for (n = -3; n <= -1; n++) {
+        CHECK_EQ(call(sys, 9192, n, 0, 0), 0);
+        CHECK_EQ(results[0], 1);
+    }
+    CHECK_EQ(call(sys, 9192, 0, 0, 0), 0);
+    CHECK_EQ(results[0], -1);
+    CHECK_EQ(call(sys, 9195, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 1);
+    hh_sys_free(sys);
+
+    sys = hh_sys_new(300);
+    for (i = 0; i < 7; i++)
+        hh_sys_tick(sys);
+    CHECK_EQ(call(sys, 9192, -2, 0, 0), 0);
+    CHECK_EQ(results[0], 2); /* 2.1 s */
+    hh_sys_free(sys);
+}
+
+static void result_overrides(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9192, 0, 3600), 0);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9192, 1, 1), -1);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9999, 0, 1), -1);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9006, 0, 1), -1); /* no results */
+    CHECK_EQ(hh_sys_set_module_result(sys, 9094, 0, 4), 0);
+    CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
+    CHECK_EQ(results[0], 3600);
+    CHECK_EQ(call(sys, 9094, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 4);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9192, 0, 7200), 0);
+    CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
+    CHECK_EQ(results[0], 7200);
+    /* the model still runs: its error status is kept */
+    CHECK_EQ(hh_sys_set_module_result(sys, 9032, 0, 11), 0);
+    CHECK_EQ(call(sys, 9032, 1, 1, 0), 1);
+    CHECK_EQ(results[0], 11);
+    hh_sys_clear_module_results(sys, 9192);
+    CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9094, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 4);
+    hh_sys_free(sys);
+}
+
+static void invalid_context(void) { CHECK(hh_sys_new(0) == NULL); }
+
+void run_module_tests(void)
+{
+    RUN(module_table);
+    RUN(unknown_and_stub_calls);
+    RUN(timer_9006_needs_numbermp4111);
+    RUN(timer_9006_counts_like_9_2);
+    RUN(timer_presets);
+    RUN(timer_retrigger);
+    RUN(machine_parameters_9031_9032);
+    RUN(run_time_mp_changes_timer_preset);
+    RUN(status_9035_9036);
+    RUN(clock_9192_9195);
+    RUN(result_overrides);
+    RUN(invalid_context);
+}

@@ -1,0 +1,104 @@
+"""The typed syntax tree of HEIDENHAIN project files: every node carries its original span and comments."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Union
+
+from .diagnostics import Span
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class OperandSyntax:
+    """An operand as written. kind: M I O T C B W D K S SREF SIMM KF X NUM SYM."""
+
+    kind: str
+    value: Union[int, str]
+    indexed: bool
+    text: str
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Instr:
+    mnemonic: str                 # canonical spelling: upper case, 'x' for multiply, brackets without blanks
+    operand: OperandSyntax | None
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Label:
+    name: str
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class KField:
+    name: str
+    values: tuple[int, ...]
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Uses:
+    file: str
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Global:
+    name: str
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Extern:
+    name: str
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class DefineFile:
+    file: str
+    is_global: bool
+    span: Span
+    comments: tuple[str, ...] = ()
+
+
+Statement = Union[Instr, Label, KField, Uses, Global, Extern, DefineFile]
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class SymbolDef:
+    """A .def entry: fixed operand, constant, auto-assigned operand, or alias of another symbol."""
+
+    name: str
+    kind: str                     # M I O T C B W D S K
+    address: int | None           # fixed address (None for auto and alias)
+    constant: int | None          # value of a K entry
+    alias: str | None             # target of '&name'
+    cflag: bool                   # '/c' prefix
+    span: Span
+    comments: tuple[str, ...] = ()
+    section: str | None = None    # text of the preceding #type marker
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class SourceFile:
+    path: str                     # display path
+    statements: tuple[Statement, ...]
+    trailing_comments: tuple[str, ...]
+    line_count: int
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class DefFile:
+    path: str
+    symbols: tuple[SymbolDef, ...]
+    includes: tuple[DefineFile, ...]
+    line_count: int

@@ -1,0 +1,363 @@
+"""Parsers (lark, LALR): preprocessed lines of .src, .def and MP files into typed syntax trees with spans and comments."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from decimal import Decimal
+from typing import Any, Iterable
+
+from lark import Lark, LarkError, Token, Transformer
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput
+
+from . import ast
+from .diagnostics import Diagnostics, Span
+from .grammars import load_grammar
+from .mnemonics import MNEMONICS, canonical
+from .preprocess import Line, split_comment
+
+INT32_MIN = -(2 ** 31)
+UINT32_MAX = 2 ** 32 - 1
+
+
+def parse_constant(text: str) -> int | None:
+    """A constant literal (without K) to its int32 value; None when it does not fit in 32 bits (A-56)."""
+    text = text.replace(" ", "").replace("\t", "")
+    if text.startswith("$"):
+        value = int(text[1:], 16)
+        return _pattern(value)
+    if text.startswith("%"):
+        value = int(text[1:], 2)
+        return _pattern(value)
+    value = int(text)
+    if INT32_MIN <= value <= 2 ** 31 - 1:
+        return value
+    return None
+
+
+def _pattern(value: int) -> int | None:
+    if value > UINT32_MAX:
+        return None
+    return value - 2 ** 32 if value >= 2 ** 31 else value
+
+
+class _ConstRange(Exception):
+    pass
+
+
+class _SrcTransformer(Transformer):
+    """Turns one parsed line into a position-free tuple (cached by line text)."""
+
+    def label(self, items):
+        return ("label", str(items[1]))
+
+    def kfield(self, items):
+        return ("kfield", str(items[1]))
+
+    def endk(self, items):
+        return ("endk",)
+
+    def kentry(self, items):
+        return ("kentry", _const_value(items[0]))
+
+    def uses(self, items):
+        return ("uses", str(items[1]))
+
+    def global_(self, items):
+        return ("global", str(items[1]))
+
+    def extern(self, items):
+        return ("extern", str(items[1]))
+
+    def define_file(self, items):
+        return ("define_file", str(items[2]), items[1] is not None)
+
+    def instr(self, items):
+        return ("instr", canonical(str(items[0])), items[1])
+
+    def operand(self, items):
+        base, index = items
+        if index is None:
+            return base
+        return dataclasses.replace(base, indexed=True, text=base.text + "[X]")
+
+    def bit_op(self, items):
+        return _addr_operand(items[0])
+
+    def word_op(self, items):
+        return _addr_operand(items[0])
+
+    def const_op(self, items):
+        return ast.OperandSyntax("K", _const_value(items[0]), False, str(items[0]))
+
+    def str_op(self, items):
+        return ast.OperandSyntax("S", int(str(items[0])[1:]), False, str(items[0]))
+
+    def strref_op(self, items):
+        text = str(items[0])
+        return ast.OperandSyntax("SREF", text[2].upper() + text[3:], False, text)
+
+    def strimm_op(self, items):
+        text = str(items[0])
+        return ast.OperandSyntax("SIMM", text[2:-1], False, text)
+
+    def kf_op(self, items):
+        return ast.OperandSyntax("KF", str(items[1]), False, f"KF {items[1]}")
+
+    def x_op(self, items):
+        return ast.OperandSyntax("X", 0, False, "X")
+
+    def num_op(self, items):
+        return ast.OperandSyntax("NUM", int(str(items[0])), False, str(items[0]))
+
+    def sym_op(self, items):
+        return ast.OperandSyntax("SYM", str(items[0]), False, str(items[0]))
+
+    def start(self, items):
+        return items[0]
+
+
+def _addr_operand(token: Token) -> ast.OperandSyntax:
+    text = str(token)
+    kind = text[0].upper()
+    return ast.OperandSyntax(kind, int(text[1:].strip()), False, kind + text[1:].strip())
+
+
+def _const_value(token: Token) -> int:
+    text = str(token)[1:].strip()
+    value = parse_constant(text)
+    if value is None:
+        raise _ConstRange(text)
+    return value
+
+
+@dataclasses.dataclass
+class _PendingKField:
+    name: str
+    span: Span
+    comments: tuple[str, ...]
+    values: list[int]
+
+
+class SrcParser:
+    """Parses the active lines of a .src file; identical line texts are parsed once per run."""
+
+    def __init__(self) -> None:
+        self._lark = Lark(load_grammar("src.lark"), parser="lalr", lexer="contextual")
+        self._transformer = _SrcTransformer()
+        self._cache: dict[str, Any] = {}
+
+    def parse_line(self, code: str) -> Any:
+        key = code.strip()
+        cached = self._cache.get(key)
+        if cached is None:
+            try:
+                cached = ("ok", self._transformer.transform(self._lark.parse(key)))
+            except _ConstRange as exc:
+                cached = ("range", str(exc))
+            except UnexpectedInput as exc:
+                cached = ("syntax", exc.column if isinstance(exc, UnexpectedCharacters) else getattr(exc, "column", 1))
+            except LarkError:
+                cached = ("syntax", 1)
+            except RecursionError:
+                cached = ("syntax", 1)
+            self._cache[key] = cached
+        return cached
+
+    def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.SourceFile:
+        statements: list[ast.Statement] = []
+        pending_comments: list[str] = []
+        kfield: _PendingKField | None = None
+        for line in lines:
+            code = line.code.strip()
+            if not code:
+                if line.comment is not None:
+                    pending_comments.append(line.comment.strip())
+                continue
+            span = Span(line.span.file, line.span.line, line.span.col)
+            comments = tuple(pending_comments) + ((line.comment.strip(),) if line.comment is not None else ())
+            pending_comments = []
+            status, result = self.parse_line(code)
+            if status == "range":
+                diags.error("E-LIT-RANGE", span, f"literal {result} does not fit in 32 bits")
+                continue
+            if status == "syntax":
+                self._report_syntax(code, span, result, diags)
+                continue
+            tag = result[0]
+            if kfield is not None:
+                if tag == "kentry":
+                    kfield.values.append(result[1])
+                    continue
+                if tag == "endk":
+                    statements.append(ast.KField(kfield.name, tuple(kfield.values), kfield.span, kfield.comments))
+                    kfield = None
+                    continue
+                diags.error("E-SYNTAX", span, "only K constants may stand between KFIELD and ENDK")
+                continue
+            if tag == "kfield":
+                kfield = _PendingKField(result[1], span, comments, [])
+            elif tag == "endk":
+                diags.error("E-SYNTAX", span, "ENDK without KFIELD")
+            elif tag == "kentry":
+                diags.error("E-SYNTAX", span, "a constant line outside a KFIELD table")
+            elif tag == "label":
+                statements.append(ast.Label(result[1], span, comments))
+            elif tag == "uses":
+                statements.append(ast.Uses(result[1], span, comments))
+            elif tag == "global":
+                statements.append(ast.Global(result[1], span, comments))
+            elif tag == "extern":
+                statements.append(ast.Extern(result[1], span, comments))
+            elif tag == "define_file":
+                statements.append(ast.DefineFile(result[1], result[2], span, comments))
+            else:
+                instr = self._instruction(result[1], result[2], span, comments, diags)
+                if instr is not None:
+                    statements.append(instr)
+        if kfield is not None:
+            diags.error("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
+        return ast.SourceFile(display, tuple(statements), tuple(pending_comments), line_count)
+
+    def _instruction(self, mnemonic: str, operand: ast.OperandSyntax | None, span: Span,
+                     comments: tuple[str, ...], diags: Diagnostics) -> ast.Instr | None:
+        info = MNEMONICS.get(mnemonic)
+        if info is None:
+            diags.error("E-SYNTAX", span, f"unknown mnemonic '{mnemonic}'")
+            return None
+        if info.form == "none" and operand is not None:
+            diags.error("E-SYNTAX", span, f"{mnemonic} takes no operand")
+            return None
+        if info.form != "none" and operand is None:
+            what = {"label": "a label", "call": "a label or module number"}.get(info.form, "an operand")
+            diags.error("E-SYNTAX", span, f"{mnemonic} needs {what}")
+            return None
+        if info.form == "label" and (operand.kind != "SYM" and operand.kind not in "MIOTCBWDX" or operand.indexed):
+            diags.error("E-SYNTAX", span, f"{mnemonic} needs a label name, not '{operand.text}'")
+            return None
+        if info.form == "call" and (operand.kind not in ("SYM", "NUM") and operand.kind not in "MIOTCBWDX" or operand.indexed):
+            diags.error("E-SYNTAX", span, f"{mnemonic} needs a label name or a module number, not '{operand.text}'")
+            return None
+        if info.form == "operand" and operand.kind == "NUM":
+            diags.error("E-SYNTAX", span, f"'{operand.text}' is not an operand (a constant is written K{operand.text})")
+            return None
+        return ast.Instr(mnemonic, operand, span, comments)
+
+    @staticmethod
+    def _report_syntax(code: str, span: Span, column: int, diags: Diagnostics) -> None:
+        first = re.match(r"\S+", code)
+        word = first.group(0) if first else code
+        col = span.col + max(0, (column or 1) - 1)
+        if first and canonical(word) not in MNEMONICS and not re.match(
+                r"(?i)(LBL|KFIELD|ENDK|USES|GLOBAL|EXTERN|#define|K[\s+\-$%0-9])", code):
+            if not any(canonical(word[:n]) in MNEMONICS for n in (1, 2, 3, 4) if word[:n] != word):
+                diags.error("E-UNSUPPORTED", span, f"'{word[:40]}' is neither a mnemonic, a directive nor a label definition")
+                return
+        diags.error("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
+
+
+class _DefTransformer(Transformer):
+    def type_marker(self, items):
+        return ("type", " ".join(str(i) for i in items))
+
+    def define_file(self, items):
+        return ("define_file", str(items[2]), items[1] is not None)
+
+    def symbol_def(self, items):
+        cflag, name, target = items
+        return ("symbol", cflag is not None, str(name)) + target
+
+    def t_fixed(self, items):
+        text = str(items[0])
+        return (text[0].upper(), int(text[1:].strip()), None, None)
+
+    def t_const(self, items):
+        return ("K", None, _const_value(items[0]), None)
+
+    def t_auto(self, items):
+        return (str(items[0]).upper(), None, None, None)
+
+    def t_alias(self, items):
+        return (str(items[0]).upper(), None, None, str(items[1]))
+
+    def start(self, items):
+        return items[0]
+
+
+class DefParser:
+    """Parses the active lines of a .def file."""
+
+    def __init__(self) -> None:
+        self._lark = Lark(load_grammar("def.lark"), parser="lalr", lexer="contextual")
+        self._transformer = _DefTransformer()
+
+    def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.DefFile:
+        symbols: list[ast.SymbolDef] = []
+        includes: list[ast.DefineFile] = []
+        section: str | None = None
+        pending: list[str] = []
+        for line in lines:
+            code = line.code.strip()
+            if not code:
+                if line.comment is not None:
+                    pending.append(line.comment.strip())
+                continue
+            span = line.span
+            comments = tuple(pending) + ((line.comment.strip(),) if line.comment is not None else ())
+            pending = []
+            try:
+                result = self._transformer.transform(self._lark.parse(code))
+            except _ConstRange as exc:
+                diags.error("E-LIT-RANGE", span, f"literal {exc} does not fit in 32 bits")
+                continue
+            except (LarkError, RecursionError):
+                diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
+                continue
+            if result[0] == "type":
+                section = result[1]
+                if result[1].lower().startswith("#typedef"):
+                    diags.error("E-UNSUPPORTED", span, "structured symbols (#TYPEDEF) are not supported for this profile")
+                continue
+            if result[0] == "define_file":
+                includes.append(ast.DefineFile(result[1], result[2], span, comments))
+                continue
+            _, cflag, name, kind, address, constant, alias = result
+            if kind == "K" and constant is None:
+                diags.error("E-SYNTAX", span, f"constant {name} needs a value (K 5, K $FF)")
+                continue
+            symbols.append(ast.SymbolDef(name, kind, address, constant, alias, cflag, span, comments, section))
+        return ast.DefFile(display, tuple(symbols), tuple(includes), line_count)
+
+
+@dataclasses.dataclass(frozen=True)
+class MachineParameter:
+    number: int
+    index: int
+    value: Decimal
+    span: Span
+
+
+class MpParser:
+    """Parses machine-parameter files: `MP4110.0 : 0.125 ;comment`."""
+
+    def __init__(self) -> None:
+        self._lark = Lark(load_grammar("mp.lark"), parser="lalr", lexer="contextual")
+
+    def parse_lines(self, display: str, lines: tuple[str, ...], diags: Diagnostics) -> list[MachineParameter]:
+        out: list[MachineParameter] = []
+        for index, raw in enumerate(lines):
+            code, _ = split_comment(raw)
+            code = code.strip()
+            if not code or code.startswith("*"):
+                continue
+            span = Span(display, index + 1, len(raw) - len(raw.lstrip()) + 1)
+            try:
+                tree = self._lark.parse(code)
+            except (LarkError, RecursionError):
+                diags.error("E-MP-VALUE", span, f"cannot parse machine parameter line '{code[:80]}'")
+                continue
+            tokens = [str(t) for t in tree.children if t is not None]
+            number = int(tokens[1])
+            idx = int(tokens[2]) if len(tokens) == 4 else 0
+            out.append(MachineParameter(number, idx, Decimal(tokens[-1]), span))
+        return out

@@ -1,0 +1,321 @@
+"""Format an IecProject as PLCopen TC6 XML v2.01 (lxml): same POUs, types and ST bodies as the ST container.
+
+Text is carried as escaped character data, never CDATA (Beremiz rewrites CDATA, targets.md §4.2).
+XML 1.0 cannot carry most control characters (U+0000-U+001F except tab, LF and CR), lone
+surrogates, U+FFFE or U+FFFF: every such character in any name, comment, initial value or body is
+replaced by U+FFFD REPLACEMENT CHARACTER. Everything else, including `&`, `<`, `]]>` and
+non-ASCII text, round-trips exactly.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+from datetime import datetime, timezone
+
+from lxml import etree
+
+from transpiler.iec_model import DataType, IecProject, IecVar, Pou, VarSection
+
+NS = "http://www.plcopen.org/xml/tc6_0201"
+XHTML = "http://www.w3.org/1999/xhtml"
+SOURCEMAP_NS = "urn:hh2iec:sourcemap"
+SOURCEMAP_DATA_NAME = "https://hh2iec.invalid/sourcemap"
+COMPANY_NAME = "hh2iec"
+PRODUCT_NAME = "hh2iec"
+REPLACEMENT = "\ufffd"
+
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+_ELEMENTARY = {name: name for name in (
+    "BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT",
+    "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT", "TOD")}
+_ELEMENTARY.update({"DATE_AND_TIME": "DT", "TIME_OF_DAY": "TOD", "STRING": "string", "WSTRING": "wstring"})
+
+_SECTION_ELEMENT = {
+    "VAR": "localVars", "VAR_TEMP": "tempVars", "VAR_INPUT": "inputVars", "VAR_OUTPUT": "outputVars",
+    "VAR_IN_OUT": "inOutVars", "VAR_EXTERNAL": "externalVars", "VAR_GLOBAL": "globalVars",
+}
+_POU_TYPE = {"PROGRAM": "program", "FUNCTION_BLOCK": "functionBlock", "FUNCTION": "function"}
+_REPETITION = re.compile(r"^\s*(\d+)\s*\((.*)\)\s*$", re.DOTALL)
+
+
+def xml_safe(text: str) -> str:
+    """`text` with every character XML 1.0 cannot carry replaced by U+FFFD."""
+    return _NOT_XML.sub(REPLACEMENT, text)
+
+
+def _q(tag: str) -> str:
+    return f"{{{NS}}}{tag}"
+
+
+def _sub(parent: etree._Element, tag: str, **attributes: str) -> etree._Element:
+    element = etree.SubElement(parent, _q(tag))
+    for key, value in attributes.items():
+        element.set(key, xml_safe(value))
+    return element
+
+
+def _formatted_text(parent: etree._Element, tag: str, text: str) -> etree._Element:
+    """A formattedText element: exactly one xhtml:p holding the escaped text."""
+    element = _sub(parent, tag)
+    paragraph = etree.SubElement(element, f"{{{XHTML}}}p")
+    paragraph.text = xml_safe(text)
+    return element
+
+
+def _documentation(parent: etree._Element, text: str | None) -> None:
+    if text:
+        _formatted_text(parent, "documentation", text)
+
+
+# --- initial values -------------------------------------------------------------------------
+
+
+def _split_top_level(text: str) -> list[str]:
+    """Split at commas outside brackets, parentheses and string literals."""
+    parts: list[str] = []
+    depth = 0
+    quote: str | None = None
+    current: list[str] = []
+    index = 0
+    while index < len(text):
+        char = text[index]
+        current.append(char)
+        if quote:
+            if char == "$" and index + 1 < len(text):
+                current.append(text[index + 1])
+                index += 1
+            elif char == quote:
+                quote = None
+        elif char in "'\"":
+            quote = char
+        elif char in "([":
+            depth += 1
+        elif char in ")]":
+            depth -= 1
+        elif char == "," and depth == 0:
+            current.pop()
+            parts.append("".join(current).strip())
+            current = []
+        index += 1
+    parts.append("".join(current).strip())
+    return parts
+
+
+def _balanced(text: str) -> bool:
+    depth = 0
+    quote: str | None = None
+    skip = False
+    for char in text:
+        if skip:
+            skip = False
+        elif quote:
+            if char == "$":
+                skip = True
+            elif char == quote:
+                quote = None
+        elif char in "'\"":
+            quote = char
+        elif char in "([":
+            depth += 1
+        elif char in ")]":
+            depth -= 1
+            if depth < 0:
+                return False
+    return depth == 0 and quote is None
+
+
+def _assignment(text: str) -> tuple[str, str] | None:
+    """`member := value` at top level, else None."""
+    parts = text.split(":=", 1)
+    if len(parts) == 2 and re.fullmatch(r"\s*[A-Za-z_]\w*\s*", parts[0]):
+        return parts[0].strip(), parts[1].strip()
+    return None
+
+
+def _value(parent: etree._Element, tag: str, literal: str, **attributes: str) -> None:
+    """An element of type ppx:value for an ST initial value: arrayValue, structValue or simpleValue."""
+    element = _sub(parent, tag, **attributes)
+    text = literal.strip()
+    if text.startswith("[") and text.endswith("]") and _balanced(text[1:-1]):
+        array = _sub(element, "arrayValue")
+        for item in _split_top_level(text[1:-1]) if text[1:-1].strip() else []:
+            repeated = _REPETITION.match(item)
+            if repeated and _balanced(repeated.group(2)):
+                _value(array, "value", repeated.group(2), repetitionValue=repeated.group(1))
+            else:
+                _value(array, "value", item)
+        return
+    if text.startswith("(") and text.endswith(")") and _balanced(text[1:-1]):
+        members = [_assignment(part) for part in _split_top_level(text[1:-1])]
+        if members and all(members):
+            struct = _sub(element, "structValue")
+            for member, value in members:  # type: ignore[misc]
+                _value(struct, "value", value, member=member)
+            return
+    simple = _sub(element, "simpleValue")
+    if text:
+        simple.set("value", xml_safe(text))
+
+
+# --- types, variables, POUs -----------------------------------------------------------------
+
+
+def _type_ref(parent: etree._Element, tag: str, type_name: str) -> None:
+    holder = _sub(parent, tag)
+    elementary = _ELEMENTARY.get(type_name.upper())
+    if elementary is not None:
+        _sub(holder, elementary)
+    else:
+        _sub(holder, "derived", name=type_name)
+
+
+def _variable(parent: etree._Element, var: IecVar) -> None:
+    attributes = {"name": var.name}
+    if var.address:
+        attributes["address"] = var.address
+    element = _sub(parent, "variable", **attributes)
+    _type_ref(element, "type", var.type)
+    if var.initial is not None:
+        _value(element, "initialValue", var.initial)
+    _documentation(element, var.comment)
+
+
+def _var_list(parent: etree._Element, section: VarSection, tag: str | None = None) -> None:
+    attributes = {}
+    if section.constant:
+        attributes["constant"] = "true"
+    if section.retain:
+        attributes["retain"] = "true"
+    element = _sub(parent, tag or _SECTION_ELEMENT[section.kind], **attributes)
+    for var in section.vars:
+        _variable(element, var)
+    _documentation(element, section.comment)
+
+
+def _data_type(parent: etree._Element, data_type: DataType) -> None:
+    element = _sub(parent, "dataType", name=data_type.name)
+    base = _sub(element, "baseType")
+    if data_type.kind == "array":
+        if data_type.base is None or not data_type.dims:
+            raise ValueError(f"array type {data_type.name} needs a base type and at least one dimension")
+        array = _sub(base, "array")
+        for dim in data_type.dims:
+            _sub(array, "dimension", lower=str(dim.lo), upper=str(dim.hi))
+        _type_ref(array, "baseType", data_type.base)
+    else:
+        struct = _sub(base, "struct")
+        for field in data_type.fields:
+            _variable(struct, field)
+    _documentation(element, data_type.comment)
+
+
+def _source_map(parent: etree._Element, pou: Pou) -> None:
+    if not pou.source_map:
+        return
+    data = _sub(_sub(parent, "addData"), "data", name=SOURCEMAP_DATA_NAME, handleUnknown="discard")
+    source_map = etree.SubElement(data, f"{{{SOURCEMAP_NS}}}sourceMap", nsmap={"hh": SOURCEMAP_NS})
+    for source_range in pou.source_map:
+        entry = etree.SubElement(source_map, f"{{{SOURCEMAP_NS}}}range")
+        entry.set("file", xml_safe(source_range.file))
+        entry.set("first", str(source_range.first_line))
+        entry.set("last", str(source_range.last_line))
+
+
+def _pou(parent: etree._Element, pou: Pou) -> None:
+    element = _sub(parent, "pou", name=pou.name, pouType=_POU_TYPE[pou.kind])
+    interface = _sub(element, "interface")
+    if pou.return_type:
+        _type_ref(interface, "returnType", pou.return_type)
+    for section in pou.sections:
+        _var_list(interface, section)
+    _formatted_text(_sub(element, "body"), "ST", pou.body)
+    _source_map(element, pou)
+    _documentation(element, pou.comment)
+
+
+def _instances(parent: etree._Element, project: IecProject) -> None:
+    conf = project.configuration
+    task_names = {task.name for task in conf.tasks}
+    for instance in conf.instances:
+        if instance.task not in task_names:
+            raise ValueError(f"program instance {instance.name} names unknown task {instance.task}")
+    configuration = _sub(_sub(_sub(parent, "instances"), "configurations"), "configuration", name=conf.name)
+    resource = _sub(configuration, "resource", name=conf.resource)
+    for task in conf.tasks:
+        task_element = _sub(resource, "task", name=task.name, priority=str(task.priority),
+                            interval=f"T#{task.interval_ms}ms")
+        for instance in conf.instances:
+            if instance.task == task.name:
+                _sub(task_element, "pouInstance", name=instance.name, typeName=instance.type_name)
+    for section in conf.globals:
+        _var_list(configuration, section, tag="globalVars")
+
+
+# --- header and entry point -----------------------------------------------------------------
+
+
+def _product_version() -> str:
+    package = importlib.import_module("transpiler")
+    version = getattr(package, "__version__", None)
+    return str(version) if version else "0"
+
+
+def creation_stamp(creation: datetime | None = None) -> str:
+    """`YYYY-MM-DDThh:mm:ss` in UTC: `creation`, else $SOURCE_DATE_EPOCH, else now.
+
+    Raises ValueError when SOURCE_DATE_EPOCH is set but is not a usable integer.
+    """
+    if creation is None:
+        epoch = os.environ.get("SOURCE_DATE_EPOCH")
+        if epoch is not None and epoch.strip():
+            try:
+                creation = datetime.fromtimestamp(int(epoch.strip()), tz=timezone.utc)
+            except (ValueError, OverflowError, OSError) as exc:
+                raise ValueError(f"SOURCE_DATE_EPOCH must be an integer count of seconds, got {epoch!r}") from exc
+        else:
+            creation = datetime.now(timezone.utc)
+    if creation.tzinfo is not None:
+        creation = creation.astimezone(timezone.utc)
+    return creation.strftime("%Y-%m-%dT%H:%M:%S")
+
+
+def _headers(root: etree._Element, project: IecProject, stamp: str) -> None:
+    _sub(root, "fileHeader", companyName=COMPANY_NAME, productName=PRODUCT_NAME,
+         productVersion=_product_version(), creationDateTime=stamp)
+    content = _sub(root, "contentHeader", name=project.name, modificationDateTime=stamp)
+    if project.header_comment:
+        _sub(content, "Comment").text = xml_safe(project.header_comment)
+    coordinates = _sub(content, "coordinateInfo")
+    for language in ("fbd", "ld", "sfc"):
+        _sub(_sub(coordinates, language), "scaling", x="0", y="0")
+
+
+def render_xml(project: IecProject, creation: datetime | None = None) -> bytes:
+    """The project as TC6 XML v2.01 bytes: UTF-8, XML declaration, pretty-printed, deterministic.
+
+    The timestamp is `creation`, else $SOURCE_DATE_EPOCH (UTC), else the current UTC time.
+    """
+    root = etree.Element(_q("project"), nsmap={None: NS, "xhtml": XHTML})
+    _headers(root, project, creation_stamp(creation))
+    types = _sub(root, "types")
+    data_types = _sub(types, "dataTypes")
+    for data_type in project.types:
+        _data_type(data_types, data_type)
+    pous = _sub(types, "pous")
+    for pou in project.pous:
+        _pou(pous, pou)
+    _instances(root, project)
+    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+
+
+def extract_st_bodies(xml: bytes) -> dict[str, str]:
+    """Map each POU name to the text of its `<ST><xhtml:p>` body (for the one-translation equality check)."""
+    root = etree.fromstring(xml, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True))
+    bodies: dict[str, str] = {}
+    for pou in root.iterfind(f"{_q('types')}/{_q('pous')}/{_q('pou')}"):
+        paragraph = pou.find(f"{_q('body')}/{_q('ST')}/{{{XHTML}}}p")
+        bodies[pou.get("name")] = paragraph.text or "" if paragraph is not None else ""
+    return bodies

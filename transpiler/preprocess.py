@@ -1,0 +1,300 @@
+"""Preprocessor: DEFINE values, #if/#ifdef/#else/#endif, INCLUDE; yields active lines mapped to their original file and line."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+from typing import Callable, Mapping, Union
+
+from lark import Lark, Transformer, LarkError
+
+from .diagnostics import Diagnostics, Span
+from .grammars import load_grammar
+
+DefineValue = Union[int, str]
+
+_PP_LINE = re.compile(r"^\s*(#if|#ifdef|#ifndef|#else|#endif|DEFINE)(?![A-Za-z0-9_])", re.IGNORECASE)
+_INCLUDE_LINE = re.compile(r'^\s*(?:INCLUDE|#include)\s+"?([^";\s]+)"?\s*$', re.IGNORECASE)
+MAX_NESTING = 256
+
+
+@dataclasses.dataclass(frozen=True)
+class Line:
+    """One active line of code with the original position of its first character."""
+
+    code: str          # text before the comment
+    comment: str | None
+    span: Span         # line and column of the line start in the original file
+
+
+@dataclasses.dataclass(frozen=True)
+class InactiveRegion:
+    file: str
+    first_line: int
+    last_line: int
+    condition: str
+
+
+@dataclasses.dataclass
+class Defines:
+    """The DEFINE table of one run; `-D` overrides are fixed and win over every DEFINE line."""
+
+    values: dict[str, DefineValue]
+    spans: dict[str, Span]
+    fixed: frozenset[str] = frozenset()
+
+    def define(self, name: str, value: DefineValue, span: Span, diags: Diagnostics) -> None:
+        if name in self.fixed:
+            return
+        if name in self.values:
+            diags.warning("E-DEF-REDEFINE", span, f"DEFINE {name} redefined (was {self.values[name]!r} at {self.spans[name]})")
+        self.values[name] = value
+        self.spans[name] = span
+
+
+def split_comment(text: str) -> tuple[str, str | None]:
+    """Split a line into code and `;` comment; a ';' inside a string literal belongs to the string."""
+    if ";" not in text:
+        return text, None
+    in_string = False
+    for i, ch in enumerate(text):
+        if ch == '"':
+            in_string = not in_string
+        elif ch == ";" and not in_string:
+            return text[:i], text[i + 1:]
+    return text, None
+
+
+class _PPTransformer(Transformer):
+    def v_string(self, items):
+        return ("str", str(items[0])[1:-1])
+
+    def v_int(self, items):
+        return ("int", int(str(items[0])))
+
+    def v_bin(self, items):
+        return ("int", int(str(items[0])[1:], 2))
+
+    def v_hex(self, items):
+        return ("int", int(str(items[0])[1:], 16))
+
+    def v_ref(self, items):
+        return ("ref", str(items[0]))
+
+    def define(self, items):
+        return ("define", str(items[1]), items[2])
+
+    def if_cmp(self, items):
+        return ("if", str(items[1]), str(items[2]), items[3])
+
+    def if_def(self, items):
+        return ("ifdef" if str(items[0]).lower() == "#ifdef" else "ifndef", str(items[1]))
+
+    def else_(self, items):
+        return ("else",)
+
+    def endif(self, items):
+        return ("endif",)
+
+    def start(self, items):
+        return items[0]
+
+
+class PPParser:
+    """Parses one preprocessor or DEFINE line with the lark grammar `pp.lark`."""
+
+    def __init__(self) -> None:
+        self._lark = Lark(load_grammar("pp.lark"), parser="lalr", lexer="contextual")
+        self._transformer = _PPTransformer()
+
+    def parse(self, code: str) -> tuple | None:
+        try:
+            return self._transformer.transform(self._lark.parse(code.strip()))
+        except LarkError:
+            return None
+
+
+def resolve_value(raw: tuple, defines: Defines, span: Span, diags: Diagnostics) -> DefineValue:
+    kind, value = raw
+    if kind == "ref":
+        if value in defines.values:
+            return defines.values[value]
+        diags.warning("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
+        return value
+    return value
+
+
+def values_equal(left: DefineValue, right: DefineValue) -> bool:
+    if isinstance(left, int) and isinstance(right, int):
+        return left == right
+    return str(left) == str(right)
+
+
+def parse_define_value(text: str) -> DefineValue:
+    """A `-D NAME=VALUE` value: integer, %binary, $hex, "string" or a bare word taken as a string."""
+    text = text.strip()
+    if re.fullmatch(r"[+-]?[0-9]+", text):
+        return int(text)
+    if re.fullmatch(r"%[01]+", text):
+        return int(text[1:], 2)
+    if re.fullmatch(r"\$[0-9A-Fa-f]+", text):
+        return int(text[1:], 16)
+    if len(text) >= 2 and text[0] == text[-1] == '"':
+        return text[1:-1]
+    return text
+
+
+@dataclasses.dataclass
+class _Frame:
+    active_before: bool
+    taking: bool
+    seen_else: bool
+    span: Span
+    condition: str
+    region_start: int | None
+
+
+class Preprocessor:
+    """Evaluates conditional compilation for one file at a time; `include` reads INCLUDE targets."""
+
+    def __init__(self, defines: Defines, diags: Diagnostics, pp: PPParser):
+        self.defines = defines
+        self.diags = diags
+        self.pp = pp
+        self.inactive: list[InactiveRegion] = []
+
+    def run(self, display: str, lines: tuple[str, ...], include: Callable[[str, Span], tuple[str, tuple[str, ...]] | None] | None = None,
+            star_comments: bool = True, _depth: int = 0) -> list[Line]:
+        out: list[Line] = []
+        stack: list[_Frame] = []
+        active = True
+        for index, raw in enumerate(lines):
+            lineno = index + 1
+            text = _normalise_dashes(raw)
+            stripped = text.lstrip()
+            col = len(text) - len(stripped) + 1
+            span = Span(display, lineno, col)
+            if _PP_LINE.match(text):
+                code, _ = split_comment(text)
+                parsed = self.pp.parse(code)
+                keyword = _PP_LINE.match(text).group(1).lower()
+                if parsed is None:
+                    if active or keyword != "define":
+                        code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
+                        if active or keyword in ("#if", "#ifdef", "#ifndef", "#else", "#endif"):
+                            self.diags.error(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
+                    if keyword in ("#if", "#ifdef", "#ifndef"):
+                        stack.append(_Frame(active, False, False, span, code.strip(), None))
+                        active = False
+                    continue
+                kind = parsed[0]
+                if kind == "define":
+                    if active:
+                        self.defines.define(parsed[1], resolve_value(parsed[2], self.defines, span, self.diags), span, self.diags)
+                    continue
+                if kind in ("if", "ifdef", "ifndef"):
+                    if len(stack) >= MAX_NESTING:
+                        self.diags.error("E-PP-NEST", span, f"#if nested deeper than {MAX_NESTING}")
+                        return out
+                    taking = self._condition(parsed, span) if active else False
+                    frame = _Frame(active, taking, False, span, code.strip(), None)
+                    stack.append(frame)
+                    if active and not taking:
+                        frame.region_start = lineno + 1
+                    active = active and taking
+                    continue
+                if kind == "else":
+                    if not stack or stack[-1].seen_else:
+                        self.diags.error("E-PP-NEST", span, "#else without a matching #if")
+                        continue
+                    frame = stack[-1]
+                    frame.seen_else = True
+                    if frame.active_before:
+                        if frame.taking:
+                            frame.region_start = lineno + 1
+                        else:
+                            self._close_region(display, frame, lineno - 1)
+                    active = frame.active_before and not frame.taking
+                    continue
+                if kind == "endif":
+                    if not stack:
+                        self.diags.error("E-PP-NEST", span, "#endif without a matching #if")
+                        continue
+                    frame = stack.pop()
+                    if frame.region_start is not None:
+                        self._close_region(display, frame, lineno - 1)
+                    active = frame.active_before
+                    continue
+            if not active:
+                continue
+            if star_comments and stripped.startswith("*"):
+                out.append(Line("", stripped[1:], span))
+                continue
+            inc = _INCLUDE_LINE.match(split_comment(text)[0]) if include else None
+            if inc:
+                if _depth > 32:
+                    self.diags.error("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested too deeply (a file includes itself?)")
+                    continue
+                got = include(inc.group(1), span)
+                if got is not None:
+                    inc_display, inc_lines = got
+                    out.extend(self.run(inc_display, inc_lines, include, star_comments, _depth + 1))
+                continue
+            code, comment = split_comment(text)
+            out.append(Line(code, comment, span))
+        for frame in stack:
+            self.diags.error("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
+            if frame.region_start is not None:
+                self._close_region(display, frame, len(lines))
+        return out
+
+    def _close_region(self, display: str, frame: _Frame, last: int) -> None:
+        if frame.region_start is not None and last >= frame.region_start:
+            self.inactive.append(InactiveRegion(display, frame.region_start, last, frame.condition))
+        frame.region_start = None
+
+    def _condition(self, parsed: tuple, span: Span) -> bool:
+        if parsed[0] in ("ifdef", "ifndef"):
+            defined = parsed[1] in self.defines.values
+            return defined if parsed[0] == "ifdef" else not defined
+        _, name, op, raw = parsed
+        if name in self.defines.values:
+            left: DefineValue = self.defines.values[name]
+        else:
+            self.diags.warning("E-PP-UNDEF", span, f"{name} is not defined; it compares as the empty string")
+            left = ""
+        right = resolve_value(raw, self.defines, span, self.diags)
+        equal = values_equal(left, right)
+        return equal if op == "=" else not equal
+
+
+def _normalise_dashes(text: str) -> str:
+    # The manuals print "L–" with an en dash; files may carry it as UTF-8 (read as Latin-1),
+    # as the cp1252 byte 0x96, or as U+2013. All of them mean '-'.
+    if "\u2013" in text or "\xe2\x80\x93" in text or "\x96" in text:
+        return text.replace("\xe2\x80\x93", "-").replace("\u2013", "-").replace("\x96", "-")
+    return text
+
+
+def read_config(display: str, lines: tuple[str, ...], defines: Defines, diags: Diagnostics, pp: PPParser) -> None:
+    """A .cfg file: DEFINE lines under conditional compilation; free text is a warning (spec 4.3, 17b.3)."""
+    pre = Preprocessor(defines, diags, pp)
+    for line in pre.run(display, lines):
+        if line.code.strip():
+            diags.warning("E-CFG-SYNTAX", line.span, f"line ignored: {line.code.strip()[:80]}")
+
+
+def initial_defines(overrides: Mapping[str, DefineValue]) -> Defines:
+    return Defines(dict(overrides), {name: Span("<command line>", 1, 1) for name in overrides}, frozenset(overrides))
+
+
+def find_default_cfg(main: Path) -> Path | None:
+    """`OEM.cfg` beside the main file, matched case-insensitively."""
+    try:
+        for p in sorted(main.parent.iterdir()):
+            if p.name.lower() == "oem.cfg" and p.is_file():
+                return p
+    except OSError:
+        return None
+    return None

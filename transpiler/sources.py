@@ -1,0 +1,96 @@
+"""Finds and reads project files: case-insensitive lookup inside the allowed folders, Latin-1 text, split lines."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import re
+from pathlib import Path
+
+from .diagnostics import Diagnostics, Span
+
+_LINE_SPLIT = re.compile(r"\r\n|\r|\n")
+MAX_FILE_BYTES = 64 * 1024 * 1024
+
+
+@dataclasses.dataclass(frozen=True)
+class SourceText:
+    path: Path
+    display: str            # path shown in diagnostics (relative to the main folder when possible)
+    lines: tuple[str, ...]
+
+
+class ProjectFolders:
+    """The folders files may be read from: the main file's folder and each -I folder."""
+
+    def __init__(self, main_dir: Path, include_dirs: list[Path]):
+        self.main_dir = main_dir.resolve()
+        self.roots = [self.main_dir] + [d.resolve() for d in include_dirs]
+
+    def display(self, path: Path) -> str:
+        try:
+            return str(path.resolve().relative_to(self.main_dir))
+        except ValueError:
+            return str(path)
+
+    def inside(self, path: Path) -> bool:
+        real = path.resolve()
+        return any(real == root or root in real.parents for root in self.roots)
+
+    def find(self, name: str, at: Span, diags: Diagnostics, relative_to: Path | None = None) -> Path | None:
+        """Resolve a file name from a directive; reports E-FILE-ESCAPE / E-FILE-NOT-FOUND."""
+        clean = name.strip().strip('"')
+        if not clean:
+            diags.error("E-FILE-NOT-FOUND", at, "empty file name")
+            return None
+        parts = re.split(r"[\\/]", clean)
+        if os.path.isabs(clean) or clean.startswith(("/", "\\")) or re.match(r"^[A-Za-z]:", clean) or ".." in parts:
+            diags.error("E-FILE-ESCAPE", at, f"file name '{clean}' leaves the project folders")
+            return None
+        search = ([relative_to] if relative_to else []) + self.roots
+        for root in search:
+            found = _find_case_insensitive(root, parts)
+            if found is not None:
+                if not self.inside(found):
+                    diags.error("E-FILE-ESCAPE", at, f"'{clean}' resolves outside the project folders (symlink)")
+                    return None
+                return found
+        diags.error("E-FILE-NOT-FOUND", at, f"file '{clean}' not found in {', '.join(map(str, self.roots))}")
+        return None
+
+
+def _find_case_insensitive(root: Path, parts: list[str]) -> Path | None:
+    current = root
+    for part in parts:
+        if not part or part == ".":
+            continue
+        candidate = current / part
+        if candidate.exists():
+            current = candidate
+            continue
+        try:
+            matches = sorted(p for p in current.iterdir() if p.name.lower() == part.lower())
+        except OSError:
+            return None
+        if not matches:
+            return None
+        current = matches[0]
+    return current if current.is_file() else None
+
+
+def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostics) -> SourceText | None:
+    """Read a file as Latin-1 (every byte sequence is accepted) and split it into lines."""
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            diags.error("E-FILE-READ", at, f"{path.name} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB")
+            return None
+        data = path.read_bytes()
+    except OSError as exc:
+        diags.error("E-FILE-READ", at, f"cannot read {path}: {exc.strerror or exc}")
+        return None
+    text = data.decode("latin-1")
+    lines = _LINE_SPLIT.split(text)
+    if lines and lines[-1] == "":
+        lines.pop()
+    return SourceText(path, folders.display(path), tuple(lines))

@@ -1,0 +1,128 @@
+"""Format an IecProject as one IEC 61131-3 Structured Text file (jinja2 templates in templates/st/); decides nothing."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import jinja2
+
+from transpiler.iec_model import IecProject, IecVar, VarSection, st_comment
+
+TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates" / "st"
+BODY_INDENT = "    "
+
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+_POU_HEADER = re.compile(r"^(PROGRAM|FUNCTION_BLOCK|FUNCTION) (\S+)")
+
+
+def comment_lines(text: str | None) -> list[str]:
+    """Own-line comments: one `(* ... *)` per source line, so no comment line can look like a declaration."""
+    if not text:
+        return []
+    return [st_comment(line) for line in _LINE_BREAK.split(text)]
+
+
+def trailing_comment(text: str | None) -> str:
+    """A comment that must fit on its declaration line: line breaks become spaces (the XML keeps them)."""
+    if not text:
+        return ""
+    return " " + st_comment(_LINE_BREAK.sub(" ", text))
+
+
+def indent_body(body: str) -> str:
+    """Indent every non-empty line by BODY_INDENT; extract_pou_bodies undoes exactly this."""
+    return "\n".join(BODY_INDENT + line if line else "" for line in body.split("\n"))
+
+
+def section_header(section: VarSection) -> str:
+    if section.constant and section.retain:
+        raise ValueError(f"a {section.kind} section cannot be both CONSTANT and RETAIN")
+    qualifier = " CONSTANT" if section.constant else " RETAIN" if section.retain else ""
+    return section.kind + qualifier
+
+
+def located_blocks(section: VarSection) -> list[VarSection]:
+    """Split a section into runs of located and of plain variables: matiec rejects a block that mixes them."""
+    blocks: list[VarSection] = []
+    run: list[IecVar] = []
+    for var in section.vars:
+        if run and (run[-1].address is None) != (var.address is None):
+            blocks.append(_block(section, run, first=not blocks))
+            run = []
+        run.append(var)
+    if run or not blocks:
+        blocks.append(_block(section, run, first=not blocks))
+    return blocks
+
+
+def _block(section: VarSection, run: list[IecVar], first: bool) -> VarSection:
+    return VarSection(kind=section.kind, vars=tuple(run), constant=section.constant,
+                      retain=section.retain, comment=section.comment if first else None)
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
+        undefined=jinja2.StrictUndefined,
+        autoescape=False,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+    env.filters.update(
+        comment_lines=comment_lines,
+        trailing_comment=trailing_comment,
+        indent_body=indent_body,
+        section_header=section_header,
+        located_blocks=located_blocks,
+    )
+    return env
+
+
+def render_st(project: IecProject) -> str:
+    """The whole project as one ST file: header, TYPEs, POUs in the given order, one CONFIGURATION."""
+    text = _environment().get_template("project.st.j2").render(project=project)
+    return text.rstrip("\n") + "\n"
+
+
+def extract_pou_bodies(st_text: str) -> dict[str, str]:
+    """Map each POU name to its body as render_st wrote it, de-indented back to the exact `Pou.body`.
+
+    Raises ValueError when the text is not in render_st's layout.
+    """
+    lines = st_text.split("\n")
+    bodies: dict[str, str] = {}
+    index = 0
+    while index < len(lines):
+        match = _POU_HEADER.match(lines[index])
+        if match is None:
+            index += 1
+            continue
+        kind, name = match.group(1), match.group(2)
+        index = _skip_sections(lines, index + 1)
+        body, index = _collect_body(lines, index, f"END_{kind}")
+        bodies[name] = body
+    return bodies
+
+
+def _skip_sections(lines: list[str], index: int) -> int:
+    while index < len(lines) and lines[index].startswith("VAR"):
+        while index < len(lines) and lines[index] != "END_VAR":
+            index += 1
+        index += 1
+    return index
+
+
+def _collect_body(lines: list[str], index: int, end: str) -> tuple[str, int]:
+    body: list[str] = []
+    while index < len(lines) and lines[index] != end:
+        line = lines[index]
+        if line and not line.startswith(BODY_INDENT):
+            raise ValueError(f"line {index + 1}: body line not indented by {len(BODY_INDENT)} spaces: {line!r}")
+        body.append(line[len(BODY_INDENT):])
+        index += 1
+    if index >= len(lines):
+        raise ValueError(f"missing {end}")
+    return "\n".join(body), index + 1
+
