@@ -61,7 +61,7 @@ def _parse_vcd(path: Path) -> tuple[dict, dict, list]:
     with path.open("rb") as handle:
         for token in tokenize(handle):
             if token.kind is TokenKind.TIMESCALE:
-                timescale = (token.timescale.magnitude.value, token.timescale.unit.value)
+                timescale = (int(token.timescale.magnitude), token.timescale.unit.value)
             elif token.kind is TokenKind.VAR:
                 variables[token.var.id_code] = (token.var.reference, token.var.type_.value, token.var.size)
             elif token.kind is TokenKind.CHANGE_TIME:

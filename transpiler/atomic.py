@@ -81,7 +81,7 @@ def _rollback(staged: list[_Staged], created_dirs: list[Path]) -> None:
         with contextlib.suppress(OSError):
             if item.replaced:
                 if item.backup is not None:
-                    pass
+                    os.replace(item.backup, item.target)
                 else:
                     item.target.unlink()
             item.temp.unlink(missing_ok=True)

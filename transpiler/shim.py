@@ -413,11 +413,13 @@ def _fixed_point(value: Any) -> tuple[int, int]:
         raise ValueError(f"machine parameter value {value!r} is not a number") from None
     if not dec.is_finite():
         raise ValueError(f"machine parameter value {value!r} is not finite")
+    if dec.as_tuple().exponent < -9:  # type: ignore[operator]
+        dec = dec.normalize()  # '0.5000000000' still fits: drop the trailing zeros
     sign, digits, exponent = dec.as_tuple()
     mantissa = int("".join(map(str, digits)) or "0") * (-1 if sign else 1)
-    if exponent > 0:
-        return mantissa * 10**exponent, 0
-    return mantissa, -exponent
+    if exponent > 0:  # type: ignore[operator]
+        return mantissa * 10**exponent, 0  # type: ignore[operator]
+    return mantissa, -exponent  # type: ignore[operator]
 
 
 class SysModules:
@@ -489,8 +491,6 @@ class SysModules:
     def set_mp(self, number: int, index: int, value: int | float | str | Decimal) -> None:
         """Machine parameter number.index; decimals are kept as written ('0.125' s, 10 cycles)."""
         mantissa, decimals = _fixed_point(value)
-        if decimals > 9:
-            mantissa, decimals = _fixed_point(Decimal(value if not isinstance(value, float) else repr(value)).normalize())
         if self._lib.hh_sys_set_mp(self._handle, _int32(number, "MP number"), _int32(index, "MP index"),
                                    mantissa, decimals) != 0:
             raise ValueError(f"machine parameter {number}.{index} = {value!r}: more than 9 decimals or 15 digits")

@@ -64,7 +64,7 @@ def _expand_random(scenario: Scenario, names: NameTable, diags: Diagnostics) -> 
     for i, pattern in enumerate(scenario.random.inputs if scenario.random else ()):
         if not is_glob(pattern):
             ref = names.resolve(pattern)   # bind() has already checked it
-            if pattern not in names.non_toggle and ref.kind in BIT_KINDS:
+            if ref.kind in BIT_KINDS:
                 chosen[pattern] = ref
             continue
         matched = names.match(pattern)
