@@ -34,6 +34,9 @@
  * wait for the acknowledgement: 17b.6 defines completion as "strobe reset and
  * acknowledgement reset", and a PLC that never resets its acknowledgement would otherwise
  * stall the queue silently.  The error is sticky: every later phase returns it again.
+ * An action whose acknowledgement marker the PLC still holds at 1 when its turn comes does
+ * not start (spec 12.3: "ack == 0") and, its strobe never having been set, cannot time out;
+ * it stays pending (hh_nc_pending), which the run report should show.
  */
 #ifndef HH_NC_H
 #define HH_NC_H
@@ -83,7 +86,8 @@ int hh_nc_fn19(hh_nc *nc, int32_t value1, int32_t value2);   /* D280/D284; M4075
 int hh_nc_mode(hh_nc *nc, int32_t mode);                     /* W272, no handshake */
 int hh_nc_restart(hh_nc *nc, int32_t kind);                  /* HH_NC_RESTART_...: M4173 / M4174 */
 
-/* Phase 1 of PLC cycle `cycle`.  Returns the number of writes stored in out[0..n-1]
+/* Phase 1 of PLC cycle `cycle` (read_bit must not be NULL; it is called only while actions are
+ * pending, at most a few times per phase).  Returns the number of writes stored in out[0..n-1]
  * (apply them in this order) or a negative HH_NC_PHASE_... code. */
 int hh_nc_phase(hh_nc *nc, int64_t cycle, hh_read_bit read_bit, void *ctx, hh_write *out, int max_out);
 

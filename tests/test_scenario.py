@@ -276,7 +276,7 @@ def test_toggle_flips_the_last_value_the_stimulus_drove(tmp_path: Path, names: N
         random: {seed: 1, inputs: [I_key_M3], toggle_probability: 1.0}
         """)
     st = build_stimulus(load_scenario(path, names), names)
-    assert [[w.value for w in step.toggles] for step in st.steps] == [[0], [1], [0], [0], [1]]
+    assert [[w.value for w in st.step(c).toggles] for c in range(5)] == [[0], [1], [0], [0], [1]]
 
 
 def _reference_toggles(seed: int, inputs: list[OperandRef], probability: float, cycles: int) -> list[list]:
@@ -308,7 +308,7 @@ def test_random_stimulus_is_reproducible_and_follows_the_documented_draws(tmp_pa
     # I_key_alias is an alias and never toggles; names sort as I18 < I19 < I_key_M3 < I_key_M5
     assert [name for name, _ in first.toggled] == ["I18", "I19", "I_key_M3", "I_key_M5"]
     expected = _reference_toggles(42, [ref for _, ref in first.toggled], 0.5, 200)
-    assert [[(w.ref, w.value) for w in step.toggles] for step in first.steps] == expected
+    assert [[(w.ref, w.value) for w in first.step(c).toggles] for c in range(200)] == expected
     assert 0.4 < first.toggle_count / (200 * 4) < 0.6
 
 
@@ -322,7 +322,7 @@ def test_two_names_of_one_operand_toggle_it_once(tmp_path: Path) -> None:
     path = write(tmp_path, "cycles: 3\nrandom: {seed: 1, inputs: ['I_*'], toggle_probability: 1.0}\n")
     st = build_stimulus(load_scenario(path, table), table)
     assert st.toggled == (("I_a", R("I", 1)),)
-    assert [len(step.toggles) for step in st.steps] == [1, 1, 1]
+    assert [len(st.step(c).toggles) for c in range(3)] == [1, 1, 1]
 
 
 def test_glob_matching_nothing_is_a_warning_with_its_line(tmp_path: Path, names: NameTable) -> None:
@@ -354,8 +354,10 @@ def test_rebuilt_from_an_edited_scenario(tmp_path: Path, names: NameTable) -> No
     s = load_scenario(path, names)
     shorter = s.model_copy(update={"cycles": 5, "events": [s.events[1]]})
     st = build_stimulus(shorter, names)
-    assert st.cycles == 5 and len(st.steps) == 5
-    assert [(c, w.ref) for c, step in enumerate(st.steps) for w in step.writes] == [(2, R("I", 2))]
+    assert st.cycles == 5
+    assert [(c, w.ref) for c in range(5) for w in st.writes(c)] == [(2, R("I", 2))]
+    with pytest.raises(IndexError):
+        st.writes(5)
 
 
 def test_materialized_random_gives_the_same_writes(tmp_path: Path, names: NameTable) -> None:
@@ -370,7 +372,8 @@ def test_materialized_random_gives_the_same_writes(tmp_path: Path, names: NameTa
     assert plain.random is None
     original, rebuilt = build_stimulus(s, names), build_stimulus(plain, names)
     assert original.toggle_count > 0 and rebuilt.toggle_count == 0
-    assert [[w[:2] for w in st.writes] for st in original.steps] == [[w[:2] for w in st.writes] for st in rebuilt.steps]
+    for cycle in range(30):
+        assert [w[:2] for w in original.writes(cycle)] == [w[:2] for w in rebuilt.writes(cycle)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -455,3 +458,13 @@ def test_scenario_built_in_code_round_trips(tmp_path: Path, names: NameTable) ->
     s = Scenario(cycles=3, events=[{"cycle": 1, "set": {"I1": 1}}])  # type: ignore[list-item]
     again = load_scenario(write(tmp_path, scenario_to_yaml(s)), names)
     assert again == s
+
+
+@pytest.mark.parametrize("text, line, fragment", [
+    ("cycles: !!int abc\n", 1, "bad value 'abc'"),
+    ("cycles: 3\nname: x\x07\n", 2, "U+0007"),
+])
+def test_unreadable_values_give_one_message(tmp_path: Path, names: NameTable, text: str, line: int,
+                                            fragment: str) -> None:
+    (d,) = errors_of(write(tmp_path, text), names)
+    assert d.span.line == line and fragment in d.message

@@ -228,3 +228,27 @@ def test_constant_and_retain_together_is_refused() -> None:
 def test_extract_rejects_foreign_layout() -> None:
     with pytest.raises(ValueError):
         extract_pou_bodies("PROGRAM P\nx := 1;\nEND_PROGRAM\n")
+
+
+def _unwritable_projects() -> list[tuple[str, IecProject]]:
+    project = rich_project()
+    no_return = dataclasses.replace(project.pous[0], return_type=None)
+    fb_return = dataclasses.replace(project.pous[1], return_type="INT")
+    no_dims = dataclasses.replace(project.types[0], dims=())
+    no_fields = dataclasses.replace(project.types[2], fields=())
+    return [
+        ("return type", dataclasses.replace(project, pous=(no_return,) + project.pous[1:])),
+        ("return type", dataclasses.replace(project, pous=(project.pous[0], fb_return, project.pous[2]))),
+        ("dimension", dataclasses.replace(project, types=(no_dims,) + project.types[1:])),
+        ("no fields", dataclasses.replace(project, types=project.types[:2] + (no_fields,))),
+    ]
+
+
+@pytest.mark.parametrize(("message", "project"), _unwritable_projects())
+def test_unwritable_models_are_refused_by_both_containers(message: str, project: IecProject) -> None:
+    from transpiler.plcopen import render_xml
+
+    with pytest.raises(ValueError, match=message):
+        render_st(project)
+    with pytest.raises(ValueError, match=message):
+        render_xml(project)

@@ -17,6 +17,7 @@ from datetime import datetime, timezone
 from lxml import etree
 
 from transpiler.iec_model import DataType, IecProject, IecVar, Pou, VarSection
+from transpiler.st_writer import check_formattable
 
 NS = "http://www.plcopen.org/xml/tc6_0201"
 XHTML = "http://www.w3.org/1999/xhtml"
@@ -199,12 +200,10 @@ def _data_type(parent: etree._Element, data_type: DataType) -> None:
     element = _sub(parent, "dataType", name=data_type.name)
     base = _sub(element, "baseType")
     if data_type.kind == "array":
-        if data_type.base is None or not data_type.dims:
-            raise ValueError(f"array type {data_type.name} needs a base type and at least one dimension")
         array = _sub(base, "array")
         for dim in data_type.dims:
             _sub(array, "dimension", lower=str(dim.lo), upper=str(dim.hi))
-        _type_ref(array, "baseType", data_type.base)
+        _type_ref(array, "baseType", data_type.base or "")
     else:
         struct = _sub(base, "struct")
         for field in data_type.fields:
@@ -297,7 +296,9 @@ def render_xml(project: IecProject, creation: datetime | None = None) -> bytes:
     """The project as TC6 XML v2.01 bytes: UTF-8, XML declaration, pretty-printed, deterministic.
 
     The timestamp is `creation`, else $SOURCE_DATE_EPOCH (UTC), else the current UTC time.
+    Raises ValueError for model shapes that cannot be written (st_writer.check_formattable).
     """
+    check_formattable(project)
     root = etree.Element(_q("project"), nsmap={None: NS, "xhtml": XHTML})
     _headers(root, project, creation_stamp(creation))
     types = _sub(root, "types")
@@ -317,5 +318,5 @@ def extract_st_bodies(xml: bytes) -> dict[str, str]:
     bodies: dict[str, str] = {}
     for pou in root.iterfind(f"{_q('types')}/{_q('pous')}/{_q('pou')}"):
         paragraph = pou.find(f"{_q('body')}/{_q('ST')}/{{{XHTML}}}p")
-        bodies[pou.get("name")] = paragraph.text or "" if paragraph is not None else ""
+        bodies[pou.get("name")] = (paragraph.text or "") if paragraph is not None else ""
     return bodies

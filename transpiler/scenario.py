@@ -237,7 +237,7 @@ class NcAction(_Model):
         return next(k for k in NC_KINDS if getattr(self, k) is not None)
 
     def as_dict(self) -> dict[str, Any]:
-        """The plain form the NC model consumes, e.g. {'tool_call': {'tool': 5, 'pocket': 2, 'second_strobe': False}}."""
+        """The plain form for the NC model, e.g. {'tool_call': {'tool': 5, 'pocket': 2, 'second_strobe': False}}."""
         return self.model_dump(exclude_none=True)
 
 
@@ -361,6 +361,7 @@ class _Tree:
     key_spans: dict[tuple, Span] = dataclasses.field(default_factory=dict)
     key_text: dict[tuple, str] = dataclasses.field(default_factory=dict)
     scalar_text: dict[tuple, str] = dataclasses.field(default_factory=dict)
+    broken: set[tuple] = dataclasses.field(default_factory=set)   # values already reported as unreadable
 
     def span(self, mark: yaml.Mark) -> Span:
         return Span(self.file, mark.line + 1, mark.column + 1)
@@ -380,7 +381,8 @@ class _Tree:
             if not isinstance(key_node, yaml.ScalarNode):
                 self.diags.error("E-SCENARIO", self.span(key_node.start_mark), "a key must be a plain name or number")
                 continue
-            key = self._scalar(key_node, path)
+            # an unreadable key (e.g. the merge key '<<') is kept as text: the schema reports it as unknown
+            key = self._scalar(key_node, None)
             try:
                 hash(key)
             except TypeError:
@@ -394,12 +396,19 @@ class _Tree:
             result[key] = self.build(value_node, sub)
         return result
 
-    def _scalar(self, node: yaml.ScalarNode, path: tuple) -> Any:
+    def _scalar(self, node: yaml.ScalarNode, path: tuple | None) -> Any:
         try:
             return yaml.constructor.SafeConstructor().construct_object(node)
         except (yaml.YAMLError, ValueError) as exc:
-            self.diags.error("E-SCENARIO", self.span(node.start_mark), f"bad value {node.value!r}: {exc}")
+            if path is not None:
+                problem = getattr(exc, "problem", None) or str(exc)
+                self.diags.error("E-SCENARIO", self.span(node.start_mark), f"bad value {node.value!r}: {problem}")
+                self.broken.add(path)
             return node.value
+
+
+def _codepoint(character: int | str) -> str:
+    return f"U+{character if isinstance(character, int) else ord(character):04X}"
 
 
 def _compose(text: str, file: str, diags: Diagnostics) -> yaml.Node | None:
@@ -410,6 +419,10 @@ def _compose(text: str, file: str, diags: Diagnostics) -> yaml.Node | None:
         span = Span(file, mark.line + 1, mark.column + 1) if mark else Span(file, 1, 1)
         problem = exc.problem or exc.context or "malformed YAML"
         diags.error("E-SCENARIO", span, f"YAML syntax error: {problem}")
+    except yaml.reader.ReaderError as exc:
+        line = text[:exc.position].count("\n") + 1
+        col = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
+        diags.error("E-SCENARIO", Span(file, line, col), f"YAML syntax error: {exc.reason} ({_codepoint(exc.character)})")
     except yaml.YAMLError as exc:
         diags.error("E-SCENARIO", Span(file, 1, 1), f"YAML syntax error: {exc}")
     return None
@@ -525,6 +538,8 @@ def _where(loc: tuple) -> str:
 
 def _schema_diagnostic(err: Mapping[str, Any], tree: _Tree, diags: Diagnostics) -> None:
     loc = tuple(err["loc"])
+    if any(loc[:n] in tree.broken for n in range(1, len(loc) + 1)):
+        return  # one message per fault: the unreadable value was already reported
     default = Span(tree.file, 1, 1)
     kind = err["type"]
     if kind == "extra_forbidden":

@@ -80,8 +80,26 @@ def _environment() -> jinja2.Environment:
     return env
 
 
+def check_formattable(project: IecProject) -> None:
+    """Refuse model shapes that neither container can express (a bug in the producer of the model)."""
+    for data_type in project.types:
+        if data_type.kind == "array" and (not data_type.base or not data_type.dims):
+            raise ValueError(f"array type {data_type.name} needs a base type and at least one dimension")
+        if data_type.kind == "struct" and not data_type.fields:
+            raise ValueError(f"struct type {data_type.name} has no fields")
+    for pou in project.pous:
+        if (pou.kind == "FUNCTION") != bool(pou.return_type):
+            raise ValueError(f"{pou.kind} {pou.name}: a return type is required for, and only for, a FUNCTION")
+    for section in [s for pou in project.pous for s in pou.sections] + list(project.configuration.globals):
+        section_header(section)
+
+
 def render_st(project: IecProject) -> str:
-    """The whole project as one ST file: header, TYPEs, POUs in the given order, one CONFIGURATION."""
+    """The whole project as one ST file: header, TYPEs, POUs in the given order, one CONFIGURATION.
+
+    Raises ValueError for model shapes that cannot be written (see check_formattable).
+    """
+    check_formattable(project)
     text = _environment().get_template("project.st.j2").render(project=project)
     return text.rstrip("\n") + "\n"
 

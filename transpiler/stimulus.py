@@ -1,4 +1,4 @@
-"""Scenario -> precomputed per-cycle stimulus (writes and NC actions), expectation checks, observed operands, YAML export."""
+"""Scenario -> precomputed per-cycle stimulus (writes, NC actions); expectation checks, trace columns, YAML export."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import os
 import random
 from decimal import Decimal
 from pathlib import Path
-from typing import Any, Callable, Iterable, NamedTuple
+from typing import Any, Callable, Iterable, Mapping, NamedTuple
 
 import yaml
 
@@ -37,25 +37,36 @@ class CycleStimulus:
         return self.sets + self.toggles
 
 
+_QUIET = CycleStimulus()
+
+
 @dataclasses.dataclass(frozen=True)
 class Stimulus:
-    """The executor-independent input of a whole run; rebuild it with build_stimulus after editing the scenario."""
+    """The executor-independent input of a whole run; rebuild it with build_stimulus after editing the scenario.
+
+    `steps` holds only the cycles in which something happens (long runs stay small).
+    """
 
     cycles: int
     cycle_time_ms: int
-    steps: tuple[CycleStimulus, ...]
+    steps: Mapping[int, CycleStimulus]
     toggled: tuple[tuple[str, OperandRef], ...]   # the random inputs after glob expansion, in draw order
     diagnostics: tuple[Diagnostic, ...] = ()
 
+    def step(self, cycle: int) -> CycleStimulus:
+        if not 0 <= cycle < self.cycles:
+            raise IndexError(f"cycle {cycle} outside 0..{self.cycles - 1}")
+        return self.steps.get(cycle, _QUIET)
+
     def writes(self, cycle: int) -> tuple[Write, ...]:
-        return self.steps[cycle].writes
+        return self.step(cycle).writes
 
     def nc_actions(self, cycle: int) -> tuple[dict[str, Any], ...]:
-        return self.steps[cycle].nc
+        return self.step(cycle).nc
 
     @property
     def toggle_count(self) -> int:
-        return sum(len(step.toggles) for step in self.steps)
+        return sum(len(step.toggles) for step in self.steps.values())
 
 
 def _expand_random(scenario: Scenario, names: NameTable, diags: Diagnostics) -> list[tuple[str, OperandRef]]:
@@ -64,7 +75,7 @@ def _expand_random(scenario: Scenario, names: NameTable, diags: Diagnostics) -> 
     for i, pattern in enumerate(scenario.random.inputs if scenario.random else ()):
         if not is_glob(pattern):
             ref = names.resolve(pattern)   # bind() has already checked it
-            if ref.kind in BIT_KINDS:
+            if pattern not in names.non_toggle and ref.kind in BIT_KINDS:
                 chosen[pattern] = ref
             continue
         matched = names.match(pattern)
@@ -111,7 +122,7 @@ def build_stimulus(scenario: Scenario, names: NameTable) -> Stimulus:
         by_cycle.setdefault(event.cycle, []).append(event)
     # The stimulus is the process outside the PLC: it remembers what it last drove onto each operand.
     driven: dict[OperandRef, int | str] = {}
-    steps: list[CycleStimulus] = []
+    steps: dict[int, CycleStimulus] = {}
     for cycle in range(bound.cycles):
         sets: list[Write] = []
         if cycle == 0:
@@ -129,15 +140,16 @@ def build_stimulus(scenario: Scenario, names: NameTable) -> Stimulus:
                     driven[ref] = 1 - _bit(driven.get(ref, 0))
                     flips.append(Write(ref, driven[ref], name))
         nc = tuple(event.nc.as_dict() for event in events if event.nc is not None)
-        steps.append(CycleStimulus(tuple(sets), tuple(flips), nc))
-    return Stimulus(bound.cycles, bound.cycle_time_ms, tuple(steps), tuple(toggles), tuple(diags.items))
+        if sets or flips or nc:
+            steps[cycle] = CycleStimulus(tuple(sets), tuple(flips), nc)
+    return Stimulus(bound.cycles, bound.cycle_time_ms, steps, tuple(toggles), tuple(diags.items))
 
 
 def materialize_random(scenario: Scenario, names: NameTable) -> Scenario:
     """The same stimulus with every random toggle turned into an explicit `set` event (so each can be removed)."""
     stimulus = build_stimulus(scenario, names)
     extra = [Event(cycle=c, set={w.name: w.value for w in step.toggles})
-             for c, step in enumerate(stimulus.steps) if step.toggles]
+             for c, step in sorted(stimulus.steps.items()) if step.toggles]
     # sorted() is stable: at equal cycles the original events keep applying before the former toggles
     events = sorted([*scenario.events, *extra], key=lambda e: e.cycle)
     return bind(scenario.model_copy(update={"events": events, "random": None}), names)

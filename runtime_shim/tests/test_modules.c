@@ -142,7 +142,8 @@ static void timer_retrigger(void)
         hh_sys *sys = hh_sys_new(20);
         int c, last = -1;
         hh_sys_set_number_mp4111(sys, 1);
-        hh_sys_set_timer_restart(sys, restart);
+        if (!restart) /* restarting is the default (A-34b) */
+            hh_sys_set_timer_restart(sys, 0);
         hh_sys_set_mp(sys, 4111, 96, 1, 1); /* 5 cycles */
         for (c = 0; c < 12; c++) {
             if (service_t96(sys))

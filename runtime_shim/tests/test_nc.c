@@ -122,9 +122,9 @@ static void queue_plays_one_at_a_time(void)
 
 static void tool_call_marker_selection(void)
 {
-    static const int32_t cases[4][3] = {{0, 5, 4521}, {5, 2, 4522}, {5, -1, 4523}, {5, 0, 4523}};
+    static const int32_t cases[5][3] = {{0, 5, 4521}, {5, 1, 4522}, {5, 2, 4522}, {5, -1, 4523}, {5, 0, 4523}};
     int i;
-    for (i = 0; i < 4; i++) {
+    for (i = 0; i < 5; i++) {
         hh_nc *nc = hh_nc_new(20, HH_NC_PROFILE_ITNC);
         int32_t m, v;
         reset_plc();

@@ -1,0 +1,120 @@
+"""Typed ST expressions with value ranges and variable dependencies, built while the accumulators are executed symbolically."""
+
+from __future__ import annotations
+
+import dataclasses
+
+INT32 = (-(2 ** 31), 2 ** 31 - 1)
+RANGES = {"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)}
+
+# Operator precedence of IEC 61131-3 ST (higher binds tighter).
+PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_EQ, PREC_AND, PREC_XOR, PREC_OR = 10, 9, 8, 7, 6, 5, 4, 3, 2
+
+
+@dataclasses.dataclass(frozen=True)
+class Expr:
+    """ST text of a value, its IEC type, the variables it reads, and (for integers) its value range."""
+
+    text: str
+    typ: str
+    deps: frozenset[str] = frozenset()
+    lo: int = 0
+    hi: int = 0
+    prec: int = PREC_ATOM
+    var: str | None = None          # set when the expression is exactly one variable (an lvalue)
+    const: int | None = None        # set for integer literals
+    bool_const: bool | None = None  # set for TRUE/FALSE
+
+    def wrap(self, prec: int) -> str:
+        return self.text if self.prec >= prec else f"({self.text})"
+
+    @property
+    def simple(self) -> bool:
+        return self.var is not None or self.const is not None or self.bool_const is not None or self.prec == PREC_ATOM and "(" not in self.text
+
+
+def var(name: str, typ: str, deps_name: str | None = None) -> Expr:
+    lo, hi = RANGES.get(typ, (0, 0))
+    return Expr(name, typ, frozenset([deps_name or base_name(name)]), lo, hi, PREC_ATOM, var=name)
+
+
+def base_name(text: str) -> str:
+    """The variable an lvalue text belongs to (array element `A[3]` -> `A`)."""
+    return text.split("[", 1)[0].split(".", 1)[0].upper()
+
+
+def int_const(value: int, typ: str = "DINT") -> Expr:
+    text = str(value) if value >= 0 else f"{typ}#{value}" if typ != "DINT" else str(value)
+    prec = PREC_ATOM if value >= 0 else PREC_UNARY
+    return Expr(text, typ, frozenset(), value, value, prec, const=value)
+
+
+def bool_const(value: bool) -> Expr:
+    return Expr("TRUE" if value else "FALSE", "BOOL", frozenset(), int(value), int(value), bool_const=value)
+
+
+def call(fn: str, args: list[Expr], typ: str, lo: int | None = None, hi: int | None = None) -> Expr:
+    deps = frozenset().union(*(a.deps for a in args)) if args else frozenset()
+    rlo, rhi = RANGES.get(typ, (0, 0))
+    return Expr(f"{fn}({', '.join(a.text for a in args)})", typ, deps,
+                rlo if lo is None else lo, rhi if hi is None else hi)
+
+
+def raw(text: str, typ: str, deps: frozenset[str], prec: int = PREC_ATOM, lo: int | None = None, hi: int | None = None) -> Expr:
+    rlo, rhi = RANGES.get(typ, (0, 0))
+    return Expr(text, typ, deps, rlo if lo is None else lo, rhi if hi is None else hi, prec)
+
+
+def to_dint(e: Expr) -> Expr:
+    """Widen an integer or boolean expression to DINT (the word accumulator's type)."""
+    if e.typ == "DINT":
+        return e
+    if e.const is not None:
+        return int_const(e.const)
+    if e.typ == "BOOL":
+        return Expr(f"BOOL_TO_DINT({e.text})", "DINT", e.deps, 0, 1)
+    return Expr(f"{e.typ}_TO_DINT({e.text})", "DINT", e.deps, e.lo, e.hi)
+
+
+def binop(op: str, a: Expr, b: Expr, typ: str, prec: int, lo: int | None = None, hi: int | None = None) -> Expr:
+    # Left-associative: the right operand needs parentheses at equal precedence.
+    text = f"{a.wrap(prec)} {op} {b.wrap(prec + 1)}"
+    rlo, rhi = RANGES.get(typ, (0, 0))
+    return Expr(text, typ, a.deps | b.deps, rlo if lo is None else lo, rhi if hi is None else hi, prec)
+
+
+def b_not(a: Expr) -> Expr:
+    if a.bool_const is not None:
+        return bool_const(not a.bool_const)
+    if a.text.startswith("NOT ") and a.prec == PREC_UNARY:
+        inner = a.text[4:]
+        if inner.startswith("(") and inner.endswith(")") and _balanced(inner[1:-1]):
+            inner = inner[1:-1]
+        return Expr(inner, "BOOL", a.deps, 0, 1, PREC_OR if inner != a.text[4:] else PREC_ATOM)
+    return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY)
+
+
+def _balanced(text: str) -> bool:
+    depth = 0
+    for ch in text:
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth < 0:
+            return False
+    return depth == 0
+
+
+def b_and(a: Expr, b: Expr) -> Expr:
+    return binop("AND", a, b, "BOOL", PREC_AND, 0, 1)
+
+
+def b_or(a: Expr, b: Expr) -> Expr:
+    return binop("OR", a, b, "BOOL", PREC_OR, 0, 1)
+
+
+def b_xor(a: Expr, b: Expr) -> Expr:
+    return binop("XOR", a, b, "BOOL", PREC_XOR, 0, 1)
+
+
+def fits(e: Expr, lo: int, hi: int) -> bool:
+    return lo <= e.lo and e.hi <= hi
