@@ -8,7 +8,7 @@ from decimal import Decimal
 from typing import Any, Iterable
 
 from lark import Lark, LarkError, Token, Transformer
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, VisitError
 
 from . import ast
 from .diagnostics import Diagnostics, Span
@@ -139,6 +139,25 @@ class _PendingKField:
     values: list[int]
 
 
+# Lines that differ only in their last name (`L  MG_a` / `L  MG_b`) parse alike: such a line is parsed once
+# with a placeholder name and the real name is put into the result, so that large projects with many distinct
+# symbols do not pay a lark parse per line. Names that could lex as another terminal (M12, K5, S3, X, KF) are
+# never replaced; tests/test_parse.py checks that both paths give the same result.
+_LAST_NAME = re.compile(r"(?<=[ \t])([A-Za-z_][A-Za-z0-9_]*)((?:[ \t]*\[[ \t]*[Xx][ \t]*\])?)$")
+_OPERAND_LIKE = re.compile(r"(?i)(?:[MIOTCBWDS][0-9]+|K[0-9]+|X|KF)")
+_PLACEHOLDER = "Hh2iecPlaceholderName"
+
+
+def _with_name(result: Any, name: str) -> Any:
+    if isinstance(result, str):
+        return result.replace(_PLACEHOLDER, name)
+    if isinstance(result, tuple):
+        return tuple(_with_name(item, name) for item in result)
+    if isinstance(result, ast.OperandSyntax):
+        return dataclasses.replace(result, value=_with_name(result.value, name), text=_with_name(result.text, name))
+    return result
+
+
 class SrcParser:
     """Parses the active lines of a .src file; identical line texts are parsed once per run."""
 
@@ -148,21 +167,37 @@ class SrcParser:
         self._cache: dict[str, Any] = {}
 
     def parse_line(self, code: str) -> Any:
+        """('ok', tuple) | ('range', literal) | ('syntax', column) for one line without its comment."""
         key = code.strip()
         cached = self._cache.get(key)
-        if cached is None:
-            try:
-                cached = ("ok", self._transformer.transform(self._lark.parse(key)))
-            except _ConstRange as exc:
-                cached = ("range", str(exc))
-            except UnexpectedInput as exc:
-                cached = ("syntax", exc.column if isinstance(exc, UnexpectedCharacters) else getattr(exc, "column", 1))
-            except LarkError:
-                cached = ("syntax", 1)
-            except RecursionError:
-                cached = ("syntax", 1)
-            self._cache[key] = cached
+        if cached is not None:
+            return cached
+        last = _LAST_NAME.search(key)
+        if last is not None and _PLACEHOLDER not in key and not _OPERAND_LIKE.fullmatch(last.group(1)):
+            template = key[:last.start(1)] + _PLACEHOLDER + key[last.end(1):]
+            shape = self._cache.get(template)
+            if shape is None:
+                shape = self._cache[template] = self.parse_uncached(template)
+            if shape[0] == "ok":
+                return ("ok", _with_name(shape[1], last.group(1)))
+        cached = self._cache[key] = self.parse_uncached(key)
         return cached
+
+    def parse_uncached(self, key: str) -> Any:
+        """The lark parse of one stripped line, without any cache."""
+        try:
+            return ("ok", self._transformer.transform(self._lark.parse(key)))
+        except VisitError as exc:
+            # A transformer callback raised: the only expected case is a constant outside 32 bits.
+            if isinstance(exc.orig_exc, _ConstRange):
+                return ("range", str(exc.orig_exc))
+            return ("syntax", 1)
+        except _ConstRange as exc:
+            return ("range", str(exc))
+        except UnexpectedInput as exc:
+            return ("syntax", exc.column if isinstance(exc, UnexpectedCharacters) else getattr(exc, "column", 1))
+        except (LarkError, RecursionError):
+            return ("syntax", 1)
 
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.SourceFile:
         statements: list[ast.Statement] = []
@@ -307,8 +342,12 @@ class DefParser:
             pending = []
             try:
                 result = self._transformer.transform(self._lark.parse(code))
-            except _ConstRange as exc:
-                diags.error("E-LIT-RANGE", span, f"literal {exc} does not fit in 32 bits")
+            except VisitError as exc:
+                # Transformer errors arrive wrapped; a constant outside 32 bits is E-LIT-RANGE, not E-SYNTAX.
+                if isinstance(exc.orig_exc, _ConstRange):
+                    diags.error("E-LIT-RANGE", span, f"literal {exc.orig_exc} does not fit in 32 bits")
+                else:
+                    diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
                 continue
             except (LarkError, RecursionError):
                 diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")

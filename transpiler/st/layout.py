@@ -1,0 +1,343 @@
+"""Data layout: decides the IEC variable of every HEIDENHAIN operand (named BOOL/SINT/INT/DINT variables, or arrays where overlap or indexing is real)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import defaultdict
+
+from ..ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
+from . import exprs as E
+from .names import NameTable
+
+MEM_TYPE = {"B": "SINT", "W": "INT", "D": "DINT"}
+BYTE_ARRAY_TYPE = "T_HH_MEM"
+BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
+STRING_ARRAY_TYPE = "T_HH_STRINGS"
+
+
+@dataclasses.dataclass(frozen=True)
+class GlobalVar:
+    name: str
+    type: str
+    group: str                      # 'io_in', 'io_out', 'nc', 'marker', 'memory', 'string', 'timer', 'register', 'mp', 'stack'
+    address: str | None = None
+    initial: str | None = None
+    comment: str | None = None
+    retain: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class OperandVar:
+    """Where one HEIDENHAIN operand lives in the IEC program (a row of io_map.csv)."""
+
+    operand: str                    # e.g. I5, W262
+    symbol: str                     # .def symbol or ''
+    iec: str                        # variable or element text
+    iec_type: str
+    direction: str
+    comment: str
+
+
+class Layout:
+    """All data decisions of the ST backend; codegen asks it how to read and write each operand."""
+
+    def __init__(self, program: Program, names: NameTable):
+        self.program = program
+        self.names = names
+        self.profile = program.semantics.profile
+        self.little = program.semantics.little_endian
+        self.globals: dict[str, GlobalVar] = {}
+        self.rows: list[OperandVar] = []
+        self._bit_var: dict[tuple[str, int], str] = {}
+        self._mem_var: dict[tuple[str, int], str] = {}
+        self.bit_arrays: dict[str, str] = {}          # kind -> array variable
+        self.mem_array: str | None = None
+        self.string_array: str | None = None
+        self._string_var: dict[int, str] = {}
+        self.types: dict[str, tuple[str, int, int]] = {}   # type name -> (element type, lo, hi)
+        self._symbols_by_operand = self._symbol_index()
+        self._plan()
+
+    # ---- planning
+
+    def _symbol_index(self) -> dict[tuple[str, int], list]:
+        index: dict[tuple[str, int], list] = defaultdict(list)
+        for sym in sorted(self.program.symbols.values(), key=lambda s: (s.alias_of is not None, s.span.file, s.span.line)):
+            if sym.kind != "K":
+                index[(sym.kind, sym.addr)].append(sym)
+        return index
+
+    def _accesses(self):
+        bits: dict[str, set[int]] = defaultdict(set)
+        bit_indexed: set[str] = set()
+        mem: set[tuple[str, int]] = set()
+        mem_indexed = False
+        strings: set[int] = set()
+        string_indexed = False
+        timers: set[int] = set()
+        counters: set[int] = set()
+        sem = self.program.semantics
+        prof = self.profile
+        for f in self.program.files:
+            for op in f.ops:
+                o = op.operand
+                if o is None:
+                    continue
+                if o.kind in BIT_KINDS:
+                    if o.indexed:
+                        bit_indexed.add(o.kind)
+                    n = op.nbits or 1
+                    bits[o.kind].update(range(o.addr, o.addr + n))
+                    if op.code == "INC" or op.code == "DEC":
+                        pass
+                    if o.kind == "T":
+                        for a in range(o.addr, o.addr + n):
+                            if prof.timer_start[0] <= a <= prof.timer_start[1]:
+                                timers.add(a)
+                            elif prof.timer_running[0] <= a <= prof.timer_running[1]:
+                                timers.add(a - prof.timer_running[0] + prof.timer_start[0])
+                    if o.kind == "C":
+                        for a in range(o.addr, o.addr + n):
+                            for lo, hi in (prof.counter_start, prof.counter_running, prof.counter_release):
+                                if lo <= a <= hi:
+                                    counters.add(a - lo)
+                elif o.kind in MEM_KINDS:
+                    if o.indexed:
+                        mem_indexed = True
+                    else:
+                        mem.add((o.kind, o.addr))
+                elif o.kind == "S":
+                    if o.indexed:
+                        string_indexed = True
+                    strings.add(o.addr)
+            for op in f.ops:
+                if op.code in ("MUL", "DIV", "MOD") or (op.code == "BCLOSE" and op.bracket and op.bracket.op in ("x", "/", "MOD")):
+                    flag = {"MUL": prof.interface.mul_err, "x": prof.interface.mul_err, "DIV": prof.interface.div_err,
+                            "/": prof.interface.div_err, "MOD": prof.interface.mod_err}[op.code if op.code != "BCLOSE" else op.bracket.op]
+                    bits["M"].add(flag)
+        for t in timers:
+            bits["T"].add(t)
+            bits["T"].add(t - prof.timer_start[0] + prof.timer_running[0])
+        for c in counters:
+            bits["C"].update({prof.counter_start[0] + c, prof.counter_running[0] + c, prof.counter_release[0] + c})
+        return bits, bit_indexed, mem, mem_indexed, strings, string_indexed, sorted(timers), sorted(counters)
+
+    def _plan(self) -> None:
+        bits, bit_indexed, mem, mem_indexed, strings, string_indexed, timers, counters = self._accesses()
+        self.timers, self.counters = timers, counters
+        for kind in "IOMTC":
+            if kind in bit_indexed:
+                size = self.profile.ranges.size(kind)
+                tname = BIT_ARRAY_TYPE.format(kind=kind)
+                self.types[tname] = ("BOOL", 0, size - 1)
+                arr = self.names.name(f"array:{kind}", f"HH_{kind}")
+                self.bit_arrays[kind] = arr
+                self._add_global(GlobalVar(arr, tname, "marker", comment=f"all {kind} operands (indexed access)"))
+                for addr in sorted(bits.get(kind, ())):
+                    self._row(kind, addr, f"{arr}[{addr}]", "BOOL")
+                continue
+            for addr in sorted(bits.get(kind, ())):
+                self._declare_bit(kind, addr)
+        self._plan_memory(mem, mem_indexed)
+        if string_indexed:
+            size = self.profile.ranges.size("S")
+            self.types[STRING_ARRAY_TYPE] = ("STRING", 0, size - 1)
+            self.string_array = self.names.name("array:S", "HH_S")
+            self._add_global(GlobalVar(self.string_array, STRING_ARRAY_TYPE, "string", comment="string memory (indexed access)"))
+            for addr in sorted(strings):
+                self._row("S", addr, f"{self.string_array}[{addr}]", "STRING")
+        else:
+            for addr in sorted(strings):
+                syms = self._symbols_by_operand.get(("S", addr), [])
+                name = self.names.name(f"S{addr}", syms[0].name if syms else f"S{addr}")
+                self._string_var[addr] = name
+                self._add_global(GlobalVar(name, "STRING", "string", comment=self._comment("S", addr)))
+                self._row("S", addr, name, "STRING")
+
+    def _plan_memory(self, mem: set[tuple[str, int]], indexed: bool) -> None:
+        # Accesses that share bytes with a differently shaped access must see one byte image.
+        intervals = sorted((addr, addr + BYTES[kind], kind) for kind, addr in mem)
+        groups: list[list[tuple[int, int, str]]] = []
+        for iv in intervals:
+            if groups and iv[0] < max(e for _, e, _ in groups[-1]):
+                groups[-1].append(iv)
+            else:
+                groups.append([iv])
+        overlapped = [g for g in groups if len({(a, k) for a, _, k in g}) > 1]
+        if indexed or overlapped:
+            size = self.profile.ranges.size("B")
+            self.types[BYTE_ARRAY_TYPE] = ("BYTE", 0, size - 1)
+            self.mem_array = self.names.name("array:mem", "HH_MEM")
+            why = "indexed access" if indexed else "overlapping B/W/D access"
+            self._add_global(GlobalVar(self.mem_array, BYTE_ARRAY_TYPE, "memory",
+                                       comment=f"byte memory ({why}; {'little' if self.little else 'big'}-endian words)"))
+        array_addrs = set()
+        if indexed:
+            array_addrs = {(k, a) for k, a in mem}
+        else:
+            for g in overlapped:
+                array_addrs |= {(k, a) for a, _, k in g}
+        for kind, addr in sorted(mem, key=lambda t: (t[1], t[0])):
+            if (kind, addr) in array_addrs:
+                self._row(kind, addr, f"{self.mem_array}[{addr}]", f"{MEM_TYPE[kind]}@{'LE' if self.little else 'BE'}")
+            else:
+                self._declare_mem(kind, addr)
+
+    def _declare_bit(self, kind: str, addr: int) -> str:
+        key = (kind, addr)
+        if key in self._bit_var:
+            return self._bit_var[key]
+        syms = self._symbols_by_operand.get(key, [])
+        wanted = syms[0].name if syms else f"{kind}{addr}"
+        name = self.names.name(f"{kind}{addr}", wanted)
+        self._bit_var[key] = name
+        address = None
+        group = "nc" if self._is_nc(kind, addr, syms) else {"I": "io_in", "O": "io_out", "T": "timer", "C": "timer"}.get(kind, "marker")
+        if kind == "I":
+            address = f"%IX{addr // 8}.{addr % 8}"
+        elif kind == "O":
+            address = f"%QX{addr // 8}.{addr % 8}"
+        self._add_global(GlobalVar(name, "BOOL", group if kind not in "IO" else {"I": "io_in", "O": "io_out"}[kind],
+                                   address=address, comment=self._comment(kind, addr)))
+        self._row(kind, addr, name, "BOOL")
+        return name
+
+    def _declare_mem(self, kind: str, addr: int) -> str:
+        key = (kind, addr)
+        if key in self._mem_var:
+            return self._mem_var[key]
+        syms = self._symbols_by_operand.get(key, [])
+        name = self.names.name(f"{kind}{addr}", syms[0].name if syms else f"{kind}{addr}")
+        self._mem_var[key] = name
+        group = "nc" if self._is_nc(kind, addr, syms) else "memory"
+        self._add_global(GlobalVar(name, MEM_TYPE[kind], group, comment=self._comment(kind, addr)))
+        self._row(kind, addr, name, MEM_TYPE[kind])
+        return name
+
+    def _is_nc(self, kind: str, addr: int, syms: list) -> bool:
+        if any(s.name.startswith(("NP_", "PN_", "NN_", "PP_")) for s in syms):
+            return True
+        width = BYTES.get(kind, 1)
+        return self.profile.is_interface(kind, addr, width)
+
+    def _comment(self, kind: str, addr: int) -> str:
+        syms = self._symbols_by_operand.get((kind, addr), [])
+        text = f"{kind}{addr}"
+        if syms:
+            s = syms[0]
+            if s.comment:
+                text += f" {s.comment}"
+            others = [x.name for x in syms[1:]]
+            if others:
+                text += f" (also {', '.join(others)})"
+        return text
+
+    def _row(self, kind: str, addr: int, iec: str, iec_type: str) -> None:
+        syms = self._symbols_by_operand.get((kind, addr), [])
+        direction = {"I": "input", "O": "output"}.get(kind, "internal")
+        if syms and syms[0].name.startswith("NP_") or (not syms and self.profile.is_interface(kind, addr, BYTES.get(kind, 1))):
+            direction = "nc_to_plc" if kind != "O" else direction
+        if syms and syms[0].name.startswith("PN_"):
+            direction = "plc_to_nc"
+        self.rows.append(OperandVar(f"{kind}{addr}", syms[0].name if syms else "", iec, iec_type, direction,
+                                    syms[0].comment if syms else ""))
+
+    def _add_global(self, var: GlobalVar) -> None:
+        self.globals[var.name] = var
+
+    def add_register(self, key: str, wanted: str, typ: str, comment: str, initial: str | None = None,
+                     group: str = "register") -> str:
+        name = self.names.name(key, wanted)
+        if name not in self.globals:
+            self._add_global(GlobalVar(name, typ, group, initial=initial, comment=comment))
+        return name
+
+    # ---- access
+
+    def bit_lvalue(self, op: Operand, x: E.Expr | None, offset: int = 0) -> E.Expr:
+        """The BOOL variable (or array element) of a bit operand, offset for LB/B= sequences."""
+        arr = self.bit_arrays.get(op.kind)
+        if op.indexed:
+            index = _index(op.addr + offset, x, 1, self.program.semantics)
+            return E.Expr(f"{arr}[{index.text}]", "BOOL", frozenset([arr.upper()]) | index.deps, 0, 1, var=f"{arr}[{index.text}]")
+        if arr is not None:
+            text = f"{arr}[{op.addr + offset}]"
+            return E.Expr(text, "BOOL", frozenset([arr.upper()]), 0, 1, var=text)
+        return E.var(self._declare_bit(op.kind, op.addr + offset), "BOOL")
+
+    def timer_var(self, kind: str, addr: int) -> E.Expr:
+        return self.bit_lvalue(Operand(kind, addr), None)
+
+    def read_value(self, op: Operand, x: E.Expr | None) -> E.Expr:
+        """A B/W/D operand as a typed expression (SINT/INT/DINT, i.e. sign-extended by type)."""
+        if op.indexed or (op.kind, op.addr) not in self._mem_var and self.mem_array is not None:
+            return self._array_read(op, x)
+        return E.var(self._declare_mem(op.kind, op.addr), MEM_TYPE[op.kind])
+
+    def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
+        """(lvalue, DINT expression) assignments that store `value` truncated to the operand width."""
+        if op.indexed or (op.kind, op.addr) not in self._mem_var and self.mem_array is not None:
+            return self._array_write(op, x, value)
+        name = self._declare_mem(op.kind, op.addr)
+        typ = MEM_TYPE[op.kind]
+        return [(name, _narrow(value, typ))]
+
+    def _byte_index(self, op: Operand, x: E.Expr | None, k: int) -> str:
+        size = BYTES[op.kind]
+        pos = k if self.little else size - 1 - k          # k = significance of the byte (0 = lowest)
+        if op.indexed:
+            scale = size if self.program.semantics["index_scaling"] == "elements" else 1
+            return _index(op.addr + pos, x, scale, self.program.semantics).text
+        return str(op.addr + pos)
+
+    def _array_read(self, op: Operand, x: E.Expr | None) -> E.Expr:
+        arr = self.mem_array
+        deps = frozenset([arr.upper()]) | (x.deps if op.indexed and x is not None else frozenset())
+        if op.kind == "B":
+            return E.Expr(f"BYTE_TO_SINT({arr}[{self._byte_index(op, x, 0)}])", "SINT", deps, -128, 127)
+        parts = ", ".join(f"{arr}[{self._byte_index(op, x, k)}]" for k in range(BYTES[op.kind]))
+        fn = "HH_MKINT" if op.kind == "W" else "HH_MKDINT"
+        return E.Expr(f"{fn}({parts})", MEM_TYPE[op.kind], deps, *E.RANGES[MEM_TYPE[op.kind]])
+
+    def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
+        arr = self.mem_array
+        out = []
+        for k in range(BYTES[op.kind]):
+            text = f"HH_BYTEOF({value.text}, {k})"
+            out.append((f"{arr}[{self._byte_index(op, x, k)}]", E.Expr(text, "BYTE", value.deps, 0, 255)))
+        return out
+
+    def string_lvalue(self, op: Operand, x: E.Expr | None) -> E.Expr:
+        if op.indexed:
+            index = _index(op.addr, x, 1, self.program.semantics)
+            text = f"{self.string_array}[{index.text}]"
+            return E.Expr(text, "STRING", frozenset([self.string_array.upper()]) | index.deps, var=text)
+        if self.string_array is not None:
+            text = f"{self.string_array}[{op.addr}]"
+            return E.Expr(text, "STRING", frozenset([self.string_array.upper()]), var=text)
+        return E.var(self._string_var[op.addr], "STRING")
+
+
+def _index(base: int, x: E.Expr | None, scale: int, semantics) -> E.Expr:
+    if x is None:
+        return E.int_const(base)
+    xs = x if scale == 1 else E.binop("*", x, E.int_const(scale), "DINT", E.PREC_MUL)
+    return E.binop("+", E.int_const(base), xs, "DINT", E.PREC_ADD)
+
+
+def _narrow(value: E.Expr, typ: str) -> E.Expr:
+    """Truncate a DINT value to SINT/INT (two's complement, no saturation: A-08)."""
+    if value.typ == typ:
+        return value
+    if value.const is not None:
+        bits = {"SINT": 8, "INT": 16, "DINT": 32}[typ]
+        v = value.const & ((1 << bits) - 1)
+        v = v - (1 << bits) if v >= 1 << (bits - 1) else v
+        return E.int_const(v, typ)
+    if E.fits(value, *E.RANGES[typ]) and value.typ in E.RANGES and value.typ != "BOOL":
+        if value.text.startswith(f"{typ}_TO_DINT(") and value.text.endswith(")"):
+            inner = value.text[len(typ) + 9:-1]
+            if E._balanced(inner):
+                return E.Expr(inner, typ, value.deps, value.lo, value.hi)
+    src = value.typ if value.typ != "BOOL" else "BOOL"
+    return E.Expr(f"{src}_TO_{typ}({value.text})", typ, value.deps, *E.RANGES[typ])

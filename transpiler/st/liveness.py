@@ -1,0 +1,139 @@
+"""Register liveness (LA, WA, SA, X) over the whole program, so that accumulators become variables only where a value crosses a block, call or cycle."""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from ..ir import CallTarget, Op, Program
+from ..resolve import routine_body, successors
+
+REGS = ("LA", "WA", "SA", "X")
+_LA_USE = {"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",
+           "JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF", "PSL", "NOTL"}
+_LA_DEF = {"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "CMP", "SCMP", "BT", "PLL", "NOTL"}
+_WA_USE = {"WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL", "DIV", "MOD",
+           "CMP", "SHL", "SHR", "BS", "BC", "BT", "PSW", "INCW", "DECW", "NOTW", "TWOC"}
+_WA_DEF = {"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL",
+           "DIV", "MOD", "SHL", "SHR", "BS", "BC", "PLW", "INCW", "DECW", "NOTW", "TWOC", "SUBM", "RPLY"}
+
+
+def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
+    """Registers an op reads (before it writes) and registers it certainly writes; calls are handled by the caller."""
+    use: set[str] = set()
+    d: set[str] = set()
+    c = op.code
+    if c in _LA_USE:
+        use.add("LA")
+    if c in _LA_DEF:
+        d.add("LA")
+    if c in _WA_USE:
+        use.add("WA")
+    if c in _WA_DEF:
+        d.add("WA")
+    if c in ("SCAT", "SST", "SCMP"):
+        use.add("SA")
+    if c in ("SLD", "SCAT"):
+        d.add("SA")
+    if c in ("PSX", "INCX", "DECX"):
+        use.add("X")
+    if c in ("PLX", "INCX", "DECX"):
+        d.add("X")
+    if c == "BOPEN":
+        use.add("LA" if op.bracket.mode == "LOGIC" else "WA")
+    if c == "BCLOSE":
+        b = op.bracket
+        if b.op in ("==", "<", ">", "<=", ">=", "<>"):
+            use.add("WA")
+            d.add("LA")
+        elif b.mode == "LOGIC":
+            use.add("LA")
+            d.add("LA")
+        else:
+            use.add("WA")
+            d.add("WA")
+    o = op.operand
+    if o is not None:
+        if o.indexed or o.kind in ("X", "KF"):
+            if o.kind == "X" and c == "WST":
+                d.add("X")
+            else:
+                use.add("X")
+    return frozenset(use), frozenset(d - use) | frozenset(d & use)
+
+
+class Liveness:
+    """live_in[(routine key, op index)] for every routine body; exit sets solved to a fixed point."""
+
+    def __init__(self, program: Program):
+        self.program = program
+        self.main = CallTarget(0, 0, "<main>")
+        roots = [self.main] + list(program.routines)
+        self.bodies = {r.key: routine_body(program.files, r) for r in roots}
+        self.routines = {r.key: r for r in roots}
+        self.entry_use: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
+        self.exit_live: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
+        self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
+        self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
+        self._solve()
+
+    def _callees(self, op: Op) -> Iterable[CallTarget]:
+        if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
+            yield op.call
+        elif op.code == "CASE":
+            yield from (t for t in op.case_targets if t is not None and t.file >= 0)
+
+    def _solve(self) -> None:
+        for _ in range(64):
+            changed = False
+            new_exit = {k: frozenset() for k in self.bodies}
+            for key, body in self.bodies.items():
+                live = self._routine(key, body)
+                self.live_in[key] = live
+                entry = live.get(self.routines[key].index, frozenset())
+                if entry != self.entry_use[key]:
+                    self.entry_use[key] = entry
+                    changed = True
+                ops = self.program.files[key[0]].ops
+                for i in body:
+                    for callee in self._callees(ops[i]):
+                        after = live.get(i + 1, frozenset()) if i + 1 < len(ops) else frozenset()
+                        if callee.key in new_exit:
+                            new_exit[callee.key] = new_exit[callee.key] | after
+            # Registers persist from one cycle to the next: what the main program reads first is live at its end.
+            new_exit[self.main.key] = new_exit[self.main.key] | self.entry_use[self.main.key]
+            if new_exit != self.exit_live:
+                self.exit_live = new_exit
+                changed = True
+            if not changed:
+                return
+
+    def _routine(self, key: tuple[int, int], body: list[int]) -> dict[int, frozenset[str]]:
+        ops = self.program.files[key[0]].ops
+        exit_live = self.exit_live[key]
+        live: dict[int, frozenset[str]] = {i: frozenset() for i in body}
+        for _ in range(len(body) + 2):
+            changed = False
+            for i in reversed(body):
+                op = ops[i]
+                out: frozenset[str] = frozenset()
+                if op.code in ("EM", "EMT", "EMF"):
+                    out = exit_live
+                for s in successors(ops, i):
+                    out = out | live.get(s, frozenset())
+                use, d = use_def(op)
+                extra = frozenset()
+                for callee in self._callees(op):
+                    extra = extra | self.entry_use.get(callee.key, frozenset())
+                value = use | extra | (out - d)
+                if value != live[i]:
+                    live[i] = value
+                    changed = True
+            if not changed:
+                break
+        return live
+
+    def at(self, routine: tuple[int, int], index: int) -> frozenset[str]:
+        return self.live_in.get(routine, {}).get(index, frozenset(REGS))
+
+    def exit(self, routine: tuple[int, int]) -> frozenset[str]:
+        return self.exit_live.get(routine, frozenset(REGS))
