@@ -135,7 +135,7 @@ def _run_once(main: Path):
     return time.perf_counter() - start, result
 
 
-def bench_frontend(lines: int = 100_000, repeat: int = 3, profile: bool = False) -> dict:
+def bench_frontend(lines: int = 100_000, repeat: int = 3, profile: bool = False, heap: bool = True) -> dict:
     """Generate the project, compile it `repeat` times; print best time, lines/s and peak memory."""
     with tempfile.TemporaryDirectory(prefix="hh2iec-bench-") as tmp:
         main = generate_project(Path(tmp), lines)
@@ -148,12 +148,14 @@ def bench_frontend(lines: int = 100_000, repeat: int = 3, profile: bool = False)
         program = result.program
         line_count = program.line_count if program else 0
         errors = len(result.diagnostics.errors)
-        # Peak Python heap of one run (tracemalloc slows the run down, so it is measured separately).
-        gc.collect()
-        tracemalloc.start()
-        _run_once(main)
-        _, peak = tracemalloc.get_traced_memory()
-        tracemalloc.stop()
+        peak = 0
+        if heap:
+            # Peak Python heap of one run (tracemalloc slows the run down ~5x, so it is measured separately).
+            gc.collect()
+            tracemalloc.start()
+            _run_once(main)
+            _, peak = tracemalloc.get_traced_memory()
+            tracemalloc.stop()
         if profile:
             import cProfile
             import pstats
@@ -185,8 +187,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--lines", type=int, default=100_000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--profile", action="store_true", help="print a cProfile of one run")
+    parser.add_argument("--no-heap", action="store_true", help="skip the (slow) tracemalloc run")
     args = parser.parse_args(argv)
-    bench_frontend(args.lines, args.repeat, args.profile)
+    bench_frontend(args.lines, args.repeat, args.profile, heap=not args.no_heap)
     return 0
 
 

@@ -102,3 +102,4 @@ class DefFile:
     symbols: tuple[SymbolDef, ...]
     includes: tuple[DefineFile, ...]
     line_count: int
+    broken: tuple[str, ...] = ()  # names of definitions rejected with an error (their uses are not reported again)

@@ -21,6 +21,13 @@ class UsageError(Exception):
     pass
 
 
+class _ArgumentParser(argparse.ArgumentParser):
+    """argparse that reports bad usage as an E-USAGE diagnostic (exit 2) instead of its own error format."""
+
+    def error(self, message: str):
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("main", type=Path, help="main program (.src) of the HEIDENHAIN project")
     p.add_argument("--cfg", type=Path, help="configuration file with DEFINE lines (default: OEM.cfg beside MAIN)")
@@ -34,8 +41,21 @@ def _common(p: argparse.ArgumentParser) -> None:
                    help="extra global definition file (as if loaded with #define /g)")
 
 
+def _load_subcommands() -> None:
+    # Subcommand modules register themselves in _EXTRA_COMMANDS when imported.
+    import importlib
+    for name in ("cli_transpile", "simulate", "equiv"):
+        try:
+            importlib.import_module(f"transpiler.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"transpiler.{name}":
+                raise
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
+    if not _EXTRA_COMMANDS:
+        _load_subcommands()
+    parser = _ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check", help="preprocess, parse and resolve a project; print a summary")
     _common(check)
@@ -150,6 +170,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
+    except UsageError as exc:
+        print(f"{NO_SPAN}: error[E-USAGE]: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except SystemExit as exc:
         return EXIT_BAD_INPUT if exc.code not in (0, None) else EXIT_OK
     handler = {"check": cmd_check, "explain": cmd_explain, "assumptions": cmd_assumptions}.get(args.command)

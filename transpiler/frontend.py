@@ -26,6 +26,11 @@ class ParsedProject:
     inactive: tuple[InactiveRegion, ...]
     files_read: tuple[str, ...]
     line_count: int
+    # Where a named file could not be read, the symbols or labels it would have provided are unknown; the
+    # resolver then does not report their uses (one root error per fault, no cascade of E-SYM-UNDEF).
+    # "*" stands for the global definitions (a missing `#define /g` file).
+    symbols_incomplete: frozenset[str] = frozenset()
+    labels_incomplete: bool = False
 
 
 @dataclasses.dataclass
@@ -38,19 +43,38 @@ class ProjectOptions:
     extra_global_defs: tuple[Path, ...] = ()
 
 
+@dataclasses.dataclass(frozen=True)
+class Parsers:
+    """The line parsers of one semantics. Their caches depend only on the line text, so one set may serve
+    several runs with the same semantics (a fuzzer or an editor re-checking a project after each change)."""
+
+    pp: PPParser
+    src: SrcParser
+    defs: DefParser
+
+    @classmethod
+    def for_semantics(cls, semantics: Semantics) -> "Parsers":
+        documented = semantics["literal_range"] == "documented"
+        return cls(PPParser(), SrcParser(bool(semantics["lenient_brackets"]), documented), DefParser(documented))
+
+
 class _Loader:
-    def __init__(self, options: ProjectOptions, semantics: Semantics, diags: Diagnostics):
+    def __init__(self, options: ProjectOptions, semantics: Semantics, diags: Diagnostics, parsers: Parsers | None = None):
         self.options = options
         self.semantics = semantics
         self.diags = diags
         self.folders = ProjectFolders(options.main.parent, list(options.include_dirs))
         self.defines: Defines = initial_defines(options.defines)
-        self.pp_parser = PPParser()
-        self.src_parser = SrcParser()
-        self.def_parser = DefParser()
+        parsers = parsers or Parsers.for_semantics(semantics)
+        self.pp_parser = parsers.pp
+        self.src_parser = parsers.src
+        self.def_parser = parsers.defs
         self.inactive: list[InactiveRegion] = []
         self.files_read: list[str] = []
         self.line_count = 0
+        self.symbols_incomplete: set[str] = set()
+        self.labels_incomplete = False
+        self._def_missing = False       # set by _load_def when a file of the current request is unreadable
 
     def _read(self, path: Path, at: Span) -> SourceText | None:
         text = read_source(path, self.folders, at, self.diags)
@@ -79,11 +103,11 @@ class _Loader:
         if cfg is None and opts.use_default_cfg:
             cfg = find_default_cfg(opts.main)
         if cfg is not None:
-            cfg_text = read_source(cfg, ProjectFolders(cfg.parent, []), NO_SPAN, self.diags)
+            # --cfg may name a file anywhere (it is given on the command line, not by the project); its display
+            # path is relative to the main folder when it lies inside it, as for every other file.
+            cfg_text = self._read(cfg, NO_SPAN)
             if cfg_text is not None:
-                self.files_read.append(self.folders.display(cfg))
-                read_config(cfg_text.display if cfg.parent.resolve() != self.folders.main_dir
-                            else cfg_text.display, cfg_text.lines, self.defines, self.diags, self.pp_parser)
+                read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.pp_parser)
         if not opts.main.is_file():
             self.diags.error("E-FILE-NOT-FOUND", NO_SPAN, f"main program {opts.main} not found")
             return self._empty()
@@ -96,21 +120,26 @@ class _Loader:
         local_defs: dict[str, list[ast.DefFile]] = {}
         loaded: dict[Path, ast.DefFile] = {}
         for extra in opts.extra_global_defs:
+            self._def_missing = False
             d = self._load_def(extra.resolve(), NO_SPAN, loaded, set())
+            if self._def_missing:
+                self.symbols_incomplete.add("*")
             global_defs.extend(d)
         # SYSTEM.DEF first when it is named (spec 1.3 step 3), then in the order named.
         def_requests.sort(key=lambda r: 0 if Path(r[0].file).name.lower() == "system.def" else 1)
         for request, owner, base in def_requests:
             path = self.folders.find(request.file, request.span, self.diags, base)
-            if path is None:
-                continue
-            defs = self._load_def(path, request.span, loaded, set())
+            self._def_missing = path is None
+            defs = self._load_def(path, request.span, loaded, set()) if path is not None else []
+            if self._def_missing:
+                self.symbols_incomplete.add("*" if request.is_global else owner)
             if request.is_global:
                 global_defs.extend(d for d in defs if d not in global_defs)
             else:
                 local_defs.setdefault(owner, []).extend(defs)
         return ParsedProject(tuple(src_files), tuple(global_defs), {k: tuple(v) for k, v in local_defs.items()},
-                             dict(self.defines.values), tuple(self.inactive), tuple(self.files_read), self.line_count)
+                             dict(self.defines.values), tuple(self.inactive), tuple(self.files_read), self.line_count,
+                             frozenset(self.symbols_incomplete), self.labels_incomplete)
 
     def _empty(self) -> ParsedProject:
         return ParsedProject((), (), {}, dict(self.defines.values), (), tuple(self.files_read), self.line_count)
@@ -122,6 +151,7 @@ class _Loader:
         seen.add(path)
         text = self._read(path, at)
         if text is None:
+            self.labels_incomplete = True
             return
         lines = self._preprocess(text)
         parsed = self.src_parser.parse_file(text.display, lines, len(text.lines), self.diags)
@@ -131,7 +161,9 @@ class _Loader:
                 def_requests.append((stmt, parsed.path, path.parent))
             elif isinstance(stmt, ast.Uses):
                 target = self.folders.find(stmt.file, stmt.span, self.diags, path.parent)
-                if target is not None:
+                if target is None:
+                    self.labels_incomplete = True
+                else:
                     self._load_src(target.resolve(), stmt.span, seen, out, def_requests)
 
     def _load_def(self, path: Path, at: Span, loaded: dict[Path, ast.DefFile], active: set[Path]) -> list[ast.DefFile]:
@@ -143,6 +175,7 @@ class _Loader:
             return []
         text = self._read(path, at)
         if text is None:
+            self._def_missing = True
             return []
         active.add(path)
         lines = self._preprocess(text)
@@ -150,7 +183,9 @@ class _Loader:
         result: list[ast.DefFile] = []
         for inc in parsed.includes:
             target = self.folders.find(inc.file, inc.span, self.diags, path.parent)
-            if target is not None:
+            if target is None:
+                self._def_missing = True
+            else:
                 result.extend(self._load_def(target, inc.span, loaded, active))
         loaded[path] = parsed
         result.append(parsed)
@@ -158,5 +193,7 @@ class _Loader:
         return result
 
 
-def load_project(options: ProjectOptions, semantics: Semantics, diags: Diagnostics) -> ParsedProject:
-    return _Loader(options, semantics, diags).load()
+def load_project(options: ProjectOptions, semantics: Semantics, diags: Diagnostics,
+                 parsers: Parsers | None = None) -> ParsedProject:
+    """Read and parse the project; `parsers` (made for the same semantics) lets runs share line caches."""
+    return _Loader(options, semantics, diags, parsers).load()

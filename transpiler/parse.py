@@ -7,12 +7,12 @@ import re
 from decimal import Decimal
 from typing import Any, Iterable
 
-from lark import Lark, LarkError, Token, Transformer
+from lark import LarkError, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, VisitError
 
 from . import ast
 from .diagnostics import Diagnostics, Span
-from .grammars import load_grammar
+from .grammars import lalr_parser
 from .mnemonics import MNEMONICS, canonical
 from .preprocess import Line, split_comment
 
@@ -20,17 +20,20 @@ INT32_MIN = -(2 ** 31)
 UINT32_MAX = 2 ** 32 - 1
 
 
-def parse_constant(text: str) -> int | None:
-    """A constant literal (without K) to its int32 value; None when it does not fit in 32 bits (A-56)."""
+def parse_constant(text: str, documented: bool = False) -> int | None:
+    """A constant literal (without K) to its int32 value; None when it does not fit in 32 bits (A-56).
+
+    `documented` (literal_range = documented) accepts only the manuals' range -2147483647 ... 2147483647 and
+    hexadecimal/binary literals up to $7FFFFFFF.
+    """
     text = text.replace(" ", "").replace("\t", "")
-    if text.startswith("$"):
-        value = int(text[1:], 16)
-        return _pattern(value)
-    if text.startswith("%"):
-        value = int(text[1:], 2)
+    if text.startswith(("$", "%")):
+        value = int(text[1:], 16 if text[0] == "$" else 2)
+        if documented and value > 2 ** 31 - 1:
+            return None
         return _pattern(value)
     value = int(text)
-    if INT32_MIN <= value <= 2 ** 31 - 1:
+    if (INT32_MIN + (1 if documented else 0)) <= value <= 2 ** 31 - 1:
         return value
     return None
 
@@ -48,6 +51,10 @@ class _ConstRange(Exception):
 class _SrcTransformer(Transformer):
     """Turns one parsed line into a position-free tuple (cached by line text)."""
 
+    def __init__(self, documented_literals: bool = False) -> None:
+        super().__init__()
+        self.documented = documented_literals
+
     def label(self, items):
         return ("label", str(items[1]))
 
@@ -58,7 +65,7 @@ class _SrcTransformer(Transformer):
         return ("endk",)
 
     def kentry(self, items):
-        return ("kentry", _const_value(items[0]))
+        return ("kentry", _const_value(items[0], self.documented))
 
     def uses(self, items):
         return ("uses", str(items[1]))
@@ -88,7 +95,8 @@ class _SrcTransformer(Transformer):
         return _addr_operand(items[0])
 
     def const_op(self, items):
-        return ast.OperandSyntax("K", _const_value(items[0]), False, str(items[0]))
+        # written text normalised like the other operands: upper-case letter, no blank after it ("k 5" -> "K5")
+        return ast.OperandSyntax("K", _const_value(items[0], self.documented), False, "K" + str(items[0])[1:].strip())
 
     def str_op(self, items):
         return ast.OperandSyntax("S", int(str(items[0])[1:]), False, str(items[0]))
@@ -123,9 +131,9 @@ def _addr_operand(token: Token) -> ast.OperandSyntax:
     return ast.OperandSyntax(kind, int(text[1:].strip()), False, kind + text[1:].strip())
 
 
-def _const_value(token: Token) -> int:
+def _const_value(token: Token, documented: bool = False) -> int:
     text = str(token)[1:].strip()
-    value = parse_constant(text)
+    value = parse_constant(text, documented)
     if value is None:
         raise _ConstRange(text)
     return value
@@ -148,23 +156,31 @@ _OPERAND_LIKE = re.compile(r"(?i)(?:[MIOTCBWDS][0-9]+|K[0-9]+|X|KF)")
 _PLACEHOLDER = "Hh2iecPlaceholderName"
 
 
-def _with_name(result: Any, name: str) -> Any:
-    if isinstance(result, str):
-        return result.replace(_PLACEHOLDER, name)
-    if isinstance(result, tuple):
-        return tuple(_with_name(item, name) for item in result)
-    if isinstance(result, ast.OperandSyntax):
-        return dataclasses.replace(result, value=_with_name(result.value, name), text=_with_name(result.text, name))
-    return result
+def _with_name(result: tuple, name: str) -> tuple:
+    """The parse result of a template line with the placeholder replaced by the real name (flat results only)."""
+    out = []
+    for item in result:
+        if isinstance(item, str):
+            item = item.replace(_PLACEHOLDER, name)
+        elif isinstance(item, ast.OperandSyntax):
+            value = item.value.replace(_PLACEHOLDER, name) if isinstance(item.value, str) else item.value
+            item = ast.OperandSyntax(item.kind, value, item.indexed, item.text.replace(_PLACEHOLDER, name))
+        out.append(item)
+    return tuple(out)
 
 
 class SrcParser:
-    """Parses the active lines of a .src file; identical line texts are parsed once per run."""
+    """Parses the active lines of a .src file; identical line texts are parsed once per run.
 
-    def __init__(self) -> None:
-        self._lark = Lark(load_grammar("src.lark"), parser="lalr", lexer="contextual")
-        self._transformer = _SrcTransformer()
+    lenient_brackets (A-02b) accepts a blank between a bracket mnemonic and '['; documented_literals is
+    literal_range = documented (A-56).
+    """
+
+    def __init__(self, lenient_brackets: bool = True, documented_literals: bool = False) -> None:
+        self._lark = lalr_parser("src.lark")
+        self._transformer = _SrcTransformer(documented_literals)
         self._cache: dict[str, Any] = {}
+        self.lenient_brackets = lenient_brackets
 
     def parse_line(self, code: str) -> Any:
         """('ok', tuple) | ('range', literal) | ('syntax', column) for one line without its comment."""
@@ -179,7 +195,8 @@ class SrcParser:
             if shape is None:
                 shape = self._cache[template] = self.parse_uncached(template)
             if shape[0] == "ok":
-                return ("ok", _with_name(shape[1], last.group(1)))
+                cached = self._cache[key] = ("ok", _with_name(shape[1], last.group(1)))
+                return cached
         cached = self._cache[key] = self.parse_uncached(key)
         return cached
 
@@ -209,7 +226,7 @@ class SrcParser:
                 if line.comment is not None:
                     pending_comments.append(line.comment.strip())
                 continue
-            span = Span(line.span.file, line.span.line, line.span.col)
+            span = line.span
             comments = tuple(pending_comments) + ((line.comment.strip(),) if line.comment is not None else ())
             pending_comments = []
             status, result = self.parse_line(code)
@@ -247,6 +264,9 @@ class SrcParser:
             elif tag == "define_file":
                 statements.append(ast.DefineFile(result[1], result[2], span, comments))
             else:
+                if not self.lenient_brackets and result[1].endswith("[") and _BLANK_BEFORE_BRACKET.match(code):
+                    # reported, but the bracket is kept so that its ']' does not cascade into E-BRACKET-BALANCE
+                    diags.error("E-SYNTAX", span, f"blank between {result[1][:-1]} and '[' (lenient_brackets is off, A-02b)")
                 instr = self._instruction(result[1], result[2], span, comments, diags)
                 if instr is not None:
                     statements.append(instr)
@@ -291,7 +311,14 @@ class SrcParser:
         diags.error("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
 
 
+_BLANK_BEFORE_BRACKET = re.compile(r"\S+[ \t]+\[")
+
+
 class _DefTransformer(Transformer):
+    def __init__(self, documented_literals: bool = False) -> None:
+        super().__init__()
+        self.documented = documented_literals
+
     def type_marker(self, items):
         return ("type", " ".join(str(i) for i in items))
 
@@ -307,7 +334,7 @@ class _DefTransformer(Transformer):
         return (text[0].upper(), int(text[1:].strip()), None, None)
 
     def t_const(self, items):
-        return ("K", None, _const_value(items[0]), None)
+        return ("K", None, _const_value(items[0], self.documented), None)
 
     def t_auto(self, items):
         return (str(items[0]).upper(), None, None, None)
@@ -319,18 +346,57 @@ class _DefTransformer(Transformer):
         return items[0]
 
 
-class DefParser:
-    """Parses the active lines of a .def file."""
+# The name a malformed definition line was meant to define (its first word after an optional /c).
+_DEF_NAME = re.compile(r"^\s*(?:/c\s+)?([A-Za-z_][A-Za-z0-9_]*)", re.IGNORECASE)
 
-    def __init__(self) -> None:
-        self._lark = Lark(load_grammar("def.lark"), parser="lalr", lexer="contextual")
-        self._transformer = _DefTransformer()
+
+# A definition line whose first word is the symbol name: lines that differ only in that name parse alike.
+_DEF_LEADING_NAME = re.compile(r"^((?:/[cC][ \t]+)?)([A-Za-z_][A-Za-z0-9_]*)(?=[ \t])")
+
+
+class DefParser:
+    """Parses the active lines of a .def file; line results are cached like SrcParser's (by text and by shape)."""
+
+    def __init__(self, documented_literals: bool = False) -> None:
+        self._lark = lalr_parser("def.lark")
+        self._transformer = _DefTransformer(documented_literals)
+        self._cache: dict[str, tuple] = {}
+
+    def parse_line(self, code: str) -> tuple:
+        """('ok', tuple) | ('range', literal) | ('syntax',) for one stripped definition line."""
+        cached = self._cache.get(code)
+        if cached is not None:
+            return cached
+        lead = _DEF_LEADING_NAME.match(code)
+        if lead is not None and _PLACEHOLDER not in code:
+            template = lead.group(1) + _PLACEHOLDER + code[lead.end():]
+            shape = self._cache.get(template)
+            if shape is None:
+                shape = self._cache[template] = self.parse_uncached(template)
+            if shape[0] == "ok" and shape[1][0] == "symbol":
+                result = shape[1]
+                cached = self._cache[code] = ("ok", result[:2] + (lead.group(2),) + result[3:])
+                return cached
+        cached = self._cache[code] = self.parse_uncached(code)
+        return cached
+
+    def parse_uncached(self, code: str) -> tuple:
+        try:
+            return ("ok", self._transformer.transform(self._lark.parse(code)))
+        except VisitError as exc:
+            # Transformer errors arrive wrapped; a constant outside 32 bits is E-LIT-RANGE, not E-SYNTAX.
+            if isinstance(exc.orig_exc, _ConstRange):
+                return ("range", str(exc.orig_exc))
+            return ("syntax",)
+        except (LarkError, RecursionError):
+            return ("syntax",)
 
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.DefFile:
         symbols: list[ast.SymbolDef] = []
         includes: list[ast.DefineFile] = []
         section: str | None = None
         pending: list[str] = []
+        broken: list[str] = []
         for line in lines:
             code = line.code.strip()
             if not code:
@@ -340,18 +406,15 @@ class DefParser:
             span = line.span
             comments = tuple(pending) + ((line.comment.strip(),) if line.comment is not None else ())
             pending = []
-            try:
-                result = self._transformer.transform(self._lark.parse(code))
-            except VisitError as exc:
-                # Transformer errors arrive wrapped; a constant outside 32 bits is E-LIT-RANGE, not E-SYNTAX.
-                if isinstance(exc.orig_exc, _ConstRange):
-                    diags.error("E-LIT-RANGE", span, f"literal {exc.orig_exc} does not fit in 32 bits")
+            parsed = self.parse_line(code)
+            if parsed[0] != "ok":
+                if parsed[0] == "range":
+                    diags.error("E-LIT-RANGE", span, f"literal {parsed[1]} does not fit in 32 bits")
                 else:
                     diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
+                broken.extend(_DEF_NAME.findall(code)[:1])
                 continue
-            except (LarkError, RecursionError):
-                diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
-                continue
+            result = parsed[1]
             if result[0] == "type":
                 section = result[1]
                 if result[1].lower().startswith("#typedef"):
@@ -363,9 +426,10 @@ class DefParser:
             _, cflag, name, kind, address, constant, alias = result
             if kind == "K" and constant is None:
                 diags.error("E-SYNTAX", span, f"constant {name} needs a value (K 5, K $FF)")
+                broken.append(name)
                 continue
             symbols.append(ast.SymbolDef(name, kind, address, constant, alias, cflag, span, comments, section))
-        return ast.DefFile(display, tuple(symbols), tuple(includes), line_count)
+        return ast.DefFile(display, tuple(symbols), tuple(includes), line_count, tuple(broken))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -380,7 +444,7 @@ class MpParser:
     """Parses machine-parameter files: `MP4110.0 : 0.125 ;comment`."""
 
     def __init__(self) -> None:
-        self._lark = Lark(load_grammar("mp.lark"), parser="lalr", lexer="contextual")
+        self._lark = lalr_parser("mp.lark")
 
     def parse_lines(self, display: str, lines: tuple[str, ...], diags: Diagnostics) -> list[MachineParameter]:
         out: list[MachineParameter] = []

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import gc
 
 from .diagnostics import Diagnostics
-from .frontend import ProjectOptions, load_project
+from .frontend import Parsers, ProjectOptions, load_project
 from .ir import Program
 from .resolve import resolve
 from .semantics import Semantics
@@ -21,10 +23,29 @@ class CompileResult:
         return self.program is not None and not self.diagnostics.has_errors()
 
 
-def compile_project(options: ProjectOptions, semantics: Semantics, diags: Diagnostics | None = None) -> CompileResult:
+@contextlib.contextmanager
+def _cyclic_gc_paused():
+    """Pause CPython's cyclic collector for one compile, then restore it.
+
+    The front end allocates millions of small, acyclic objects (lines, spans, AST nodes, ops); the collector
+    would rescan the growing heap again and again for nothing: about 40 % of the run time on a 100 000-line
+    project (tests/bench_frontend.py). Reference counting still frees everything as usual.
+    """
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def compile_project(options: ProjectOptions, semantics: Semantics, diags: Diagnostics | None = None,
+                    parsers: Parsers | None = None) -> CompileResult:
     diags = diags or Diagnostics()
-    parsed = load_project(options, semantics, diags)
-    if not parsed.src_files:
-        return CompileResult(None, diags)
-    program = resolve(parsed, semantics, diags)
+    with _cyclic_gc_paused():
+        parsed = load_project(options, semantics, diags, parsers)
+        if not parsed.src_files:
+            return CompileResult(None, diags)
+        program = resolve(parsed, semantics, diags)
     return CompileResult(program, diags)

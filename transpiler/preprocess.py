@@ -7,16 +7,15 @@ import re
 from pathlib import Path
 from typing import Callable, Mapping, Union
 
-from lark import Lark, Transformer, LarkError
+from lark import LarkError, Transformer
 
 from .diagnostics import Diagnostics, Span
-from .grammars import load_grammar
+from .grammars import lalr_parser
 
 DefineValue = Union[int, str]
 
 _PP_LINE = re.compile(r"^\s*(#if|#ifdef|#ifndef|#else|#endif|DEFINE)(?![A-Za-z0-9_])", re.IGNORECASE)
 _INCLUDE_LINE = re.compile(r'^\s*(?:INCLUDE|#include)\s+"?([^";\s]+)"?\s*$', re.IGNORECASE)
-MAX_NESTING = 256
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,14 +104,20 @@ class PPParser:
     """Parses one preprocessor or DEFINE line with the lark grammar `pp.lark`."""
 
     def __init__(self) -> None:
-        self._lark = Lark(load_grammar("pp.lark"), parser="lalr", lexer="contextual")
+        self._lark = lalr_parser("pp.lark")
         self._transformer = _PPTransformer()
+        self._cache: dict[str, tuple | None] = {}     # directives repeat a lot (#endif, #else, the same #if)
 
     def parse(self, code: str) -> tuple | None:
+        key = code.strip()
+        if key in self._cache:
+            return self._cache[key]
         try:
-            return self._transformer.transform(self._lark.parse(code.strip()))
-        except LarkError:
-            return None
+            result = self._transformer.transform(self._lark.parse(key))
+        except (LarkError, RecursionError):
+            result = None
+        self._cache[key] = result
+        return result
 
 
 def resolve_value(raw: tuple, defines: Defines, span: Span, diags: Diagnostics) -> DefineValue:
@@ -175,10 +180,11 @@ class Preprocessor:
             stripped = text.lstrip()
             col = len(text) - len(stripped) + 1
             span = Span(display, lineno, col)
-            if _PP_LINE.match(text):
+            directive = _PP_LINE.match(text)
+            if directive:
                 code, _ = split_comment(text)
                 parsed = self.pp.parse(code)
-                keyword = _PP_LINE.match(text).group(1).lower()
+                keyword = directive.group(1).lower()
                 if parsed is None:
                     if active or keyword != "define":
                         code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
@@ -187,16 +193,18 @@ class Preprocessor:
                     if keyword in ("#if", "#ifdef", "#ifndef"):
                         stack.append(_Frame(active, False, False, span, code.strip(), None))
                         active = False
-                    continue
+                        continue
+                    if keyword not in ("#else", "#endif"):
+                        continue
+                    # "#endif junk": still closes its block, so that the #if above does not cascade into E-PP-NEST
+                    parsed = (keyword[1:],)
                 kind = parsed[0]
                 if kind == "define":
                     if active:
                         self.defines.define(parsed[1], resolve_value(parsed[2], self.defines, span, self.diags), span, self.diags)
                     continue
                 if kind in ("if", "ifdef", "ifndef"):
-                    if len(stack) >= MAX_NESTING:
-                        self.diags.error("E-PP-NEST", span, f"#if nested deeper than {MAX_NESTING}")
-                        return out
+                    # Any depth is allowed (spec 3.2); the stack is a list, so depth costs no recursion.
                     taking = self._condition(parsed, span) if active else False
                     frame = _Frame(active, taking, False, span, code.strip(), None)
                     stack.append(frame)
@@ -231,7 +239,8 @@ class Preprocessor:
             if star_comments and stripped.startswith("*"):
                 out.append(Line("", stripped[1:], span))
                 continue
-            inc = _INCLUDE_LINE.match(split_comment(text)[0]) if include else None
+            code, comment = split_comment(text)
+            inc = _INCLUDE_LINE.match(code) if include else None
             if inc:
                 if _depth > 32:
                     self.diags.error("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested too deeply (a file includes itself?)")
@@ -241,7 +250,6 @@ class Preprocessor:
                     inc_display, inc_lines = got
                     out.extend(self.run(inc_display, inc_lines, include, star_comments, _depth + 1))
                 continue
-            code, comment = split_comment(text)
             out.append(Line(code, comment, span))
         for frame in stack:
             self.diags.error("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")

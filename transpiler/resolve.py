@@ -34,12 +34,23 @@ MAX_NESTING = 16
 class _SymTables:
     global_: dict[str, Symbol]
     local: dict[str, dict[str, Symbol]]
+    # Names whose definition was rejected with an error, and the files whose definitions are incomplete
+    # because a definition file could not be read ("*": the global ones): their unknown names are not
+    # reported again (one root error per fault).
+    broken: set[str] = dataclasses.field(default_factory=set)
+    incomplete: frozenset[str] = frozenset()
 
-    def lookup(self, file: str, name: str) -> Symbol | None:
+    def already_reported(self, file: str, name: str) -> bool:
+        return name in self.broken or "*" in self.incomplete or file in self.incomplete
+
+    def lookup(self, file: str, name: str, fold_case: bool = False) -> Symbol | None:
         local = self.local.get(file)
         if local and name in local:
             return local[name]
-        return self.global_.get(name)
+        found = self.global_.get(name)
+        if found is None and fold_case:        # symbol_case = insensitive (A-01)
+            found = _folded(local or {}, name) or _folded(self.global_, name)
+        return found
 
     def all_symbols(self) -> dict[str, Symbol]:
         merged = dict(self.global_)
@@ -57,24 +68,30 @@ class _Allocator:
         self.profile = semantics.profile
         self.used_bits = used_bits
         self.used_bytes = used_bytes
+        # Addresses are only ever added to the used sets, so the lowest free address of a kind never goes
+        # down: each search resumes where the previous one stopped (linear instead of quadratic time).
+        self.resume: dict[str, int] = {}
 
     def allocate(self, kind: str) -> int | None:
+        resume = self.resume.get(kind, 0)
         if kind in BIT_KINDS or kind == "S":
             used = self.used_bits.setdefault(kind, set())
             for lo, hi in getattr(self.ranges, kind):
-                for addr in range(lo, hi + 1):
+                for addr in range(max(lo, resume), hi + 1):
                     if addr not in used and not self.profile.is_interface(kind, addr):
                         used.add(addr)
+                        self.resume[kind] = addr + 1
                         return addr
             return None
         size = BYTES[kind]
         for lo, hi in self.ranges.B:
-            start = (lo + size - 1) // size * size
+            start = (max(lo, resume) + size - 1) // size * size
             for addr in range(start, hi - size + 2, size):
                 span = range(addr, addr + size)
                 if any(a in self.used_bytes for a in span) or any(self.profile.is_interface("B", a) for a in span):
                     continue
                 self.used_bytes.update(span)
+                self.resume[kind] = addr + size
                 return addr
         return None
 
@@ -105,16 +122,20 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
     used_bits, used_bytes = _explicit_addresses(project)
     allocator = _Allocator(semantics, used_bits, used_bytes)
     auto: list[Symbol] = []
-    tables = _SymTables({}, {})
+    tables = _SymTables({}, {}, incomplete=project.symbols_incomplete)
     addr_owner: dict[tuple[str, int], ast.SymbolDef] = {}
+    auto_by_definition: dict[Span, Symbol] = {}
 
     def fill(table: dict[str, Symbol], defs: Iterable[ast.DefFile]) -> None:
         entries = [s for d in defs for s in d.symbols]
+        for d in defs:
+            tables.broken.update(d.broken)
         for s in entries:
             if _RESERVED.match(s.name):
                 diags.error("E-SYM-RESERVED", s.span, f"symbol name '{s.name}' is literal operand syntax")
                 continue
             if s.address is not None and not _check_def_address(s, semantics, diags):
+                tables.broken.add(s.name)
                 continue
             if s.alias is not None:
                 continue
@@ -123,18 +144,24 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
             elif s.address is not None:
                 sym = Symbol(s.name, s.kind, s.address, s.span, " ".join(s.comments), section=s.section)
                 key = (s.kind if s.kind not in MEM_KINDS else "BYTE", s.address)
-                if key in addr_owner and not s.cflag and addr_owner[key].kind == s.kind:
+                # (the same name again is an identical redefinition or the same file read for two owners)
+                if key in addr_owner and not s.cflag and addr_owner[key].kind == s.kind and addr_owner[key].name != s.name:
                     other = addr_owner[key]
                     diags.warning("E-DEF-DUP-ADDR", s.span, f"{s.name} names {s.kind}{s.address} like {other.name} "
                                   f"({other.span}); mark an intended second use with /c")
                 addr_owner.setdefault(key, s)
+            elif s.span in auto_by_definition:
+                # A local .def file named by several modules: one definition line is one operand.
+                sym = auto_by_definition[s.span]
             else:
                 addr = allocator.allocate(s.kind)
                 if addr is None:
                     diags.error("E-DEF-POOL", s.span, f"no free {s.kind} operand left for {s.name}")
+                    tables.broken.add(s.name)
                     continue
                 sym = Symbol(s.name, s.kind, addr, s.span, " ".join(s.comments), auto=True, section=s.section)
                 auto.append(sym)
+                auto_by_definition[s.span] = sym
             _add(table, sym, diags)
         pending = [s for s in entries if s.alias is not None]
         for _ in range(len(pending) + 1):
@@ -148,6 +175,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
                 if target.kind != s.kind:
                     diags.error("E-DEF-ALIAS", s.span, f"{s.name} is of kind {s.kind} but its alias target "
                                 f"{s.alias} is of kind {target.kind}")
+                    tables.broken.add(s.name)
                 else:
                     _add(table, Symbol(s.name, s.kind, target.addr, s.span, " ".join(s.comments),
                                        alias_of=s.alias, section=s.section), diags)
@@ -156,7 +184,9 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
             if not progressed:
                 break
         for s in pending:
-            diags.error("E-DEF-ALIAS", s.span, f"alias target &{s.alias} of {s.name} is not defined")
+            if s.alias not in tables.broken and "*" not in tables.incomplete:   # else reported already
+                diags.error("E-DEF-ALIAS", s.span, f"alias target &{s.alias} of {s.name} is not defined")
+            tables.broken.add(s.name)
 
     fill(tables.global_, project.global_defs)
     for owner, defs in project.local_defs.items():
@@ -177,6 +207,15 @@ def _add(table: dict[str, Symbol], sym: Symbol, diags: Diagnostics) -> None:
     table[sym.name] = sym
 
 
+def _folded(table: dict, name: str):
+    """The entry whose key equals name ignoring case (the first in sorted order, for determinism)."""
+    lower = name.lower()
+    for key in sorted(table):
+        if key.lower() == lower:
+            return table[key]
+    return None
+
+
 def _check_case_clashes(symbols: Iterable[Symbol], diags: Diagnostics) -> None:
     by_lower: dict[str, Symbol] = {}
     for sym in sorted(symbols, key=lambda s: (s.span.file, s.span.line, s.name)):
@@ -193,20 +232,33 @@ def _check_def_address(s: ast.SymbolDef, semantics: Semantics, diags: Diagnostic
 def _check_range(kind: str, addr: int, semantics: Semantics, span: Span, diags: Diagnostics, what: str,
                  count: int = 1) -> bool:
     profile = semantics.profile
+    prefix = "" if what == f"{kind}{addr}" else f"{what}: "     # name the symbol when one was written
     if kind in MEM_KINDS:
         size = BYTES[kind]
         if addr % size:
-            diags.error("E-ADDR-ALIGN", span, f"{what}: {kind}{addr} is not aligned to {size} bytes")
+            diags.error("E-ADDR-ALIGN", span, f"{prefix}{kind}{addr} is not aligned to {size} bytes")
             return False
-        ok = all(profile.ranges.contains("B", a) for a in range(addr, addr + size)) or profile.is_interface(kind, addr, size)
+        ok = (_inside_one_interval(profile.ranges.B, addr, addr + size - 1)
+              or all(profile.ranges.contains("B", a) for a in range(addr, addr + size))
+              or profile.is_interface(kind, addr, size))
     elif kind in BIT_KINDS or kind == "S":
-        ok = all(profile.ranges.contains(kind, a) or profile.is_interface(kind, a) for a in range(addr, addr + count))
+        # The fast test (whole span inside one interval) decides almost every operand; the per-address
+        # test is only needed for spans that cross an interval border or touch interface operands.
+        ok = (_inside_one_interval(getattr(profile.ranges, kind), addr, addr + count - 1)
+              or all(profile.ranges.contains(kind, a) or profile.is_interface(kind, a) for a in range(addr, addr + count)))
     else:
         return True
     if not ok:
         extra = f" (and the following {count - 1})" if count > 1 else ""
-        diags.error("E-ADDR-RANGE", span, f"{what}: {kind}{addr}{extra} is outside the {profile.name} range")
+        diags.error("E-ADDR-RANGE", span, f"{prefix}{kind}{addr}{extra} is outside the {profile.name} range")
     return ok
+
+
+def _inside_one_interval(intervals: tuple[tuple[int, int], ...], first: int, last: int) -> bool:
+    for lo, hi in intervals:
+        if lo <= first and last <= hi:
+            return True
+    return False
 
 
 # --------------------------------------------------------------------------------------------
@@ -220,6 +272,9 @@ class _Frame:
     load: bool
     index: int
     span: Span
+    # E-BRACKET-SPAN faults inside this bracket; reported when it closes. A bracket that is never closed
+    # reports only E-BRACKET-BALANCE: the missing ']' is the root fault, not the EM after it.
+    span_faults: list[tuple[Span, str]] = dataclasses.field(default_factory=list)
 
 
 class _FileLowering:
@@ -239,6 +294,7 @@ class _FileLowering:
         self.externs: dict[str, ast.Extern] = {}
         self.pending_calls: list[tuple[int, str, Span]] = []     # op index, label, span (CM/SUBM targets)
         self.pending_case: list[tuple[int, int, str, Span]] = []  # op index, entry, label, span
+        self.case_entries: dict[int, list[tuple[Span, tuple[str, ...]]]] = {}   # CASE op index -> entry notes
         self.pending_jumps: list[tuple[int, str, Span]] = []
 
     def run(self) -> None:
@@ -254,7 +310,10 @@ class _FileLowering:
         last_acc = "NONE"
         brackets: list[_Frame] = []
         structs: list[list] = []     # [keyword, op index, else index]
-        case_open: tuple[int, Span] | None = None
+        case_open: tuple[int | None, Span] | None = None
+        # E-CASE-BODY faults inside the open table, reported at its ENDC: a table that is never closed reports
+        # only "CASE without ENDC" (the missing ENDC is the root fault, not every line after it).
+        case_faults: list[tuple[Span, str]] = []
         for stmt in stmts:
             if isinstance(stmt, ast.Global):
                 self.globals.append(stmt)
@@ -267,9 +326,9 @@ class _FileLowering:
             index = len(self.ops)
             if isinstance(stmt, ast.Label):
                 if case_open:
-                    self.diags.error("E-CASE-BODY", stmt.span, "only 'CM label' lines may stand inside CASE ... ENDC")
-                if brackets:
-                    self.diags.error("E-BRACKET-SPAN", stmt.span, "LBL inside an open bracket")
+                    case_faults.append((stmt.span, "only 'CM label' lines may stand inside CASE ... ENDC"))
+                if brackets and self.semantics["bracket_span"] == "forbidden":
+                    brackets[-1].span_faults.append((stmt.span, "LBL inside an open bracket"))
                 if stmt.name in self.labels:
                     self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} is defined twice in this file")
                 else:
@@ -296,40 +355,50 @@ class _FileLowering:
                 self.diags.error("E-UNSUPPORTED", instr.span, "=N is not part of the language (enable allow_assign_not, A-16)")
                 continue
             if case_open is not None and m not in ("CM", "ENDC"):
-                self.diags.error("E-CASE-BODY", instr.span, f"only 'CM label' lines may stand inside CASE ... ENDC, not {m}")
+                case_faults.append((instr.span, f"only 'CM label' lines may stand inside CASE ... ENDC, not {m}"))
                 continue
-            if brackets and (m in CONTROL):
-                self.diags.error("E-BRACKET-SPAN", instr.span, f"{m} inside an open bracket (opened at line {brackets[-1].span.line})")
-                continue
+            if (brackets and m in CONTROL and case_open is None      # (a table's CM and ENDC go with its CASE)
+                    and self.semantics["bracket_span"] == "forbidden"):
+                brackets[-1].span_faults.append(
+                    (instr.span, f"{m} inside an open bracket (opened at line {brackets[-1].span.line})"))
+                # CASE/ENDC and structured keywords still take part in structure matching, so that their
+                # partners outside the bracket do not report a second error.
+                if m not in STRUCT_ALL and m not in ("CASE", "ENDC"):
+                    continue
             if case_open is not None and m == "CM":
                 case_index = case_open[0]
                 op = instr.operand
                 if op.kind == "NUM":
-                    self.diags.error("E-CASE-BODY", instr.span, "a PLC module cannot be a CASE entry")
+                    case_faults.append((instr.span, "a PLC module cannot be a CASE entry"))
                     continue
-                case_op = self.ops[case_index]
-                entry = len(case_op.case_notes)
-                self.ops[case_index] = dataclasses.replace(
-                    case_op, case_notes=case_op.case_notes + ((instr.span, instr.comments),))
-                self.pending_case.append((case_index, entry, _label_text(op), instr.span))
+                if case_index is None:       # the CASE line itself was rejected
+                    continue
+                notes = self.case_entries.setdefault(case_index, [])
+                self.pending_case.append((case_index, len(notes), _label_text(op), instr.span))
+                notes.append((instr.span, instr.comments))
                 continue
             operand = None
             if instr.operand is not None and info.form == "operand":
                 operand = self._operand(instr)
-                if operand is None:
-                    continue
-                if not self._kind_ok(instr, operand):
+                if operand is None or not self._kind_ok(instr, operand):
+                    if m == "CASE":
+                        # Keep the table open (without an op) so that its entries and ENDC cause no more errors.
+                        case_open, case_faults = (None, instr.span), []
                     continue
             op, chain_open, last_acc = self._lower(instr, operand, index, chain_open, last_acc, brackets, structs)
             if op is None:
                 continue
             if m == "CASE":
-                case_open = (index, instr.span)
+                case_open, case_faults = (index, instr.span), []
             elif m == "ENDC":
                 if case_open is None:
                     self.diags.error("E-CASE-BODY", instr.span, "ENDC without CASE")
-                case_open = None
+                for fault_span, message in case_faults:
+                    self.diags.error("E-CASE-BODY", fault_span, message)
+                case_open, case_faults = None, []
             self.ops.append(op)
+        for case_index, notes in self.case_entries.items():
+            self.ops[case_index] = dataclasses.replace(self.ops[case_index], case_notes=tuple(notes))
         for frame in brackets:
             self.diags.error("E-BRACKET-BALANCE", frame.span, f"bracket {frame.op}[ is never closed")
         for frame in structs:
@@ -345,11 +414,11 @@ class _FileLowering:
         kind, value = syn.kind, syn.value
         symbol = None
         if kind == "SYM":
-            sym = self.symbols.lookup(self.src.path, str(value))
+            sym = self.symbols.lookup(self.src.path, str(value), self.semantics["symbol_case"] == "insensitive")
             if sym is None:
                 if str(value) in self.kfields:
                     self.diags.error("E-OPERAND-KIND", span, f"constant field {value} is read as 'KF {value}[X]'")
-                else:
+                elif not self.symbols.already_reported(self.src.path, str(value)):
                     self.diags.error("E-SYM-UNDEF", span, f"unknown symbol '{value}'")
                 return None
             symbol = sym.name
@@ -461,6 +530,8 @@ class _FileLowering:
                 self.diags.error("E-BRACKET-BALANCE", span, "']' without an opening bracket")
                 return None, chain_open, last_acc
             frame = brackets.pop()
+            for fault_span, message in frame.span_faults:
+                self.diags.error("E-BRACKET-SPAN", fault_span, message)
             bracket = Bracket(frame.op, frame.mode, frame.load)
             logic_result = (frame.op in LOGIC_GATES and frame.mode == "LOGIC") or frame.op in COMPARES
             return (Op("BCLOSE", bracket=bracket, rel=frame.op if frame.op in COMPARES else "", **base),
@@ -517,19 +588,22 @@ class _FileLowering:
                       brackets: list[_Frame]) -> tuple[Op | None, bool, str]:
         span = base["span"]
         if len(brackets) >= MAX_NESTING:
-            self.diags.error("E-BRACKET-DEPTH", span, f"brackets nested deeper than {MAX_NESTING}")
+            if len(brackets) == MAX_NESTING:     # once per too-deep nest, not for every deeper level
+                self.diags.error("E-BRACKET-DEPTH", span, f"brackets nested deeper than {MAX_NESTING}")
             # Keep a frame so that the matching ']' does not cascade into a second error.
             brackets.append(_Frame(op, "LOGIC" if op in LOGIC_GATES else "WORD", False, index, span))
             return None, chain_open, last_acc
         mode = last_acc
         if mode == "STRING":
             self.diags.error("E-BRACKET-MODE", span, f"{op}[ after a string instruction")
+            brackets.append(_Frame(op, "WORD", False, index, span))   # the matching ']' must not cascade
             return None, chain_open, last_acc
         if mode == "NONE":
             mode = "LOGIC" if op in LOGIC_GATES else "WORD"
         if (op in ARITH or op in COMPARES) and mode != "WORD":
             self.diags.error("E-BRACKET-MODE", span, f"{op}[ needs a word value before it (the previous instruction "
                              "addressed the logic accumulator)")
+            brackets.append(_Frame(op, "WORD", False, index, span))   # the matching ']' must not cascade
             return None, chain_open, last_acc
         load = (mode == "LOGIC" and op in LOGIC_GATES and not chain_open
                 and self.semantics["bracket_at_chain_start"] == "load")
@@ -540,7 +614,7 @@ class _FileLowering:
     def _structured(self, m: str, base: dict, index: int, structs: list[list]) -> Op | None:
         span = base["span"]
         if m in STRUCT_OPEN:
-            if len(structs) >= MAX_NESTING:
+            if len(structs) == MAX_NESTING:      # once per too-deep nest, not for every deeper level
                 self.diags.error("E-STRUCT-NEST", span, f"structured statements nested deeper than {MAX_NESTING}")
             structs.append([m, index, None])
             code = {"IFT": "JPF", "IFF": "JPT", "WHILET": "JPF", "WHILEF": "JPT", "REPEAT": "NOP"}[m]
@@ -550,6 +624,13 @@ class _FileLowering:
         if not structs or structs[-1][0] not in expected or (m == "ELSE" and structs[-1][2] is not None):
             opener = structs[-1][0] if structs else "nothing"
             self.diags.error("E-STRUCT-NEST", span, f"{m} does not match the open structure ({opener})")
+            # Interleaved structures (IFT WHILET ENDI ENDW): forget the opener this keyword was meant for, so
+            # that the inner one still closes normally and the overlap is one error, not three.
+            if m != "ELSE":
+                for k in range(len(structs) - 1, -1, -1):
+                    if structs[k][0] in expected:
+                        del structs[k]
+                        break
             return Op("NOP", **base)
         frame = structs[-1]
         if m == "ELSE":
@@ -608,10 +689,11 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) ->
         low.run()
     exports = _exports(lowerings, diags)
     for low in lowerings:
-        _link(low, lowerings, exports, diags)
+        _link(low, lowerings, exports, diags, project.labels_incomplete)
     files = tuple(FileCode(low.src.path, tuple(low.ops), dict(low.labels), low.src.line_count) for low in lowerings)
-    for i, f in enumerate(files):
-        _check_flow(i, f, diags)
+    for i, (f, low) in enumerate(zip(files, lowerings)):
+        if _flow_is_complete(low, diags):
+            _check_flow(i, f, diags)
     for i, low in enumerate(lowerings[1:], start=1):
         for op in files[i].ops:
             if op.code == "LBL":
@@ -641,15 +723,32 @@ def _exports(lowerings: list[_FileLowering], diags: Diagnostics) -> dict[str, Ca
     return exports
 
 
-def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str, CallTarget], diags: Diagnostics) -> None:
+def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str, CallTarget], diags: Diagnostics,
+          labels_incomplete: bool = False) -> None:
+    if low.semantics["symbol_case"] == "insensitive":       # A-01: labels are looked up ignoring case too
+        def spelled(name: str, table: dict) -> str:
+            if name in table:
+                return name
+            lower = name.lower()
+            return next((key for key in sorted(table) if key.lower() == lower), name)
+    else:
+        def spelled(name: str, table: dict) -> str:
+            return name
+
     def target(name: str, span: Span) -> CallTarget | None:
+        name = spelled(name, low.labels)
+        if name not in low.labels:
+            name = spelled(name, low.externs)
+        if name in low.externs:
+            name = spelled(name, exports)
         if name in low.labels:
             return CallTarget(low.file_index, low.labels[name], name)
         if name in low.externs:
             found = exports.get(name)
             if found is not None:
                 return found
-            diags.error("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
+            if not labels_incomplete:       # else the unreadable module (already reported) may export it
+                diags.error("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
             return None
         elsewhere = [o.src.path for o in lowerings if name in o.labels]
         hint = f" (it is defined in {elsewhere[0]}: add GLOBAL there and EXTERN here)" if elsewhere else ""
@@ -660,19 +759,36 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
         t = target(name, span)
         if t is not None:
             low.ops[index] = dataclasses.replace(low.ops[index], call=t)
-    for index, entry, name, span in low.pending_case:
+    case_targets: dict[int, list[CallTarget]] = {}
+    for index, entry, name, span in low.pending_case:          # entries arrive in table order
         t = target(name, span)
-        op = low.ops[index]
-        targets = list(op.case_targets) + [None] * (entry + 1 - len(op.case_targets))
-        targets[entry] = t if t is not None else CallTarget(label=name)
-        low.ops[index] = dataclasses.replace(op, case_targets=tuple(targets))
+        case_targets.setdefault(index, []).append(t if t is not None else CallTarget(label=name))
+    for index, targets in case_targets.items():
+        low.ops[index] = dataclasses.replace(low.ops[index], case_targets=tuple(targets))
     for index, name, span in low.pending_jumps:
+        name = spelled(name, low.labels)
         if name in low.labels:
             low.ops[index] = dataclasses.replace(low.ops[index], target=low.labels[name])
         else:
             elsewhere = [o.src.path for o in lowerings if name in o.labels]
             where = f"; it is in {elsewhere[0]} (jumps stay inside a file, A-31)" if elsewhere else ""
             diags.error("E-JUMP-SCOPE", span, f"jump target {name} is not a label of this file{where}")
+
+
+_LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
+                              "E-FILE-NOT-FOUND", "E-FILE-ESCAPE", "E-FILE-READ", "E-FILE-INCLUDE-CYCLE"})
+_FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
+
+
+def _flow_is_complete(low: _FileLowering, diags: Diagnostics) -> bool:
+    """False when an earlier error removed a line or a control statement of the file: a path that then
+    seems to run off the end is a consequence of that error, not a second fault."""
+    files = {low.src.path} | {stmt.span.file for stmt in low.src.statements}
+    if any(d.code in _LOST_LINE_CODES and d.span.file in files for d in diags.errors):
+        return False
+    lowered = {op.span for op in low.ops}
+    return all(stmt.span in lowered for stmt in low.src.statements
+               if isinstance(stmt, ast.Instr) and stmt.mnemonic in _FLOW_MNEMONICS)
 
 
 def successors(ops: tuple[Op, ...], i: int) -> list[int]:
@@ -730,28 +846,30 @@ def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
 def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagnostics) -> tuple[tuple[CallTarget, ...], int]:
     main = CallTarget(0, 0, "<main>")
     nodes: dict[tuple[int, int], CallTarget] = {}
-    edges: dict[tuple[int, int], list[tuple[CallTarget, Op]]] = {}
+    edges: dict[tuple[int, int], list[tuple[CallTarget, Span]]] = {}     # callee and the span of the call
     roots = [main] if files and files[0].ops else []
     todo = list(roots)
     while todo:
         node = todo.pop()
         if node.key in edges:
             continue
-        out: list[tuple[CallTarget, Op]] = []
+        out: list[tuple[CallTarget, Span]] = []
         for i in routine_body(files, node):
             op = files[node.file].ops[i]
-            callees = []
+            callees: list[tuple[CallTarget, Span]] = []
             if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
-                callees.append(op.call)
+                callees.append((op.call, op.span))
             elif op.code == "CASE":
-                callees.extend(t for t in op.case_targets if t is not None and t.file >= 0)
+                # each entry is a call site of its own (spec 6.15.1), located at its CM line
+                callees.extend((t, op.case_notes[k][0] if k < len(op.case_notes) else op.span)
+                               for k, t in enumerate(op.case_targets) if t is not None and t.file >= 0)
             elif op.code == "SUBM" and op.call is not None and op.call.file >= 0:
                 if op.call.key not in nodes:
                     nodes[op.call.key] = op.call
                     roots.append(op.call)
                     todo.append(op.call)
-            for c in callees:
-                out.append((c, op))
+            for c, call_span in callees:
+                out.append((c, call_span))
                 if c.key not in nodes:
                     nodes[c.key] = c
                     todo.append(c)
@@ -805,10 +923,11 @@ def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagno
     recursive: set[tuple[int, int]] = set()
     for comp in sccs:
         members = set(comp)
-        calls = [(op.span, op) for k in comp for (c, op) in edges.get(k, []) if c.key in members]
+        # 17b.11: at the call that closes the cycle, the first one in file order (program file, then line)
+        calls = [(k[0], span.line, span) for k in comp for (c, span) in edges.get(k, []) if c.key in members]
         if calls:
             recursive |= members
-            span, op = min(calls, key=lambda t: (t[0].file, t[0].line))
+            span = min(calls, key=lambda t: (t[0], t[1]))[2]
             names = ", ".join(sorted(nodes[k].label if k in nodes else "<main>" for k in comp))
             diags.error("E-CALL-RECURSION", span, f"recursive calls between {names} (A-29)")
     depth_limit = int(semantics["call_depth"])
@@ -821,7 +940,7 @@ def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagno
     return routines, max_depth
 
 
-def _longest_paths(edges: dict[tuple[int, int], list[tuple[CallTarget, Op]]],
+def _longest_paths(edges: dict[tuple[int, int], list[tuple[CallTarget, Span]]],
                    skip: set[tuple[int, int]]) -> dict[tuple[int, int], int]:
     """Longest call chain below each node of the (acyclic once `skip` is removed) call graph."""
     depth: dict[tuple[int, int], int] = {}

@@ -41,9 +41,10 @@ class OperandVar:
 class Layout:
     """All data decisions of the ST backend; codegen asks it how to read and write each operand."""
 
-    def __init__(self, program: Program, names: NameTable):
+    def __init__(self, program: Program, names: NameTable, helper=lambda name: None):
         self.program = program
         self.names = names
+        self.helper = helper
         self.profile = program.semantics.profile
         self.little = program.semantics.little_endian
         self.globals: dict[str, GlobalVar] = {}
@@ -297,11 +298,15 @@ class Layout:
             return E.Expr(f"BYTE_TO_SINT({arr}[{self._byte_index(op, x, 0)}])", "SINT", deps, -128, 127)
         parts = ", ".join(f"{arr}[{self._byte_index(op, x, k)}]" for k in range(BYTES[op.kind]))
         fn = "HH_MKINT" if op.kind == "W" else "HH_MKDINT"
+        self.helper(fn)
         return E.Expr(f"{fn}({parts})", MEM_TYPE[op.kind], deps, *E.RANGES[MEM_TYPE[op.kind]])
 
     def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         arr = self.mem_array
         out = []
+        if op.kind == "B":
+            return [(f"{arr}[{self._byte_index(op, x, 0)}]", E.Expr(f"DINT_TO_BYTE({value.text})" if value.typ == "DINT" else f"{value.typ}_TO_BYTE({value.text})", "BYTE", value.deps, 0, 255))]
+        self.helper("HH_BYTEOF")
         for k in range(BYTES[op.kind]):
             text = f"HH_BYTEOF({value.text}, {k})"
             out.append((f"{arr}[{self._byte_index(op, x, k)}]", E.Expr(text, "BYTE", value.deps, 0, 255)))
@@ -321,6 +326,8 @@ class Layout:
 def _index(base: int, x: E.Expr | None, scale: int, semantics) -> E.Expr:
     if x is None:
         return E.int_const(base)
+    if x.const is not None:
+        return E.int_const(base + scale * x.const)
     xs = x if scale == 1 else E.binop("*", x, E.int_const(scale), "DINT", E.PREC_MUL)
     return E.binop("+", E.int_const(base), xs, "DINT", E.PREC_ADD)
 

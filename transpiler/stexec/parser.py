@@ -358,6 +358,8 @@ def _syntax_message(err: UnexpectedInput, text: str) -> str:
             return "pragmas '{...}' are not supported (matiec pastes them into C)"
         if text.startswith("//", err.pos_in_stream) or text.startswith("/*", err.pos_in_stream):
             return "only (* ... *) comments are allowed in IEC 61131-3 ST"
+        if ch == "#":
+            return "a based or typed literal is not allowed here (CASE labels must be plain decimal integers)"
         if ch == '"':
             return "double-quoted strings (WSTRING) are not supported"
         return f"unexpected character {ch!r}"
@@ -367,8 +369,11 @@ def _syntax_message(err: UnexpectedInput, text: str) -> str:
             found = "end of file"
         else:
             found = f"'{tok}'"
-        if tok.type == "STAR" and tok.start_pos is not None and tok.start_pos > 0 and text[tok.start_pos - 1] == "(":
+        at = tok.start_pos if tok.start_pos is not None else 0
+        if text.startswith("(*", at) or (tok.type == "STAR" and at > 0 and text[at - 1] == "("):
             return "unterminated comment '(*'"
+        if text.startswith("//", at) or text.startswith("/*", at):
+            return "only (* ... *) comments are allowed in IEC 61131-3 ST"
         expected = sorted({_describe(e) for e in err.expected if not e.startswith("__")})
         if len(expected) > 8:
             expected = expected[:8] + ["..."]

@@ -150,8 +150,9 @@ def loop_trap(limit_: int) -> None:
 # ------------------------------------------------------------------ TIME (int milliseconds)
 
 def time_to_secs(ms: int) -> int:
-    """TIME_TO_<int> counts whole seconds on matiec (targets.md 1.3)."""
-    return int(ms / 1000) if abs(ms) < (1 << 52) else (abs(ms) // 1000) * (1 if ms >= 0 else -1)
+    """TIME_TO_<int> counts whole seconds on matiec (targets.md 1.3), truncated toward zero."""
+    q = abs(ms) // 1000
+    return q if ms >= 0 else -q
 
 
 def real_to_time(x: float) -> int:
@@ -253,16 +254,17 @@ def time_to_string(ms: int) -> str:
 
 
 def string_to_int(s: str) -> int:
-    """matiec's string-to-integer scan: 2#/8#/16# prefixes, otherwise the digits after the last letter or dot."""
-    if not s:
-        return 0
+    """matiec's string-to-integer scan: 2#/8#/16# prefixes (other characters skipped), otherwise the decimal
+    digits after the last letter or dot, with a leading '-' giving the sign."""
     for prefix, base_, digits in (("2#", 2, "01"), ("8#", 8, "01234567"), ("16#", 16, "0123456789abcdefABCDEF")):
-        if len(s) > len(prefix) - 1 and s.startswith(prefix) and len(s) > 1:
+        if s.startswith(prefix):
             value = 0
             for ch in s[len(prefix):]:
                 if ch in digits:
                     value = value * base_ + int(ch, 16)
             return value & 0xFFFFFFFFFFFFFFFF
+    if not s:
+        return 0
     sign = -1 if s[0] == "-" else 1
     value, scale, count = 0, 1, 0
     for ch in reversed(s):

@@ -11,10 +11,8 @@ STR_MAX = 126   # matiec's STR_MAX_LEN: longest STRING value
 class Type:
     """Base of all types; derived types compare by identity (IEC name equivalence)."""
 
-    name: str = "?"
-
     def __str__(self) -> str:
-        return self.name
+        return getattr(self, "name", "?")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -1,0 +1,56 @@
+"""Shared helpers of the front-end tests: write a project into a folder, compile it, summarise diagnostics (no tests here)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Mapping
+
+from transpiler.diagnostics import Diagnostic, Severity
+from transpiler.frontend import ProjectOptions
+from transpiler.pipeline import CompileResult, compile_project
+from transpiler.semantics import make_semantics
+
+
+def write_project(folder: Path, files: Mapping[str, str | bytes]) -> None:
+    """Write name -> text (Latin-1) or bytes; names may contain sub-folders."""
+    for name, text in files.items():
+        path = folder / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(text if isinstance(text, bytes) else text.encode("latin-1"))
+
+
+def compile_files(folder: Path, files: Mapping[str, str | bytes], main: str = "main.src", profile: str = "itnc530",
+                  semantics: Mapping[str, object] | None = None, **options) -> CompileResult:
+    """Write the files and run the whole front end (load, preprocess, parse, resolve)."""
+    write_project(folder, files)
+    return compile_project(ProjectOptions(main=folder / main, **options), make_semantics(profile, semantics or {}))
+
+
+@dataclasses.dataclass(frozen=True)
+class Found:
+    code: str
+    file: str
+    line: int
+    col: int
+
+
+def found(diags: list[Diagnostic]) -> list[Found]:
+    return [Found(d.code, d.span.file, d.span.line, d.span.col) for d in diags]
+
+
+def errors(result: CompileResult) -> list[Found]:
+    return found(result.diagnostics.errors)
+
+
+def warnings(result: CompileResult) -> list[Found]:
+    return found([d for d in result.diagnostics.items if d.severity is Severity.WARNING])
+
+
+def error_codes(result: CompileResult) -> list[str]:
+    return [d.code for d in result.diagnostics.errors]
+
+
+def program_ops(result: CompileResult, file: int = 0):
+    assert result.program is not None, [d.render() for d in result.diagnostics.items]
+    return result.program.files[file].ops

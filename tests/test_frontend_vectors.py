@@ -1,0 +1,63 @@
+"""The public test vectors of spec section 20 through the front end: compile errors exactly as expected, else clean."""
+
+from __future__ import annotations
+
+import pytest
+from test_frontend_support import errors
+from vectors import SKIP_REASON, SPEC, Vector, load_vectors
+
+from transpiler.frontend import ProjectOptions
+from transpiler.pipeline import compile_project
+from transpiler.semantics import make_semantics
+
+VECTORS = load_vectors() if SPEC.exists() else []
+
+
+def _params():
+    if not VECTORS:
+        return [pytest.param(None, marks=pytest.mark.skip(reason=SKIP_REASON), id="no-spec")]
+    return [pytest.param(v, id=v.id) for v in VECTORS]
+
+
+def _compile(vector: Vector, tmp_path):
+    main = vector.write(tmp_path)
+    options = ProjectOptions(main=main, extra_global_defs=vector.extra_defs(tmp_path))
+    return compile_project(options, make_semantics(vector.profile))
+
+
+def test_the_spec_has_vectors_of_both_kinds():
+    if not VECTORS:
+        pytest.skip(SKIP_REASON)
+    compile_errors = [v for v in VECTORS if (v.expect_error or {}).get("phase") == "compile"]
+    assert len(VECTORS) >= 80
+    assert compile_errors, "the spec should contain vectors with an expected compile-time error"
+
+
+@pytest.mark.parametrize("vector", _params())
+def test_vector_compiles_as_expected(vector: Vector, tmp_path):
+    result = _compile(vector, tmp_path)
+    expected = vector.expect_error or {}
+    got = errors(result)
+    if expected.get("phase") == "compile":
+        assert [e.code for e in got] == [expected["code"]], [d.render() for d in result.diagnostics.items]
+        if "line" in expected:
+            assert got[0].line == expected["line"], got[0]
+            assert got[0].file == "main.src"
+    else:
+        assert got == [], [d.render() for d in result.diagnostics.items]
+        assert result.program is not None and result.program.files[0].ops
+
+
+def test_every_vector_compiles_the_same_twice(tmp_path):
+    """Determinism: two runs over the same files give the same diagnostics, ops, symbols and auto-assigned addresses."""
+    if not VECTORS:
+        pytest.skip(SKIP_REASON)
+    for vector in VECTORS:
+        folder = tmp_path / vector.id
+        first = _compile(vector, folder)
+        second = _compile(vector, folder)
+        assert [d.render() for d in first.diagnostics.items] == [d.render() for d in second.diagnostics.items]
+        if first.program is not None:
+            assert first.program.files == second.program.files, vector.id
+            assert first.program.symbols == second.program.symbols, vector.id
+            assert first.program.auto_assigned == second.program.auto_assigned, vector.id

@@ -1,0 +1,391 @@
+"""The reference machine: cycle phases of spec 8.1 around the generated program code, runtime faults, coverage.
+
+Co-simulation (issue 7) drives the phases one by one instead of run_cycle:
+
+    m.apply_writes(writes)            # scenario step 1: non-input operands now, inputs into the process image
+    nc = m.nc_phase(cycle, actions)   # phase 1: the NC model's writes, [(kind, addr, value)]; raises HandshakeTimeout
+    m.input_latch()                   # phase 2
+    m.timer_service()                 # phase 3 (after the program when cycle_phases = timers_after_main)
+    m.program_phase(cycle, report)    # phases 4 and 5: main program, then submit jobs
+    m.output_flush(); m.end_cycle()   # phase 6, then the simulated clock advances
+
+The ST side can apply exactly the same `nc` write list (the NC model's decisions of the
+reference run), or own a second NcModel that reads its own acknowledgement markers; both see
+the same scenario actions. run_cycle does all of this and turns faults into a CycleReport.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+from decimal import Decimal, InvalidOperation
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+from ..diagnostics import Diagnostics, Span
+from ..ir import Program
+from ..shim import HandshakeTimeout, NcModel, SysModules
+from .compile import GENERATED_FILENAME, CompiledProgram, compile_program
+from .faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
+from .state import MachineState, sext
+from .submit import SubmitQueue
+from .support import Runtime
+from .timers import TimerService, load_presets
+
+PSEUDO = ("LA", "WA", "X", "SA")
+WriteLike = Any   # stimulus.Write (ref, value, name), or a (kind, addr, value) tuple
+
+
+@dataclasses.dataclass(frozen=True)
+class Coverage:
+    """Executed ops and the outcomes seen at each conditional jump/call/EM (0/1) and CASE (entry, -1 = none)."""
+
+    executed: frozenset[tuple[int, int]]
+    branches: Mapping[tuple[int, int], frozenset[int]]
+
+
+def normalize_mp(mp: Mapping[Any, Any] | None) -> dict[tuple[int, int], Decimal]:
+    """Machine parameters keyed (number, index) with Decimal values; index None counts as 0."""
+    result: dict[tuple[int, int], Decimal] = {}
+    for key, value in (mp or {}).items():
+        if isinstance(key, str):
+            number, _, index = key.partition(".")
+            key = (int(number), int(index) if index else 0)
+        number, index = key
+        if isinstance(value, bool):
+            raise ValueError(f"machine parameter {number}.{index}: {value!r} is not a number")
+        try:
+            dec = value if isinstance(value, Decimal) else Decimal(repr(value) if isinstance(value, float) else str(value))
+        except InvalidOperation:
+            raise ValueError(f"machine parameter {number}.{index}: {value!r} is not a number") from None
+        result[(int(number), int(index or 0))] = dec
+    return result
+
+
+class Machine:
+    """Cycle-accurate executor of a resolved program (spec sections 5-15)."""
+
+    def __init__(self, program: Program, mp: Mapping[Any, Any] | None = None, cycle_time_ms: int | None = None, *,
+                 coverage: bool = False, number_mp4111: int = 0, module_results: Mapping[int, Iterable[int]] | None = None,
+                 mp_spans: Mapping[tuple[int, int], Span] | None = None, compiled: CompiledProgram | None = None):
+        sem = program.semantics
+        self.program = program
+        self.semantics = sem
+        self.profile = sem.profile
+        self.cycle_time_ms = int(cycle_time_ms if cycle_time_ms is not None else sem["cycle_time_ms"])
+        if self.cycle_time_ms <= 0:
+            raise ValueError(f"cycle_time_ms must be positive, not {self.cycle_time_ms}")
+        self.state = MachineState(self.profile, sem)
+        mps = normalize_mp(mp)
+        diags = Diagnostics()
+        timer_presets, counter_presets = load_presets(mps, sem, self.cycle_time_ms, diags, mp_spans)
+        self.sys = SysModules(self.cycle_time_ms, number_mp4111=number_mp4111, timer_unit=sem["timer_unit"],
+                              timer_restart=bool(sem["timer_restart_while_running"]))
+        for (number, index), value in mps.items():
+            try:
+                self.sys.set_mp(number, index, value)
+            except ValueError as exc:
+                span = (mp_spans or {}).get((number, index), Span("<machine parameters>", 1, 1))
+                diags.error("E-MP-VALUE", span, str(exc))
+        if diags.has_errors():
+            raise MachineConfigError(diags.items)
+        for number, values in (module_results or {}).items():
+            self.sys.set_module_results(number, list(values))
+        self.timers = TimerService(sem, timer_presets, counter_presets)
+        self.nc = NcModel(self.cycle_time_ms, self.profile.name)
+        self.jobs = SubmitQueue(sem["submit_model"])
+        self.runtime = Runtime(self.state, sem, self.sys, self.jobs, self._warn)
+        self.coverage_enabled = coverage
+        if compiled is None or compiled.coverage != coverage:
+            compiled = compile_program(program, coverage=coverage, native=self.state.native)
+        self._primary = compiled
+        self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(len(compiled.op_index), coverage))
+        self._exact: tuple[CompiledProgram, tuple, Any, Any] | None = None
+        self.halted = False
+        self.next_cycle = 0
+        self.faults: list[RuntimeFault] = []
+        self.warnings: list[RuntimeFault] = []
+        self.instructions = 0
+        self._report = CycleReport(-1)
+        self._first_cycle_itf = self.profile.interface.first_cycle
+        self._first_cycle_marker = int(sem["first_cycle_marker"])
+
+    # ------------------------------------------------------------------ operand access
+
+    def read(self, kind: str, addr: int = 0) -> int | str:
+        """Any operand (bits 0/1, B/W/D signed per width, S text) or the main registers LA, WA, X, SA."""
+        if kind in PSEUDO:
+            la, wa, x, sa = self._get()[:4]
+            if self.semantics["accumulator_model"] == "shared_bit7":
+                la = (wa >> 7) & 1
+            return {"LA": 1 if la else 0, "WA": wa, "X": x, "SA": sa}[kind]
+        return self.state.read(kind, addr)
+
+    def write(self, kind: str, addr: int, value: int | str) -> None:
+        """Write an operand from outside the program; for I it is also what the process drives (latched in phase 2)."""
+        if kind in PSEUDO:
+            regs = list(self._get())
+            index = PSEUDO.index(kind)
+            regs[index] = str(value) if kind == "SA" else (1 if value else 0) if kind == "LA" else sext(int(value), 32)
+            self._set(*regs)
+            return
+        self.state.write(kind, addr, value)
+
+    def reader(self, operands: Sequence[tuple[str, int]]) -> Callable[[], list[int | str]]:
+        """A function returning the current values of `operands` (as `read` would), compiled once: for traces."""
+        st = self.state
+        parts = []
+        for kind, addr in operands:
+            self.read(kind, addr)                         # validates kind, range and alignment
+            if kind in PSEUDO:
+                parts.append({"LA": "((r[1] >> 7) & 1)" if self.semantics["accumulator_model"] == "shared_bit7"
+                              else "(1 if r[0] else 0)", "WA": "r[1]", "X": "r[2]", "SA": "r[3]"}[kind])
+            elif kind in "MIOTC" or kind == "S":
+                parts.append(f"{kind}[{addr}]")
+            elif kind == "B":
+                parts.append(f"mb[{addr}]")
+            elif st.native:
+                parts.append(f"mw[{addr >> 1}]" if kind == "W" else f"md[{addr >> 2}]")
+            else:
+                parts.append(f"{'h' if kind == 'W' else 'i'}(mem, {addr})[0]")
+        source = "def _reader():\n    r = get()\n    return [" + ", ".join(parts) + "]\n"
+        namespace: dict[str, Any] = {"get": self._get, "M": st.M, "I": st.I, "O": st.O, "T": st.T, "C": st.C,
+                                     "S": st.S, "mb": st.mb, "mem": st.mem, "h": st.st_h.unpack_from,
+                                     "i": st.st_i.unpack_from}
+        if st.native:
+            namespace.update(mw=st.mw, md=st.md)
+        exec(compile(source, "<hh2iec-reader>", "exec"), namespace)  # noqa: S102 - generated from validated operands
+        return namespace["_reader"]
+
+    @property
+    def registers(self) -> dict[str, int | str]:
+        return {name: self.read(name) for name in PSEUDO}
+
+    # ------------------------------------------------------------------ the cycle
+
+    def run_cycle(self, cycle: int, stimulus_writes: Iterable[WriteLike] = (),
+                  nc_actions: Iterable[Mapping[str, Any]] = ()) -> CycleReport:
+        """One PLC cycle (spec 8.1) after the scenario writes; faults stop the machine (see `halted`)."""
+        if self.halted:
+            raise MachineHalted(f"the PLC program stopped after a runtime fault; cannot run cycle {cycle}")
+        if cycle != self.next_cycle:
+            raise ValueError(f"cycles run 0, 1, 2, ...: expected cycle {self.next_cycle}, not {cycle}")
+        report = CycleReport(cycle)
+        self._report = report
+        self.apply_writes(stimulus_writes)
+        try:
+            report.nc_writes = self.nc_phase(cycle, nc_actions)
+        except HandshakeTimeout as exc:
+            self._record(report, RuntimeFault(exc.code, str(exc), exc.cycle))
+        if not self.halted:
+            self.input_latch()
+            timers_first = self.semantics["cycle_phases"] != "timers_after_main"
+            if timers_first:
+                self.timer_service()
+            self.program_phase(cycle, report)
+            if not self.halted:
+                if not timers_first:
+                    self.timer_service()
+                self.output_flush()
+        self.end_cycle()
+        return report
+
+    def apply_writes(self, writes: Iterable[WriteLike]) -> None:
+        for w in writes:
+            if hasattr(w, "ref"):
+                self.write(w.ref.kind, w.ref.addr, w.value)
+            else:
+                kind, addr, value = w
+                self.write(kind, addr, value)
+
+    def nc_phase(self, cycle: int, actions: Iterable[Mapping[str, Any]] = ()) -> list[tuple[str, int, int]]:
+        """Phase 1: queue the actions, run the NC model, apply and return its writes; raises HandshakeTimeout."""
+        for action in actions:
+            self.nc.enqueue(action)
+        writes = self.nc.phase(cycle, self._read_marker)
+        applied = []
+        for kind, addr, value in writes:
+            if kind == "M" and addr == self._first_cycle_itf:
+                addr = self._first_cycle_marker      # A-38 first_cycle_marker
+            self.state.write(kind, addr, value)
+            applied.append((kind, addr, value))
+        return applied
+
+    def _read_marker(self, marker: int) -> int:
+        return self.state.M[marker] if 0 <= marker < len(self.state.M) else 0
+
+    def input_latch(self) -> None:
+        """Phase 2: the input image is refreshed from the process; program writes to I are lost (A-33)."""
+        self.state.I[:] = self.state.process_inputs
+
+    def timer_service(self) -> None:
+        """Phase 3: timers T0-T47 and counters (9.2, 10.2) here, T96-T999 of module 9006 in the shim."""
+        st = self.state
+        self.timers.service(st.T, st.C)
+        for _, addr, value in self.sys.service():
+            if addr < len(st.T):
+                st.T[addr] = value
+
+    def output_flush(self) -> None:
+        """Phase 6: the output image goes to the process."""
+        self.state.process_outputs[:] = self.state.O
+
+    def end_cycle(self) -> None:
+        self.sys.tick()
+        self.next_cycle += 1
+
+    def program_phase(self, cycle: int, report: CycleReport | None = None) -> None:
+        """Phases 4 and 5. A budget overrun seen by the fast code's pre-count re-runs both phases from a snapshot
+        with per-instruction counting, replaying the module calls, so the watchdog fault is exact."""
+        report = report or self._report
+        self._report = report
+        rt = self.runtime
+        rt.cycle = cycle
+        if self._primary.exact:
+            self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
+            return
+        snap = (self.state.snapshot(), self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings))
+        rt.module_log = []
+        rt.replay = None
+        try:
+            self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
+        except BudgetExceeded:
+            state, regs, jobs, unknown, warned = snap
+            self.state.restore(state)
+            self.jobs.restore(jobs)
+            rt.unknown_modules = unknown
+            del report.warnings[warned:]
+            self.warnings = [w for w in self.warnings if w.cycle != cycle]
+            compiled, funcs, get, set_ = self._exact_variant()
+            set_(*regs)
+            rt.replay = collections.deque(rt.module_log)
+            try:
+                self._run_programs(compiled, funcs, get, set_, cycle, report)
+            finally:
+                rt.replay = None
+                self._set(*get())
+
+    def _exact_variant(self) -> tuple[CompiledProgram, tuple, Any, Any]:
+        if self._exact is None:
+            compiled = compile_program(self.program, exact=True, native=self.state.native)
+            funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), False))
+            self._exact = (compiled, funcs, get, set_)
+        return self._exact
+
+    def _run_programs(self, compiled: CompiledProgram, funcs: tuple, get: Any, set_: Any, cycle: int,
+                      report: CycleReport) -> None:
+        rt = self.runtime
+        la, wa, x, sa = get()[:4]
+        set_(la, wa, x, sa, 0, 0, -1)
+        rt.stack.clear()
+        rt.in_job = False
+        try:
+            funcs[0](0)
+        except Fault as exc:
+            self._fault(report, compiled, exc, cycle, None)
+        except BudgetExceeded:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a bug in the interpreter must not become a traceback
+            self._fault(report, compiled, Fault("E-TOOL", f"internal interpreter error: {exc!r}"), cycle, None, exc)
+        else:
+            if rt.stack:
+                self._warn("E-RT-STACK-LEFTOVER", f"{len(rt.stack)} word(s) left on the data stack at the end of "
+                           "the main program (A-19)", get()[6])
+            self._run_jobs(compiled, funcs, get, set_, cycle, report)
+        report.instructions = get()[4]
+        self.instructions += report.instructions
+
+    def _run_jobs(self, compiled: CompiledProgram, funcs: tuple, get: Any, set_: Any, cycle: int,
+                  report: CycleReport) -> None:
+        rt = self.runtime
+        itf = self.profile.interface
+        markers = (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err)
+        word = itf.module_err_code_word
+        while not self.halted:
+            job = self.jobs.take(cycle)
+            if job is None:
+                return
+            main_regs = get()
+            M = self.state.M
+            saved = ([M[m] for m in markers], bytes(self.state.mem[word:word + 2]) if word is not None else b"")
+            for m in markers:                # the job's own copies of the error markers start at 0
+                M[m] = 0
+            if word is not None:
+                self.state.mem[word:word + 2] = b"\0\0"
+            set_(0, 0, 0, "", main_regs[4], 0, -1)
+            rt.stack.clear()
+            rt.in_job = True
+            self.jobs.running = job
+            try:
+                job.func(job.block)
+            except JobCancelled:
+                pass
+            except Fault as exc:
+                self._fault(report, compiled, exc, cycle, job.label)
+            except BudgetExceeded:
+                raise
+            except Exception as exc:  # noqa: BLE001
+                self._fault(report, compiled, Fault("E-TOOL", f"internal interpreter error: {exc!r}"), cycle,
+                            job.label, exc)
+            finally:
+                self.jobs.running = None
+                rt.in_job = False
+                for m, value in zip(markers, saved[0]):
+                    M[m] = value
+                if word is not None:
+                    self.state.mem[word:word + 2] = saved[1]
+                set_(*main_regs[:4], get()[4], 0, main_regs[6])
+
+    # ------------------------------------------------------------------ faults and warnings
+
+    def op_span(self, opid: int) -> Span | None:
+        if opid < 0:
+            return None
+        f, i = self._primary.op_index[opid]
+        return self.program.files[f].ops[i].span
+
+    def _fault(self, report: CycleReport, compiled: CompiledProgram, exc: Fault, cycle: int, job: str | None,
+               cause: BaseException | None = None) -> None:
+        opid = _locate(compiled, cause or exc)
+        op = compiled.op_index[opid] if opid >= 0 else None
+        self._record(report, RuntimeFault(exc.code, exc.message, cycle, self.op_span(opid), "error", op, job))
+
+    def _record(self, report: CycleReport, fault: RuntimeFault) -> None:
+        report.faults.append(fault)
+        self.faults.append(fault)
+        self.halted = True
+
+    def _warn(self, code: str, message: str, opid: int) -> None:
+        op = self._primary.op_index[opid] if opid >= 0 else None
+        job = self.jobs.running.label if self.jobs.running is not None else None
+        warning = RuntimeFault(code, message, self._report.cycle, self.op_span(opid), "warning", op, job)
+        self._report.warnings.append(warning)
+        self.warnings.append(warning)
+
+    # ------------------------------------------------------------------ coverage and summaries
+
+    @property
+    def coverage(self) -> Coverage:
+        if not self.coverage_enabled:
+            raise ValueError("the machine was created without coverage=True")
+        index = self._primary.op_index
+        executed = frozenset(index[i] for i, hit in enumerate(self.runtime.hits) if hit)
+        branches: dict[tuple[int, int], set[int]] = {}
+        for opid, outcome in self.runtime.branches:
+            branches.setdefault(index[opid], set()).add(int(outcome))
+        return Coverage(executed, {k: frozenset(v) for k, v in branches.items()})
+
+    @property
+    def unknown_modules(self) -> dict[int, int]:
+        """Module numbers without a table entry that ran as stubs, with how often (run summary, A-46)."""
+        return dict(self.runtime.unknown_modules)
+
+
+def _locate(compiled: CompiledProgram, exc: BaseException) -> int:
+    """Op id of the innermost generated line in the traceback (every generated line belongs to one op)."""
+    lineno = None
+    tb = exc.__traceback__
+    while tb is not None:
+        if tb.tb_frame.f_code.co_filename == GENERATED_FILENAME:
+            lineno = tb.tb_lineno
+        tb = tb.tb_next
+    return compiled.op_of_line(lineno) if lineno is not None else -1

@@ -1,0 +1,308 @@
+"""`hh2iec simulate`: runs the original program on the reference interpreter against a scenario, with traces and expectations."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from decimal import Decimal
+from pathlib import Path
+from typing import Any, Callable
+
+import yaml
+
+from .cli import _EXTRA_COMMANDS, UsageError, options_from_args
+from .diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
+from .interp import Machine, MachineConfigError, RuntimeFault
+from .ir import BIT_KINDS, Program
+from .parse import MpParser
+from .pipeline import compile_project
+from .scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
+from .semantics import PROFILES, SemanticsError, make_semantics
+from .shim import NcActionError, ShimUnavailable, UnknownModule
+from .stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
+from .traces import TraceRecorder
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+_WRITES = {"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "WST", "POP", "INC", "DEC", "SST"}
+_NAMED_KINDS = frozenset("MIOTCBWDS")
+
+
+# ---------------------------------------------------------------------------------------------
+# names and operands of a program
+
+
+def _operand_refs(op) -> list[OperandRef]:   # noqa: ANN001 - ir.Op
+    o = op.operand
+    if o is None or o.indexed or o.kind not in _NAMED_KINDS:
+        return []
+    count = op.nbits if op.code in ("LDBITS", "STBITS") else 1
+    return [OperandRef(o.kind, o.addr + i) for i in range(count)]
+
+
+def program_operands(program: Program) -> tuple[set[OperandRef], set[OperandRef], set[OperandRef]]:
+    """(every operand named by an instruction, the ones the program writes, the outputs it uses)."""
+    used: set[OperandRef] = set()
+    written: set[OperandRef] = set()
+    for code in program.files:
+        for op in code.ops:
+            refs = _operand_refs(op)
+            used.update(refs)
+            if op.code in _WRITES:
+                written.update(r for r in refs if r.kind != "X")
+    outputs = {r for r in used if r.kind == "O"}
+    return used, written, outputs
+
+
+def project_names(program: Program) -> NameTable:
+    """Scenario names: every .def symbol (aliases included) plus every raw operand the program uses."""
+    symbols: dict[str, OperandRef] = {}
+    constants: set[str] = set()
+    non_toggle: set[str] = set()
+    for name, sym in program.symbols.items():
+        if sym.kind == "K":
+            constants.add(name)
+            non_toggle.add(name)
+            continue
+        symbols[name] = OperandRef(sym.kind, sym.addr)
+        if sym.alias_of:
+            non_toggle.add(name)
+    used, _, _ = program_operands(program)
+    for ref in used:
+        symbols.setdefault(str(ref), ref)
+    return NameTable.for_profile(symbols, program.semantics.profile.name, non_toggle=frozenset(non_toggle),
+                                 constants=frozenset(constants))
+
+
+# ---------------------------------------------------------------------------------------------
+# machine parameters
+
+
+def machine_parameters(scenario: Scenario, diags: Diagnostics) -> tuple[dict[tuple[int, int], Decimal], dict]:
+    """The MP file of the scenario, overridden by its inline `mp`; with the span of every value."""
+    mp: dict[tuple[int, int], Decimal] = {}
+    spans: dict[tuple[int, int], Span] = {}
+    path = scenario.machine_parameters
+    if path is not None:
+        try:
+            lines = tuple(Path(path).read_text(encoding="latin-1").splitlines())
+        except OSError as exc:
+            diags.error("E-SCENARIO", scenario.span_of("machine_parameters"), f"cannot read {path}: {exc}")
+            lines = ()
+        for p in MpParser().parse_lines(str(path), lines, diags):
+            mp[(p.number, p.index)] = p.value
+            spans[(p.number, p.index)] = p.span
+    for (number, index), value in scenario.mp.items():
+        key = (number, index or 0)
+        mp[key] = value
+        spans[key] = scenario.span_of("mp", (number, index))
+    return mp, spans
+
+
+# ---------------------------------------------------------------------------------------------
+# running a scenario
+
+
+class _Trace(TraceRecorder):
+    """TraceRecorder fed by Machine.reader, whose values are already in canonical form (bits 0/1, signed B/W/D).
+
+    Normalizing every value again dominated long simulations with wide default observations.
+    """
+
+    def record_canonical(self, cycle: int, values: list[int | str]) -> None:
+        self.rows.append((cycle, tuple(values)))
+
+
+@dataclasses.dataclass
+class SimulationResult:
+    trace: TraceRecorder
+    failures: list[ExpectationFailure]
+    fault: RuntimeFault | None
+    warnings: list[RuntimeFault]
+    cycles_run: int
+    instructions: int
+    seconds: float
+    machine: Machine
+    fault_span: Span | None = None          # where to point for a fault without a program location
+
+
+def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, coverage: bool = False) -> Machine:
+    """A machine set up from the scenario (MPs, cycle time, module results); raises CompileFailed on bad input."""
+    mp, spans = machine_parameters(scenario, diags)
+    diags.raise_if_errors()
+    cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
+    try:
+        return Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
+                       mp_spans=spans)
+    except MachineConfigError:
+        raise
+    except (UnknownModule, ValueError) as exc:
+        diags.error("E-SCENARIO", scenario.span_of("module_results"), str(exc))
+        raise CompileFailed(diags.items) from None
+
+
+def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulus: Stimulus | None = None, *,
+                 machine: Machine | None = None, diags: Diagnostics | None = None) -> SimulationResult:
+    """Run every cycle of the scenario; stops at the first runtime fault. Raises CompileFailed on bad input."""
+    diags = diags or Diagnostics()
+    stimulus = stimulus or build_stimulus(scenario, names)
+    machine = machine or build_machine(program, scenario, diags)
+    _, written, outputs = program_operands(program)
+    columns = observed_operands(scenario, names, written, outputs, diags)
+    trace = _Trace(columns)
+    read: Callable[[OperandRef], Any] = lambda ref: machine.read(ref.kind, ref.addr)  # noqa: E731
+    observed = machine.reader([(ref.kind, ref.addr) for _, ref in columns])
+    failures: list[ExpectationFailure] = []
+    fault: RuntimeFault | None = None
+    start = time.perf_counter()
+    cycles_run = 0
+    for cycle in range(stimulus.cycles):
+        try:
+            report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+        except NcActionError as exc:
+            diags.error("E-SCENARIO", _nc_event_span(scenario, cycle), str(exc))
+            raise CompileFailed(diags.items) from None
+        cycles_run = cycle + 1
+        trace.record_canonical(cycle, observed())
+        if report.faults:
+            fault = report.faults[0]
+            break
+        failures += check_expectations(scenario, cycle, read)
+    seconds = time.perf_counter() - start
+    fault_span = _nc_event_span(scenario, fault.cycle) if fault is not None and fault.span is None else None
+    return SimulationResult(trace, failures, fault, list(machine.warnings), cycles_run, machine.instructions, seconds,
+                            machine, fault_span)
+
+
+def _nc_event_span(scenario: Scenario, cycle: int) -> Span:
+    """The nc event at or before `cycle` that a NC problem most likely belongs to."""
+    best = None
+    for i, event in enumerate(scenario.events):
+        if event.nc is not None and event.cycle <= cycle:
+            best = i
+    return scenario.span_of("events", best, "nc") if best is not None else scenario.span_of()
+
+
+# ---------------------------------------------------------------------------------------------
+# command line
+
+
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
+    p = sub.add_parser("simulate", help="run the original program on the reference interpreter against a scenario")
+    common(p)
+    p.add_argument("--scenario", type=Path, required=True, help="scenario file (YAML, see scenario-format.md)")
+    p.add_argument("--trace", type=Path, metavar="OUT.csv", help="write one row per cycle with the observed values")
+    p.add_argument("--vcd", type=Path, metavar="OUT.vcd", help="write the trace as a value-change dump (GTKWave)")
+    p.set_defaults(handler=cmd_simulate)
+
+
+def _peek(path: Path) -> tuple[str | None, dict, Span | None]:
+    """The scenario's `profile` and `semantics` (needed before compiling), and where `semantics` is written."""
+    try:
+        node = yaml.compose(path.read_text(encoding="utf-8"), Loader=yaml.SafeLoader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return None, {}, None          # load_scenario reports it with its line
+    profile, semantics, where = None, {}, None
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            if not isinstance(key, yaml.ScalarNode):
+                continue
+            if key.value == "profile" and isinstance(value, yaml.ScalarNode) and value.value in PROFILES:
+                profile = value.value
+            elif key.value == "semantics" and isinstance(value, yaml.MappingNode):
+                where = Span(str(path), key.start_mark.line + 1, key.start_mark.column + 1)
+                data = yaml.safe_load(yaml.serialize(value))
+                semantics = data if isinstance(data, dict) else {}
+    return profile, semantics, where
+
+
+def _print(items: list[Diagnostic], stream: Any = None) -> None:
+    for d in items:
+        print(d.render(), file=stream or sys.stderr)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    path: Path = args.scenario
+    if not path.is_file():
+        raise UsageError(f"scenario file '{path}' does not exist")
+    scenario_profile, scenario_semantics, sem_span = _peek(path)
+    overrides = {str(k): v for k, v in scenario_semantics.items()}
+    for item in args.semantic_overrides:
+        if "=" not in item:
+            raise UsageError(f"-S expects KEY=VALUE, got '{item}'")
+        key, value = item.split("=", 1)
+        overrides[key.strip()] = value.strip()
+    try:
+        semantics = make_semantics(args.profile or scenario_profile or "itnc530", overrides)
+    except SemanticsError as exc:
+        where = sem_span or Span(str(path), 1, 1)
+        print(f"{where}: error[E-SCENARIO]: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    result = compile_project(options_from_args(args), semantics)
+    _print(result.diagnostics.items)
+    if not result.ok:
+        return EXIT_BAD_INPUT
+    program = result.program
+    names = project_names(program)
+    diags = Diagnostics()
+    try:
+        scenario = load_scenario(path, names)
+        _print(list(scenario.warnings))
+        stimulus = build_stimulus(scenario, names)
+        _print(list(stimulus.diagnostics))
+        sim = run_scenario(program, scenario, names, stimulus, diags=diags)
+    except ScenarioError as exc:
+        _print(exc.diagnostics)
+        return EXIT_BAD_INPUT
+    except CompileFailed as exc:
+        _print(exc.diagnostics)
+        return EXIT_BAD_INPUT
+    except ShimUnavailable as exc:
+        print(f"{Span(str(path), 1, 1)}: error[E-TOOL]: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    _print(diags.items)
+    return _report(args, scenario, sim)
+
+
+def _report(args: argparse.Namespace, scenario: Scenario, sim: SimulationResult) -> int:
+    try:
+        if args.trace is not None:
+            sim.trace.write_csv(args.trace)
+        if args.vcd is not None:
+            sim.trace.write_vcd(args.vcd, sim.machine.cycle_time_ms)
+    except OSError as exc:
+        print(f"{Span(str(args.trace or args.vcd), 1, 1)}: error[E-USAGE]: cannot write the trace: {exc}",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    _print_warnings(sim.warnings)
+    for number, count in sorted(sim.machine.unknown_modules.items()):
+        print(f"note: PLC module {number} ran {count} time(s) as a stub without a simulation model (A-46)",
+              file=sys.stderr)
+    for failure in sim.failures:
+        where = failure.span or scenario.span_of("expect")
+        print(f"{where}: expectation failed: cycle {failure.cycle}: {failure.name}: expected {failure.expected!r}, "
+              f"actual {failure.actual!r}", file=sys.stderr)
+    rate = sim.instructions / sim.seconds if sim.seconds > 0 else 0.0
+    checked = sum(len(e.values) for e in scenario.expect if e.cycle < sim.cycles_run)
+    print(f"hh2iec simulate: {scenario.name}: {sim.cycles_run} of {scenario.cycles} cycles, "
+          f"{sim.instructions} instructions ({rate / 1e6:.2f} M/s), {checked} expected values checked, "
+          f"{len(sim.failures)} failed")
+    if sim.fault is not None:
+        print(sim.fault.render(sim.fault_span), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return EXIT_FAILED if sim.failures else EXIT_OK
+
+
+def _print_warnings(warnings: list[RuntimeFault]) -> None:
+    """Each distinct runtime warning once, with its first cycle and how often it occurred."""
+    seen: dict[tuple, list[RuntimeFault]] = {}
+    for w in warnings:
+        seen.setdefault((w.code, w.span, w.job), []).append(w)
+    for group in seen.values():
+        first = group[0]
+        extra = f"; {len(group)} times in total" if len(group) > 1 else ""
+        print(first.render() + extra, file=sys.stderr)
+
+
+_EXTRA_COMMANDS.append(register)

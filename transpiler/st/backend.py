@@ -1,0 +1,364 @@
+"""The ST backend: turns the IR program into an IecProject (POUs, types, globals, configuration) plus the facts the report needs."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from decimal import Decimal, ROUND_CEILING
+from typing import Mapping
+
+from ..diagnostics import Diagnostics, Span
+from ..iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
+                         Task, VarSection)
+from ..ir import CallTarget, Operand, Program
+from ..resolve import routine_body
+from . import library
+from .layout import Layout
+from .liveness import Liveness
+from .names import NameTable
+from .structure import NotStructured, RoutineInfo, Structurer
+from .symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
+
+GROUP_TITLES = [("io_in", "Inputs (process image)"), ("io_out", "Outputs (process image)"),
+                ("nc", "NC interface (NC <-> PLC operands)"), ("marker", "Markers"), ("timer", "Timer and counter operands"),
+                ("memory", "Byte memory: bytes, words, double words"), ("string", "Strings"),
+                ("mp", "Machine parameters (presets in PLC cycles)"), ("kfield", "Constant fields (KFIELD tables)"), ("register", "Accumulators, index register, data stack")]
+
+
+@dataclasses.dataclass(frozen=True)
+class Fallback:
+    pou: str
+    reason: str
+    span: Span
+
+
+@dataclasses.dataclass(frozen=True)
+class StResult:
+    project: IecProject
+    layout: Layout
+    names: NameTable
+    fallbacks: tuple[Fallback, ...]
+    untranslated: tuple[tuple[Span, str], ...]
+    pou_of_routine: Mapping[tuple[int, int], str]
+    timers: tuple[int, ...]
+    counters: tuple[int, ...]
+    presets: Mapping[str, int]          # preset variable -> value in cycles
+    preset_vars: Mapping[tuple[int, int], str]   # (MP number, index) -> preset variable
+
+
+def timer_preset_cycles(value: Decimal, semantics) -> int:
+    """Spec 9.3: seconds -> ceil(t / cycle time) with exact decimals; cycle profiles use the integer as is."""
+    if semantics["timer_unit"] == "seconds":
+        cycles = (value * 1000 / Decimal(int(semantics["cycle_time_ms"]))).to_integral_value(ROUND_CEILING)
+        return int(cycles)
+    return int(value)
+
+
+class StBackend:
+    def __init__(self, program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal] | None = None,
+                 project_name: str | None = None):
+        self.program = program
+        self.diags = diags
+        self.mp = dict(mp or {})
+        self.semantics = program.semantics
+        self.main_name_wanted = project_name or re.sub(r"\.src$", "", program.main.path.split("/")[-1], flags=re.I)
+        self.names = NameTable()
+        self.helpers_used: set[str] = set()
+        self.fallbacks: list[Fallback] = []
+        self.untranslated: list[tuple[Span, str]] = []
+        self.kfields: dict[str, tuple[str, tuple[int, ...]]] = {}
+        self.types: list[DataType] = []
+
+    # ---- naming
+
+    def _reserve_pou_names(self) -> None:
+        for name in library.helper_pous():
+            self.names.reserve(name, f"lib:{name}")
+        for name in ("HH_TIMER", "HH_COUNTER"):
+            self.names.reserve(name, f"lib:{name}")
+        self.main_pou = self.names.name("pou:main", self.main_name_wanted)
+        self.pou_names: dict[tuple[int, int], str] = {}
+        for r in self.program.routines:
+            self.pou_names[r.key] = self.names.name(f"pou:{r.file}:{r.index}", r.label)
+        self.instance_names: dict[tuple[int, int], str] = {
+            key: self.names.name(f"inst:{key}", f"i_{name}") for key, name in self.pou_names.items()}
+
+    # ---- build
+
+    def build(self) -> StResult:
+        self._reserve_pou_names()
+        layout = Layout(self.program, self.names, self.helpers_used.add)
+        self.layout = layout
+        self.liveness = Liveness(self.program)
+        self.registers: dict[str, str] = {}
+        self.stack: tuple[str, str] | None = None
+        others = {r.index: r for r in self.program.routines}
+        pous: dict[tuple[int, int], Pou] = {}
+        routine_keys = [(0, 0)] + [r.key for r in self.program.routines]
+        self.calls: dict[tuple[int, int], set[tuple[int, int]]] = {}
+        for key in routine_keys:
+            pous[key] = self._routine(key, others)
+        presets = self._presets(layout)
+        main = pous.pop((0, 0))
+        main = self._with_services(main, layout)
+        user_pous = self._order(pous)
+        lib = [p for name, p in library.helper_pous().items() if name in self._helper_closure()]
+        fbs = []
+        if layout.timers:
+            fbs.append(library.timer_fb(self.semantics))
+        if layout.counters:
+            fbs.append(library.counter_fb(self.semantics))
+        all_pous = tuple(lib + fbs + user_pous + [main])
+        types = tuple(self._types(layout))
+        config = self._configuration(layout)
+        project = IecProject(self.main_pou, types, all_pous, config,
+                             header_comment=self._header())
+        return StResult(project, layout, self.names, tuple(self.fallbacks), tuple(self.untranslated),
+                        {k: v for k, v in self.pou_names.items()} | {(0, 0): self.main_pou},
+                        tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars)
+
+    def _header(self) -> str:
+        p = self.program
+        return (f"Generated by hh2iec from {p.main.path} (profile {p.semantics.profile.name}).\n"
+                f"Source files: {', '.join(p.source_files)}.\n"
+                "HEIDENHAIN symbol names are kept; every block carries its source file and line.")
+
+    def _helper_closure(self) -> set[str]:
+        todo = list(self.helpers_used)
+        done: set[str] = set()
+        while todo:
+            h = todo.pop()
+            if h in done:
+                continue
+            done.add(h)
+            todo.extend(library.HELPER_DEPENDENCIES.get(h, ()))
+        return done
+
+    def _register(self, reg: str) -> str:
+        if reg not in self.registers:
+            typ, wanted, comment = REG_TYPES[reg]
+            self.registers[reg] = self.layout.add_register(f"reg:{reg}", wanted, typ, comment)
+        return self.registers[reg]
+
+    def _stack_names(self) -> tuple[str, str]:
+        if self.stack is None:
+            words = int(self.semantics["data_stack_words"])
+            tname = self.names.name("type:stack", "T_HH_STACK")
+            self.types.append(DataType(tname, "array", "INT", (ArrayDim(0, words + 1),),
+                                       comment="data stack of 16-bit words (A-19)"))
+            arr = self.layout.add_register("stack", "HH_STACK", tname, "data stack (PS/PL), 16-bit words")
+            sp = self.layout.add_register("sp", "HH_SP", "INT", "data stack pointer (number of words)")
+            self.stack = (arr, sp)
+        return self.stack
+
+    def _kfield(self, o: Operand) -> str:
+        key = f"kf:{o.text}:{','.join(map(str, o.kfield))}"
+        if key not in self.kfields:
+            tname = self.names.name(f"type:{key}", f"T_KF_{o.text}")
+            name = self.names.name(key, f"KF_{o.text}")
+            self.types.append(DataType(tname, "array", "DINT", (ArrayDim(0, len(o.kfield) - 1),),
+                                       comment=f"constant field {o.text} (KFIELD)"))
+            self.kfields[key] = (name, o.kfield)
+            init = "[" + ", ".join(str(v) for v in o.kfield) + "]"
+            self.layout.globals[name] = library_global(name, tname, init, f"KFIELD {o.text}")
+        return self.kfields[key][0]
+
+    def _module_call(self, number: int) -> str:
+        raise Unsupported(f"PLC module {number} (module calls are not translated yet)")
+
+    def _routine(self, key: tuple[int, int], others: dict[int, CallTarget]) -> Pou:
+        program = self.program
+        is_main = key == (0, 0)
+        entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)
+        file = program.files[key[0]]
+        body = routine_body(program.files, entry)
+        emitter = Emitter()
+        temps: list[tuple[str, str]] = []
+        callees: set[tuple[int, int]] = set()
+        pou_name = self.main_pou if is_main else self.pou_names[key]
+
+        def temp(typ: str) -> str:
+            name = f"t{len(temps) + 1}"
+            temps.append((name, typ))
+            return name
+
+        def live_after(i: int) -> frozenset[str]:
+            return self.liveness.at(key, i + 1) if i + 1 < len(file.ops) else frozenset()
+
+        def call_name(target: CallTarget) -> str:
+            callees.add(target.key)
+            return f"{self.instance_names[target.key]}()"
+
+        ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
+                             self._kfield, self._stack_names, self._module_call, self.semantics)
+        other_entries = {i: t for i, t in others.items() if t.file == key[0] and i != entry.index and i in body}
+        info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
+                           self.liveness.exit(key), lambda i: self.liveness.at(key, i))
+        structured = True
+        try:
+            Structurer(info, Executor(ctx)).region(min(body) if body else 0, (max(body) + 1) if body else 0)
+        except NotStructured as exc:
+            structured = False
+            self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
+            emitter = Emitter()
+            temps.clear()
+            callees.clear()
+            ctx.out = emitter
+            self._state_machine(info, ctx, temp)
+        except Unsupported as exc:
+            self.untranslated.append((file.ops[body[0]].span if body else Span(file.path, 1), str(exc)))
+            self.diags.warning("E-UNSUPPORTED", file.ops[body[0]].span if body else Span(file.path, 1),
+                               f"{pou_name}: not translated: {exc}")
+            emitter = Emitter()
+            emitter.line(f"(* NOT TRANSLATED: {str(exc).replace('*)', '* )')} *)")
+            emitter.line(f"{self._register('LA')} := {self._register('LA')};")
+        emitter.flush_comments()
+        self.calls[key] = callees
+        lines = emitter.lines
+        if not any(not line.strip().startswith("(*") for line in lines):
+            lines = lines + ["RETURN; (* the subprogram does nothing *)"]
+        local = [IecVar(self.instance_names[c], self.pou_names[c]) for c in sorted(callees)]
+        local += [IecVar(n, t) for n, t in temps]
+        if not structured:
+            local.append(IecVar("HH_STATE", "DINT", comment="state of the irreducible control flow"))
+        if not local and not is_main and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
+            # matiec rejects a FUNCTION_BLOCK without any declaration.
+            local.append(IecVar("HH_UNUSED", "BOOL", comment="placeholder: the subprogram has no data of its own"))
+        sections = []
+        if local:
+            sections.append(VarSection("VAR", tuple(local)))
+        first = file.ops[min(body)].span.line if body else 1
+        last = file.ops[max(body)].span.line if body else 1
+        label = "main program" if is_main else f"LBL {entry.label}"
+        comment = f"{label} of {file.path}" + ("" if structured else " (irreducible jumps: state machine)")
+        comments = [c for c in file.ops[entry.index].comments] if body and not is_main else []
+        if comments:
+            comment += "\n" + "\n".join(comments)
+        return Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "\n".join(lines),
+                   comment=comment, source_map=(SourceRange(file.path, first, last),))
+
+    def _state_machine(self, info: RoutineInfo, ctx: RoutineContext, temp) -> None:
+        from .structure import state_machine
+        state_machine(info, Executor(ctx))
+
+    def _presets(self, layout: Layout) -> dict[str, int]:
+        presets: dict[str, int] = {}
+        self.preset_vars: dict[tuple[int, int], str] = {}
+        prof = self.semantics.profile
+        for t in layout.timers:
+            value = self.mp.get((4110, t), Decimal(0))
+            cycles = timer_preset_cycles(value, self.semantics)
+            name = self.layout.add_register(f"mp:4110.{t}", f"MP4110_{t}", "DINT",
+                                            f"timer T{t} preset in cycles (MP4110.{t} = {value})", str(cycles), group="mp")
+            presets[name] = cycles
+            self.preset_vars[(4110, t)] = name
+        for c in layout.counters:
+            value = self.mp.get((4120, c), Decimal(0))
+            name = self.layout.add_register(f"mp:4120.{c}", f"MP4120_{c}", "DINT",
+                                            f"counter C{c} preset (MP4120.{c} = {value})", str(int(value)), group="mp")
+            presets[name] = int(value)
+            self.preset_vars[(4120, c)] = name
+        return presets
+
+    def _with_services(self, main: Pou, layout: Layout) -> Pou:
+        prof = self.semantics.profile
+        lines: list[str] = []
+        local = list(main.sections[0].vars) if main.sections else []
+        if layout.timers or layout.counters:
+            lines.append("(* phase 3: timer and counter service (spec 9.2, 10.2) *)")
+        for t in layout.timers:
+            inst = self.names.name(f"timer:{t}", f"HH_Timer{t}")
+            local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
+            start = layout.timer_var("T", t)
+            running = layout.timer_var("T", t - prof.timer_start[0] + prof.timer_running[0])
+            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(4110, t)]});")
+            lines.append(f"{running.text} := {inst}.RUNNING;")
+        for c in layout.counters:
+            inst = self.names.name(f"counter:{c}", f"HH_Counter{c}")
+            local.append(IecVar(inst, "HH_COUNTER", comment=f"service of C{c}"))
+            start = layout.timer_var("C", prof.counter_start[0] + c)
+            running = layout.timer_var("C", prof.counter_running[0] + c)
+            release = layout.timer_var("C", prof.counter_release[0] + c)
+            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(4120, c)]}, RELEASE := {release.text});")
+            lines.append(f"{running.text} := {inst}.RUNNING;")
+        if self.stack is not None:
+            lines.append(f"{self.stack[1]} := 0; (* the data stack is empty at the start of each cycle (A-19) *)")
+        if lines:
+            lines.append("(* phase 4: main program *)")
+        body = "\n".join(lines + [main.body])
+        sections = (VarSection("VAR", tuple(local)),) + main.sections[1:] if local else main.sections
+        return dataclasses.replace(main, body=body, sections=sections)
+
+    def _order(self, pous: dict[tuple[int, int], Pou]) -> list[Pou]:
+        """Callees before callers (matiec needs declarations before use)."""
+        order: list[tuple[int, int]] = []
+        seen: set[tuple[int, int]] = set()
+
+        def visit(key: tuple[int, int]) -> None:
+            stack = [(key, iter(sorted(self.calls.get(key, ()))))]
+            seen.add(key)
+            while stack:
+                node, it = stack[-1]
+                nxt = next((c for c in it if c not in seen), None)
+                if nxt is None:
+                    stack.pop()
+                    if node in pous:
+                        order.append(node)
+                    continue
+                seen.add(nxt)
+                stack.append((nxt, iter(sorted(self.calls.get(nxt, ())))))
+
+        for key in sorted(pous):
+            if key not in seen:
+                visit(key)
+        return [pous[k] for k in order]
+
+    def _types(self, layout: Layout) -> list[DataType]:
+        out = []
+        for name, (elem, lo, hi) in sorted(layout.types.items()):
+            out.append(DataType(name, "array", elem, (ArrayDim(lo, hi),)))
+        return out + self.types
+
+    def _configuration(self, layout: Layout) -> Configuration:
+        groups: dict[str, list[IecVar]] = {}
+        for g in layout.globals.values():
+            groups.setdefault(g.group, []).append(IecVar(g.name, g.type, g.initial, g.address, g.comment))
+        sections = []
+        for key, title in GROUP_TITLES:
+            if key in groups:
+                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title))
+        for key in groups:
+            if key not in dict(GROUP_TITLES):
+                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=key))
+        cycle = int(self.semantics["cycle_time_ms"])
+        task = self.names.name("task", "HH_Cycle")
+        inst = self.names.name("instance", f"PLC_{self.main_pou}")
+        return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
+                             (Task(task, cycle, 0),), (ProgramInstance(inst, task, self.main_pou),), tuple(sections))
+
+
+def library_global(name: str, typ: str, init: str, comment: str):
+    from .layout import GlobalVar
+    return GlobalVar(name, typ, "kfield", initial=init, comment=comment)
+
+
+def add_externals(project: IecProject) -> IecProject:
+    """Give every POU that reads a global a VAR_EXTERNAL declaration of it (found in its body text)."""
+    globals_by_upper = {v.name.upper(): v for s in project.configuration.globals for v in s.vars}
+    constant_types = set()
+    new_pous = []
+    ident = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+    for pou in project.pous:
+        if pou.kind == "FUNCTION" or pou.name.startswith("HH_") and pou.kind == "FUNCTION_BLOCK" and pou.name in ("HH_TIMER", "HH_COUNTER"):
+            new_pous.append(pou)
+            continue
+        body_no_comments = re.sub(r"\(\*.*?\*\)", "", pou.body, flags=re.S)
+        used = {m.group(0).upper() for m in ident.finditer(body_no_comments)}
+        local = {v.name.upper() for s in pou.sections for v in s.vars}
+        ext = [globals_by_upper[u] for u in sorted(used) if u in globals_by_upper and u not in local]
+        ext.sort(key=lambda v: v.name.upper())
+        sections = list(pou.sections)
+        if ext:
+            sections.append(VarSection("VAR_EXTERNAL", tuple(IecVar(v.name, v.type) for v in ext)))
+        new_pous.append(dataclasses.replace(pou, sections=tuple(sections)))
+    return dataclasses.replace(project, pous=tuple(new_pous))

@@ -1,0 +1,446 @@
+"""Control-flow structuring: turns jumps of one routine into IF/ELSE, WHILE, REPEAT, EXIT and RETURN, or a state machine when irreducible."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+from ..ir import CallTarget, FileCode, Op
+from . import exprs as E
+from .symbolic import Executor, Unsupported
+
+JUMPS = ("JP", "JPT", "JPF")
+
+
+class NotStructured(Exception):
+    """The routine's jumps do not nest; the caller falls back to a state machine."""
+
+    def __init__(self, reason: str, index: int):
+        super().__init__(reason)
+        self.reason = reason
+        self.index = index
+
+
+@dataclasses.dataclass
+class RoutineInfo:
+    key: tuple[int, int]
+    entry: CallTarget
+    file: FileCode
+    body: list[int]                 # reachable op indices
+    is_main: bool
+    call_name: Callable[[CallTarget], str]     # FB instance call text for a subprogram
+    other_entries: dict[int, CallTarget]   # LBLs that start other routines (fall-through -> call + return)
+    exit_live: frozenset[str]
+    live_in: Callable[[int], frozenset[str]]
+
+
+class Structurer:
+    """Recursive descent over the textual op order; every region [lo, hi) is entered at lo and left at hi."""
+
+    def __init__(self, info: RoutineInfo, ex: Executor):
+        self.info = info
+        self.ex = ex
+        self.ops = info.file.ops
+        self.out = ex.ctx.out
+        self.body = set(info.body)
+        self.jumps_to: dict[int, list[int]] = {}
+        for i in info.body:
+            op = self.ops[i]
+            if op.code in JUMPS and op.target is not None:
+                self.jumps_to.setdefault(op.target, []).append(i)
+        self.loop_exits: list[int] = []    # exit index of each enclosing loop
+        self.depth = 0                     # nesting of emitted IF/loop constructs
+        self.loop_heads: set[int] = set()  # heads of the loops being emitted (their back edge is the loop itself)
+
+    # ---- helpers
+
+    def _live(self, i: int) -> frozenset[str]:
+        return self.info.live_in(i) if i < len(self.ops) else frozenset()
+
+    def _is_return_at(self, i: int) -> bool:
+        """Control reaching op i returns at once (labels and no-ops, then EM)."""
+        while i < len(self.ops) and self.ops[i].code in ("LBL", "NOP") and i not in self.info.other_entries:
+            i += 1
+        return i < len(self.ops) and self.ops[i].code == "EM"
+
+    def _clean(self, lo: int, hi: int, exit_ok: set[int]) -> bool:
+        """No jump from outside [lo, hi) lands strictly inside, and every jump inside stays inside or goes to exit_ok."""
+        for t, sources in self.jumps_to.items():
+            if lo < t < hi and any(not lo <= s < hi for s in sources):
+                return False
+        for i in range(lo, hi):
+            if i not in self.body:
+                continue
+            op = self.ops[i]
+            if op.code in JUMPS and op.target is not None:
+                t = op.target
+                if not (lo <= t < hi or t in exit_ok or self._is_return_at(t)):
+                    return False
+            if i != lo and i in self.info.other_entries:
+                return False
+        return True
+
+    def _cond(self, op: Op, jump_if_true: bool) -> E.Expr:
+        la = self.ex.s.reg("LA")
+        return la if jump_if_true else E.b_not(la)
+
+    def _return(self, live_exit: frozenset[str]) -> None:
+        self.ex.flush(live_exit)
+        self.out.line("RETURN;")
+
+    def _tag(self, i: int) -> str:
+        span = self.ops[i].span
+        return f"(* {span.file}:{span.line} *)"
+
+    # ---- regions
+
+    def region(self, lo: int, hi: int) -> None:
+        i = lo
+        while i < hi:
+            if i not in self.body:
+                i += 1
+                continue
+            op = self.ops[i]
+            if i != self.info.entry.index and i in self.info.other_entries:
+                # Falling through into another subprogram's label: call it and return (same effect, readable).
+                other = self.info.other_entries[i]
+                self.ex.flush(self._live(i))
+                self.out.line(f"{self.info.call_name(other)}; (* falls through into LBL {other.label} *)")
+                self.ex.s.regs = {k: None for k in self.ex.s.regs}
+                self._return(self.info.exit_live)
+                return
+            if i in self.jumps_to and i not in self.loop_heads and any(s >= i for s in self.jumps_to[i]):
+                i = self._loop(i, hi)
+                continue
+            if op.code == "LBL":
+                if i in self.jumps_to:
+                    self.ex.flush(self._live(i))
+                self.out.comment(f"LBL {op.label}  {op.span.file}:{op.span.line}")
+                self.ex.run(op, i)
+                i += 1
+                continue
+            if op.code in JUMPS:
+                i = self._forward_jump(i, hi)
+                continue
+            if op.code in ("EM", "EMT", "EMF"):
+                i = self._end(i, hi)
+                continue
+            if op.code in ("CALL", "CALLT", "CALLF"):
+                self._call(op, i)
+                i += 1
+                continue
+            if op.code == "CASE":
+                self._case(op, i)
+                i += 1
+                continue
+            if op.code in ("SUBM", "RPLY", "CAN"):
+                raise Unsupported(f"submit jobs ({op.mnemonic}) at {op.span}")
+            self.ex.run(op, i)
+            i += 1
+        if hi < len(self.ops) and hi in self.jumps_to:
+            pass
+
+    def _end(self, i: int, hi: int) -> int:
+        op = self.ops[i]
+        live_exit = self.info.exit_live
+        if op.code == "EM":
+            self.ex.flush(live_exit)
+            last = self.depth == 0 and not any(j > i for j in self.body)
+            if not last:
+                self.out.line("RETURN;")
+            self.ex.s.regs = {k: None for k in self.ex.s.regs}
+            return self._skip_dead(i + 1, hi)
+        self._if_return(op.code == "EMT", live_exit)
+        return i + 1
+
+    def _skip_dead(self, i: int, hi: int) -> int:
+        while i < hi and i not in self.body:
+            i += 1
+        return i
+
+    def _if_return(self, when_la: bool, live: frozenset[str]) -> None:
+        # Registers live at the exit reach their variables before the test, on both paths.
+        self.ex.keep_live(live)
+        la = self.ex.s.reg("LA")
+        cond = la if when_la else E.b_not(la)
+        self.out.line(f"IF {cond.text} THEN")
+        self.out.indent += 1
+        self.out.line("RETURN;")
+        self.out.indent -= 1
+        self.out.line("END_IF;")
+
+    def _call(self, op: Op, i: int) -> None:
+        if op.call is None or op.call.file < 0 and not op.call.is_module:
+            raise Unsupported(f"unresolved call at {op.span}")
+        self.ex.flush(self._live(i) | frozenset(["LA"] if op.code != "CALL" else []))
+        if op.call.is_module:
+            text = self.ex.ctx.module_call(op.call.module)
+        else:
+            text = self.info.call_name(op.call)
+        if op.code == "CALL":
+            self.out.line(f"{text}; {self._tag(i)}")
+        else:
+            cond = self.ex.s.reg("LA") if op.code == "CALLT" else E.b_not(self.ex.s.reg("LA"))
+            self.out.line(f"IF {cond.text} THEN {self._tag(i)}")
+            self.out.indent += 1
+            self.out.line(f"{text};")
+            self.out.indent -= 1
+            self.out.line("END_IF;")
+        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+
+    def _case(self, op: Op, i: int) -> None:
+        self.ex.index = i
+        for text in op.comments:
+            self.out.comment(text)
+        selector = self.ex.value(op.operand)
+        self.ex.flush(self._live(i))
+        if selector.typ == "DINT" or selector.typ in ("SINT", "INT"):
+            sel_text = selector.text
+        else:
+            sel_text = f"{selector.typ}_TO_DINT({selector.text})"
+        self.out.line(f"CASE {sel_text} OF {self._tag(i)}")
+        for n, target in enumerate(op.case_targets):
+            note = op.case_notes[n] if n < len(op.case_notes) else None
+            comment = ""
+            if note and note[1]:
+                from ..iec_model import st_comment
+                comment = " " + st_comment(" ".join(note[1]))
+            self.out.line(f"    {n}: {self.info.call_name(target)};{comment}")
+        self.out.line("END_CASE;")
+        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+
+    def _forward_jump(self, i: int, hi: int) -> int:
+        op = self.ops[i]
+        t = op.target
+        if t is None:
+            raise NotStructured("jump without target", i)
+        if self.loop_exits and t == self.loop_exits[-1]:
+            # A jump to the end of the enclosing loop: EXIT.
+            if op.code == "JP":
+                self.ex.flush(self._live(t))
+                self.out.line("EXIT;")
+                return self._skip_dead(i + 1, hi)
+            cond = self._cond(op, op.code == "JPT")
+            self.ex.flush(self._live(t) | self._live(i + 1))
+            cond = self._cond(op, op.code == "JPT")
+            self.out.line(f"IF {cond.text} THEN")
+            self.out.indent += 1
+            self.out.line("EXIT;")
+            self.out.indent -= 1
+            self.out.line("END_IF;")
+            return i + 1
+        if t <= i:
+            raise NotStructured(f"backward jump to {self.ops[t].label or t} outside a loop", i)
+        if self._is_return_at(t) and not (t <= hi and self._clean(i + 1, t, {t})):
+            if op.code == "JP":
+                self._return(self.info.exit_live)
+                return self._skip_dead(i + 1, hi)
+            self._if_return(op.code == "JPT", self.info.exit_live)
+            return i + 1
+        if t > hi:
+            raise NotStructured(f"jump to {self.ops[t].label if t < len(self.ops) else 'end'} leaves its block", i)
+        if op.code == "JP":
+            if not self._clean(i + 1, t, {t}):
+                raise NotStructured("jump over code that is entered from elsewhere", i)
+            self.ex.flush(self._live(t))
+            live_dead = [j for j in range(i + 1, t) if j in self.body]
+            if live_dead:
+                raise NotStructured("unreachable-looking code that is reachable", i)
+            return t
+        # IF / ELSE: the skipped block ends with an unconditional forward jump past an else block.
+        else_end = None
+        last = t - 1
+        if last > i and self.ops[last].code == "JP" and self.ops[last].target is not None:
+            e = self.ops[last].target
+            if (t < e <= hi and self.jumps_to.get(t) == [i] and self._clean(i + 1, last, {last})
+                    and self._clean(t, e, {e}) and all(s == last or t <= s < e for s in self.jumps_to.get(e, []) if s > i)):
+                else_end = e
+        if else_end is None and not self._clean(i + 1, t, {t}):
+            raise NotStructured(f"jumps into or out of the block skipped by {op.mnemonic} at line {op.span.line}", i)
+        live_join = self._live(else_end if else_end is not None else t)
+        self.ex.keep_live(live_join)
+        snap = self.ex.snapshot()
+        cond = self._cond(op, op.code == "JPF")      # the block runs when the jump is NOT taken
+        then_lines = self._branch(i + 1, t if else_end is None else last, live_join)
+        else_lines: list[str] = []
+        if else_end is not None:
+            after_then = self.ex.snapshot()
+            self.ex.restore(snap)
+            else_lines = self._branch(t, else_end, live_join)
+        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+        self._emit_if(cond, then_lines, else_lines, i)
+        return else_end if else_end is not None else t
+
+    def _branch(self, lo: int, hi: int, live_join: frozenset[str]) -> list[str]:
+        """Emit a branch into a separate list of lines (indented one level deeper)."""
+        saved_lines, saved_indent = self.out.lines, self.out.indent
+        self.out.lines = []
+        self.out.indent = saved_indent + 1
+        self.depth += 1
+        try:
+            self.region(lo, hi)
+            self.ex.flush(live_join)
+            self.out.flush_comments()
+            return self.out.lines
+        finally:
+            self.depth -= 1
+            self.out.lines, self.out.indent = saved_lines, saved_indent
+
+    def _emit_if(self, cond: E.Expr, then_lines: list[str], else_lines: list[str], i: int) -> None:
+        def has_code(lines: list[str]) -> bool:
+            return any(not line.strip().startswith("(*") for line in lines)
+        if not has_code(then_lines) and not has_code(else_lines):
+            self.out.lines.extend(then_lines + else_lines)
+            return
+        if not has_code(then_lines):
+            cond, then_lines, else_lines = E.b_not(cond), else_lines, then_lines
+        self.out.line(f"IF {cond.text} THEN {self._tag(i)}")
+        self.out.lines.extend(then_lines)
+        if has_code(else_lines):
+            self.out.line("ELSE")
+            self.out.lines.extend(else_lines)
+        elif else_lines:
+            self.out.lines.extend(else_lines)
+        self.out.line("END_IF;")
+
+    def _loop(self, h: int, hi: int) -> int:
+        back = [s for s in self.jumps_to[h] if s >= h and s < hi]
+        if not back:
+            raise NotStructured("loop leaves its block", h)
+        j = max(back)
+        exit_index = j + 1
+        if not self._clean(h, j + 1, {exit_index}):
+            raise NotStructured("jumps into the middle of a loop", h)
+        if any(s >= h and s != j for s in self.jumps_to[h]):
+            raise NotStructured("loop with several back edges", h)
+        head = self.ops[h]
+        tail = self.ops[j]
+        self.ex.flush(self._live(h) | frozenset(["LA"]))
+        self.ex.index = h
+        self.loop_exits.append(exit_index)
+        self.loop_heads.add(h)
+        try:
+            if tail.code in ("JPT", "JPF"):
+                tag = self._tag(h)
+                saved_lines, saved_indent = self.out.lines, self.out.indent
+                self.out.lines, self.out.indent = [], saved_indent + 1
+                self.depth += 1
+                self.region(h, j)
+                self.ex.index = j
+                self.ex.keep_live(self._live(h) | self._live(exit_index))
+                cond = self._cond(tail, tail.code == "JPF")     # leave when the back jump is not taken
+                self.out.flush_comments()
+                body = self.out.lines
+                self.depth -= 1
+                self.out.lines, self.out.indent = saved_lines, saved_indent
+                self.ex.s.regs = {k: None for k in self.ex.s.regs}
+                self.out.line(f"REPEAT {tag}")
+                self.out.lines.extend(body or ["    " * (saved_indent + 1) + f"{self.ex.ctx.register('LA')} := {self.ex.ctx.register('LA')};"])
+                self.out.line(f"UNTIL {cond.text}")
+                self.out.line("END_REPEAT;")
+                return exit_index
+            # Unconditional back jump: a WHILE loop; a leading conditional exit becomes its condition.
+            first = h
+            while first < j and self.ops[first].code in ("LBL", "NOP"):
+                first += 1
+            if self.ops[first].code in ("JPT", "JPF") and self.ops[first].target == exit_index and first == h:
+                cond = self._cond(self.ops[first], self.ops[first].code == "JPF")
+                body = self._branch(first + 1, j, self._live(h) | frozenset(["LA"]))
+                self.out.line(f"WHILE {cond.text} DO {self._tag(h)}")
+                self.out.lines.extend(body)
+                self.out.line("END_WHILE;")
+                return exit_index
+            body = self._branch(h, j, self._live(h))
+            self.out.line(f"WHILE TRUE DO {self._tag(h)}")
+            self.out.lines.extend(body)
+            self.out.line("END_WHILE;")
+            return exit_index
+        finally:
+            self.loop_exits.pop()
+            self.loop_heads.discard(h)
+
+
+def state_machine(info: RoutineInfo, ex: Executor) -> None:
+    """Fallback for irreducible jumps: one CASE branch per basic block inside a WHILE loop (reported)."""
+    ops = info.file.ops
+    body = sorted(info.body)
+    body_set = set(body)
+    starts = {info.entry.index}
+    for i in body:
+        op = ops[i]
+        if op.code in JUMPS and op.target is not None:
+            starts.add(op.target)
+        if op.code in JUMPS + ("EM", "EMT", "EMF"):
+            starts.add(i + 1)
+    starts = sorted(s for s in starts if s in body_set)
+    block_id = {s: n for n, s in enumerate(starts)}
+    out = ex.ctx.out
+    structurer = Structurer(info, ex)
+    ex.flush(frozenset(["LA", "WA", "SA", "X"]))
+    out.line(f"HH_STATE := {block_id[info.entry.index]};")
+    out.line("WHILE HH_STATE >= 0 DO (* irreducible control flow: one state per basic block *)")
+    out.indent += 1
+    out.line("CASE HH_STATE OF")
+    out.indent += 1
+    all_regs = frozenset(["LA", "WA", "SA", "X"])
+    for n, start in enumerate(starts):
+        end = starts[n + 1] if n + 1 < len(starts) else max(body) + 1
+        out.line(f"{n}: (* {ops[start].span.file}:{ops[start].span.line} *)")
+        out.indent += 1
+        ex.s.regs = {k: None for k in ex.s.regs}
+        i = start
+        next_state = None
+        while i < end:
+            if i not in body_set:
+                i += 1
+                continue
+            op = ops[i]
+            if op.code == "JP":
+                ex.flush(all_regs)
+                next_state = str(block_id[op.target])
+                break
+            if op.code in ("JPT", "JPF"):
+                ex.flush(all_regs)
+                la = ex.s.reg("LA")
+                cond = la if op.code == "JPT" else E.b_not(la)
+                out.line(f"IF {cond.text} THEN")
+                out.line(f"    HH_STATE := {block_id[op.target]};")
+                out.line("ELSE")
+                out.line(f"    HH_STATE := {block_id.get(i + 1, -1)};")
+                out.line("END_IF;")
+                next_state = ""
+                break
+            if op.code == "EM":
+                ex.flush(all_regs)
+                next_state = "-1"
+                break
+            if op.code in ("EMT", "EMF"):
+                ex.flush(all_regs)
+                la = ex.s.reg("LA")
+                cond = la if op.code == "EMT" else E.b_not(la)
+                out.line(f"IF {cond.text} THEN")
+                out.line("    HH_STATE := -1;")
+                out.line("ELSE")
+                out.line(f"    HH_STATE := {block_id.get(i + 1, -1)};")
+                out.line("END_IF;")
+                next_state = ""
+                break
+            if op.code in ("CALL", "CALLT", "CALLF"):
+                structurer._call(op, i)
+            elif op.code == "CASE":
+                structurer._case(op, i)
+            elif op.code in ("SUBM", "RPLY", "CAN"):
+                raise Unsupported(f"submit jobs ({op.mnemonic}) at {op.span}")
+            else:
+                ex.run(op, i)
+            i += 1
+        if next_state is None:
+            ex.flush(all_regs)
+            next_state = str(block_id.get(end, -1))
+        if next_state:
+            out.line(f"HH_STATE := {next_state};")
+        out.indent -= 1
+    out.indent -= 1
+    out.line("END_CASE;")
+    out.indent -= 1
+    out.line("END_WHILE;")

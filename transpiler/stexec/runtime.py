@@ -1,0 +1,411 @@
+"""Instantiates a compiled ST project and runs it cycle by cycle; reads and writes variables by path."""
+
+from __future__ import annotations
+
+import re
+import traceback
+from typing import Any, Callable, Optional
+
+from transpiler.diagnostics import Span
+from transpiler.stexec import typesys as T
+from transpiler.stexec.compiler import base_tick, normalise_address
+from transpiler.stexec.errors import StError, StRuntimeError, Trap, st_diag
+from transpiler.stexec.model import CompiledProject, PouInfo, VarInfo
+from transpiler.stexec.rtlib import HELPERS, f32
+
+_PATH_TOKEN = re.compile(r"\s*(?:(%[A-Za-z]+[0-9.]*[0-9])|([A-Za-z_][A-Za-z0-9_]*)|\.|\[([^\]]*)\])")
+
+
+# ====================================================================== value conversion at the boundary
+
+def to_st(value: Any, ty: T.Type, what: str) -> Any:
+    """A Python value from outside (set, externals) as the runtime representation of ty; raises ValueError."""
+    b = T.base(ty)
+    if isinstance(b, T.Elem):
+        if b.cat in ("int", "bit"):
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise ValueError(f"{what}: {b.name} needs an int, got {value!r}")
+            if isinstance(ty, T.SubrangeT) and not ty.lo <= value <= ty.hi:
+                raise ValueError(f"{what}: {value} outside the subrange {ty.lo}..{ty.hi}")
+            v = value & b.mask
+            return v - (1 << b.bits) if b.signed and v >> (b.bits - 1) else v
+        if b.cat == "bool":
+            if isinstance(value, bool):
+                return value
+            if value in (0, 1) and isinstance(value, int):
+                return bool(value)
+            raise ValueError(f"{what}: BOOL needs True/False, got {value!r}")
+        if b.cat == "real":
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"{what}: {b.name} needs a number, got {value!r}")
+            return f32(float(value)) if b is T.REAL else float(value)
+        if b.cat == "time":
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise ValueError(f"{what}: TIME needs int milliseconds, got {value!r}")
+            return value
+        if b.cat == "string":
+            if not isinstance(value, str):
+                raise ValueError(f"{what}: STRING needs a str, got {value!r}")
+            if len(value) > T.STR_MAX:
+                raise ValueError(f"{what}: string of {len(value)} characters, at most {T.STR_MAX}")
+            return value
+    if isinstance(b, T.EnumT):
+        if isinstance(value, str):
+            idx = b.index(value)
+            if idx is None:
+                raise ValueError(f"{what}: '{value}' is not a value of {b.name}")
+            return idx
+        if isinstance(value, int) and not isinstance(value, bool) and 0 <= value < len(b.values):
+            return value
+        raise ValueError(f"{what}: {b.name} needs one of {', '.join(b.values)}")
+    raise ValueError(f"{what}: cannot set a whole {ty}; set its elements or fields")
+
+
+def from_st(value: Any, ty: T.Type) -> Any:
+    """The runtime representation as a plain Python value (enums by name, arrays as lists, structs as dicts)."""
+    b = T.base(ty)
+    if isinstance(b, T.EnumT):
+        return b.values[value]
+    if isinstance(b, T.ArrayT):
+        return [from_st(v, b.elem) for v in value]
+    if isinstance(b, T.StructT):
+        return {f.name: from_st(getattr(value, "v_" + k), f.ty) for k, f in b.fields.items()}
+    if isinstance(b, T.FbT):
+        return {v.name: from_st(getattr(value, "v_" + v.key), v.ty) for v in b.pou.state_vars}
+    return value
+
+
+def _sinit(obj: Any, **fields: Any) -> Any:
+    for k, v in fields.items():
+        setattr(obj, k, v)
+    return obj
+
+
+def _aset(dst: list, src: list) -> None:
+    for d, s in zip(dst, src):
+        d._set(s)
+
+
+# ====================================================================== externals
+
+def _fb_external(fn: Callable, pou: PouInfo) -> Callable:
+    fields = [(v.key, v.ty) for v in pou.state_vars]
+
+    def body(inst: Any) -> None:
+        state = {k: getattr(inst, "v_" + k) for k, _t in fields}
+        try:
+            fn(state)
+        except (Trap, StRuntimeError):
+            raise
+        except Exception as exc:  # noqa: BLE001 - reported as a runtime error of the ST program
+            raise Trap(f"external implementation of {pou.name} raised {type(exc).__name__}: {exc}") from exc
+        for k, ty in fields:
+            if k not in state:
+                continue
+            value = state[k]
+            if T.is_aggregate(ty):
+                setattr(inst, "v_" + k, value)
+            else:
+                setattr(inst, "v_" + k, _checked(value, ty, f"{pou.name}.{k}"))
+    return body
+
+
+def _fn_external(fn: Callable, pou: PouInfo) -> Callable:
+    params = [v.key for v in pou.pyparams]
+    rest = pou.tuple_outputs
+    inout_pos = {v.key: i for i, v in enumerate(pou.pyparams)}
+
+    def call(*args: Any) -> Any:
+        try:
+            res = fn(**dict(zip(params, args)))
+        except (Trap, StRuntimeError):
+            raise
+        except Exception as exc:  # noqa: BLE001
+            raise Trap(f"external implementation of {pou.name} raised {type(exc).__name__}: {exc}") from exc
+        outs: dict = {}
+        if isinstance(res, tuple):
+            if len(res) != 2 or not isinstance(res[1], dict):
+                raise Trap(f"external implementation of {pou.name} must return a result or (result, dict)")
+            res, outs = res
+            outs = {str(k).lower(): v for k, v in outs.items()}
+        result = res if T.is_aggregate(pou.result) else _checked(res, pou.result, f"result of {pou.name}")
+        if not rest:
+            return result
+        values = [result]
+        for v in rest:
+            if v.key in outs:
+                values.append(outs[v.key] if T.is_aggregate(v.ty) else _checked(outs[v.key], v.ty, f"{pou.name}.{v.key}"))
+            elif v.kind == "inout":
+                values.append(args[inout_pos[v.key]])
+            else:
+                values.append(T.default_value(v.ty))
+        return tuple(values)
+    return call
+
+
+def _checked(value: Any, ty: T.Type, what: str) -> Any:
+    try:
+        return to_st(value, ty, what)
+    except ValueError as exc:
+        raise Trap(str(exc)) from exc
+
+
+# ====================================================================== path resolution
+
+class _Ref:
+    """A resolved variable path: a holder object plus attribute name, or a list plus index."""
+
+    __slots__ = ("holder", "attr", "index", "ty", "constant", "what")
+
+    def __init__(self, holder: Any, attr: Optional[str], index: Optional[int], ty: T.Type, constant: bool, what: str):
+        self.holder, self.attr, self.index, self.ty, self.constant, self.what = holder, attr, index, ty, constant, what
+
+    def get(self) -> Any:
+        if self.attr is not None:
+            return getattr(self.holder, self.attr)
+        return self.holder[self.index]
+
+    def set(self, value: Any) -> None:
+        if self.attr is not None:
+            setattr(self.holder, self.attr, value)
+        else:
+            self.holder[self.index] = value
+
+
+class Runtime:
+    """One running instance of the project's configuration (see the package docstring for the contract)."""
+
+    def __init__(self, project: CompiledProject, externals: Optional[dict[str, Callable]]):
+        self._project = project
+        if not project.has_configuration or not project.programs:
+            raise StError([st_diag(Span(project.filename, 1, 1),
+                                   "the file has no CONFIGURATION with a program instance to run")])
+        ns: dict[str, Any] = dict(HELPERS)
+        ns.update({"_sinit": _sinit, "_aset": _aset, "_LOOP_RANGE": range(project.loop_limit)})
+        exec(project.code, ns)   # noqa: S102 - code generated by our own compiler from checked ST
+        for name, fn in (externals or {}).items():
+            pou = project.pous.get(name.lower())
+            if pou is None:
+                raise StError([st_diag(Span(project.filename, 1, 1),
+                                       f"external implementation for '{name}', which the ST file does not declare")])
+            if pou.kind == "function":
+                ns["F_" + pou.key] = _fn_external(fn, pou)
+            else:
+                ns["B_" + pou.key] = _fb_external(fn, pou)
+        self._ns = ns
+        self._g = ns["C__G"]()
+        ns["G"] = self._g
+        self._instances: dict[str, tuple[Any, PouInfo, str]] = {}
+        self._schedule: list[tuple[int, Callable, Any]] = []
+        self.cycle_time_ms = base_tick(project.tasks)
+        for p in project.programs:
+            inst = ns["C_" + p.pou.key]()
+            self._instances[p.name.lower()] = (inst, p.pou, p.name)
+            period = p.task.interval_ms // self.cycle_time_ms if p.task is not None else 1
+            self._schedule.append((period, ns["B_" + p.pou.key], inst))
+        self._tick = 0
+        self._refs: dict[str, _Ref] = {}
+
+    # ------------------------------------------------------------------ running
+    @property
+    def cycle(self) -> int:
+        """Number of completed cycles."""
+        return self._tick
+
+    @property
+    def now_ms(self) -> int:
+        """Simulated time of the next cycle (CURRENT_TIME as timers will read it)."""
+        return self._tick * self.cycle_time_ms
+
+    def run_cycle(self) -> None:
+        tick = self._tick
+        self._g.now = tick * self.cycle_time_ms
+        try:
+            for period, body, inst in self._schedule:
+                if tick % period == 0:
+                    body(inst)
+        except StRuntimeError:
+            raise
+        except Exception as exc:   # noqa: BLE001 - every fault inside generated code becomes StRuntimeError
+            raise self._runtime_error(exc) from None
+        self._tick = tick + 1
+
+    def _runtime_error(self, exc: BaseException) -> StRuntimeError:
+        span = None
+        filename = f"<stexec:{self._project.filename}>"
+        for frame, lineno in traceback.walk_tb(exc.__traceback__):
+            if frame.f_code.co_filename == filename:
+                spans = self._project.line_spans
+                if 0 < lineno < len(spans) and spans[lineno] is not None:
+                    span = spans[lineno]
+        if isinstance(exc, Trap):
+            message = exc.message
+        elif isinstance(exc, ZeroDivisionError):
+            message = "division by zero"
+        elif isinstance(exc, RecursionError):
+            message = "call nesting too deep"
+        elif isinstance(exc, ValueError) and "negative shift count" in str(exc):
+            message = "negative shift count"
+        else:
+            message = f"internal error of the built-in executor: {type(exc).__name__}: {exc}"
+        return StRuntimeError(message, span)
+
+    # ------------------------------------------------------------------ addressing
+    def _resolve(self, path: str) -> _Ref:
+        ref = self._refs.get(path)
+        if ref is not None:
+            return ref
+        ref = self._resolve_uncached(path)
+        self._refs[path] = ref
+        return ref
+
+    def _tokens(self, path: str) -> list[tuple[str, str]]:
+        out, pos = [], 0
+        while pos < len(path):
+            m = _PATH_TOKEN.match(path, pos)
+            if not m or m.end() == pos:
+                raise KeyError(f"malformed variable path '{path}'")
+            if m.group(1):
+                out.append(("addr", m.group(1)))
+            elif m.group(2):
+                out.append(("name", m.group(2)))
+            elif m.group(3) is not None:
+                out.append(("index", m.group(3)))
+            else:
+                out.append(("dot", "."))
+            pos = m.end()
+        return out
+
+    def _resolve_uncached(self, path: str) -> _Ref:
+        toks = self._tokens(path)
+        if not toks:
+            raise KeyError(path)
+        kind, text = toks[0]
+        rest = toks[1:]
+        if kind == "addr":
+            addr = normalise_address(text)
+            loc = self._project.locations.get(addr) if addr else None
+            if loc is None:
+                raise KeyError(f"no variable is located at '{text}'")
+            ref = _Ref(self._g, loc[1], None, loc[0], False, addr)
+        elif kind == "name":
+            key = text.lower()
+            g = self._project.globals.get(key)
+            if g is not None:
+                ref = self._var_ref(self._g, g, text)
+            elif key in self._instances:
+                inst, pou, name = self._instances[key]
+                if not rest:
+                    raise KeyError(f"'{path}' is a program instance; name one of its variables")
+                if rest[0][0] != "dot" or len(rest) < 2 or rest[1][0] != "name":
+                    raise KeyError(f"malformed variable path '{path}'")
+                ref = self._member(inst, pou, rest[1][1], path)
+                rest = rest[2:]
+            else:
+                raise KeyError(f"unknown variable '{text}'")
+        else:
+            raise KeyError(f"malformed variable path '{path}'")
+        while rest:
+            kind, text = rest[0]
+            if kind == "dot" and len(rest) > 1 and rest[1][0] == "name":
+                ref = self._field(ref, rest[1][1], path)
+                rest = rest[2:]
+            elif kind == "index":
+                ref = self._element(ref, text, path)
+                rest = rest[1:]
+            else:
+                raise KeyError(f"malformed variable path '{path}'")
+        return ref
+
+    def _var_ref(self, holder: Any, v: VarInfo, what: str) -> _Ref:
+        if v.location is not None:
+            return _Ref(self._g, "l_" + v.location[1:].lower().replace(".", "_"), None, v.ty, v.constant, what)
+        return _Ref(holder, "v_" + v.key, None, v.ty, v.constant, what)
+
+    def _member(self, inst: Any, pou: PouInfo, name: str, path: str) -> _Ref:
+        v = pou.vars.get(name.lower())
+        if v is None or v.kind in ("temp", "result"):
+            raise KeyError(f"'{path}': {pou.name} has no variable '{name}'")
+        if v.kind == "external":
+            g = self._project.globals.get(v.key)
+            return self._var_ref(self._g, g, path)
+        return self._var_ref(inst, v, path)
+
+    def _field(self, ref: _Ref, name: str, path: str) -> _Ref:
+        b = T.base(ref.ty)
+        obj = ref.get()
+        if isinstance(b, T.StructT):
+            f = b.fields.get(name.lower())
+            if f is None:
+                raise KeyError(f"'{path}': {b.name} has no field '{name}'")
+            return _Ref(obj, "v_" + name.lower(), None, f.ty, ref.constant, path)
+        if isinstance(b, T.FbT):
+            return self._member(obj, b.pou, name, path)
+        raise KeyError(f"'{path}': {ref.ty} has no fields")
+
+    def _element(self, ref: _Ref, text: str, path: str) -> _Ref:
+        b = T.base(ref.ty)
+        if not isinstance(b, T.ArrayT):
+            raise KeyError(f"'{path}': {ref.ty} is not an array")
+        try:
+            idx = [int(part) for part in text.split(",")]
+        except ValueError:
+            raise KeyError(f"'{path}': array indexes must be integers") from None
+        if len(idx) != len(b.dims):
+            raise KeyError(f"'{path}': {len(b.dims)} index(es) expected")
+        flat = 0
+        for i, (lo, hi), stride in zip(idx, b.dims, b.strides()):
+            if not lo <= i <= hi:
+                raise KeyError(f"'{path}': index {i} outside {lo}..{hi}")
+            flat += (i - lo) * stride
+        return _Ref(ref.get(), None, flat, b.elem, ref.constant, path)
+
+    def get(self, path: str) -> Any:
+        ref = self._resolve(path)
+        return from_st(ref.get(), ref.ty)
+
+    def set(self, path: str, value: Any) -> None:
+        ref = self._resolve(path)
+        if ref.constant:
+            raise ValueError(f"'{path}' is a CONSTANT")
+        if T.is_aggregate(ref.ty):
+            raise ValueError(f"'{path}' is a {ref.ty}; set its elements or fields one by one")
+        ref.set(to_st(value, ref.ty, path))
+
+    def names(self) -> list[str]:
+        out: list[str] = []
+        for g in self._project.globals.values():
+            if g.location is None or g.name and not g.name.startswith("AT "):
+                self._leaf_names(g.name, g.ty, out)
+        for inst, pou, name in self._instances.values():
+            for v in pou.vars.values():
+                if v.kind in ("temp", "result", "external") or v.name.startswith("AT "):
+                    continue
+                self._leaf_names(f"{name}.{v.name}", v.ty, out)
+        out.extend(sorted(self._project.locations))
+        return out
+
+    def _leaf_names(self, prefix: str, ty: T.Type, out: list[str]) -> None:
+        b = T.base(ty)
+        if isinstance(b, T.ArrayT):
+            ranges = [range(lo, hi + 1) for lo, hi in b.dims]
+            for idx in _product(ranges):
+                self._leaf_names(f"{prefix}[{','.join(map(str, idx))}]", b.elem, out)
+        elif isinstance(b, T.StructT):
+            for f in b.fields.values():
+                self._leaf_names(f"{prefix}.{f.name}", f.ty, out)
+        elif isinstance(b, T.FbT):
+            for v in b.pou.state_vars:
+                self._leaf_names(f"{prefix}.{v.name}", v.ty, out)
+        else:
+            out.append(prefix)
+
+
+def _product(ranges: list[range]):
+    if not ranges:
+        yield ()
+        return
+    for i in ranges[0]:
+        for rest in _product(ranges[1:]):
+            yield (i,) + rest
+
