@@ -777,3 +777,59 @@ def test_case_with_a_word_selector_and_nested_calls(tmp_path: Path) -> None:
     """, given={"W0": 1})
     cycles(m, 1)
     assert m.read("W", 2) == 111
+
+
+# ---------------------------------------------------------------------------------------------
+# the fast code (block pre-counts, dispatch) and the exact code agree on random programs
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_SIMPLE = st.one_of(
+    st.sampled_from(["L", "LN", "A", "AN", "O", "ON", "XO", "XON"]).flatmap(
+        lambda m: st.sampled_from([f"{m} I{i}" for i in range(3)] + [f"{m} M{i}" for i in range(4)])),
+    st.sampled_from(["=", "S", "R", "SN", "RN"]).flatmap(lambda m: st.sampled_from([f"{m} M{i}" for i in range(4)])),
+    st.sampled_from(["L", "+", "-", "x", "/", "MOD", "A", "O", "XO", "==", "<", ">=", "<<", ">>", "BS", "BC", "BT"]
+                    ).flatmap(lambda m: st.sampled_from([f"{m} K{k}" for k in (-3, 0, 1, 2, 7, 300)]
+                                                        + [f"{m} W{a}" for a in (0, 2)] + [f"{m} B5"])),
+    st.sampled_from(["= W0", "= W2", "= B5", "= D8", "PS W0", "PS M1", "PL D8", "PL M3", "PSW", "PLW",
+                     "CM SUB0", "CMT SUB1", "CMF SUB0", "EMT", "EMF", "L X", "= X", "INCW", "NOTL"]),
+)
+_COMPOSITE = st.sampled_from([
+    ["L W0", "+[", "L K3", "x W2", "]"],
+    ["L I0", "A[", "L M1", "O I2", "]"],
+    ["L W2", "==[", "L W0", "MOD K3", "]"],
+    ["L M2", "ON[", "L I1", "XO M0", "]"],
+])
+
+
+@st.composite
+def _programs(draw: st.DrawFn) -> str:
+    units = draw(st.lists(st.one_of(_SIMPLE.map(lambda s: [s]), _COMPOSITE), min_size=1, max_size=25))
+    labels = draw(st.integers(min_value=1, max_value=4))
+    for i in range(labels):
+        units.insert(draw(st.integers(min_value=0, max_value=len(units))), [f"LBL L{i}"])
+    jumps = draw(st.lists(st.tuples(st.sampled_from(["JP", "JPT", "JPF"]), st.integers(0, labels - 1)), max_size=4))
+    for mnemonic, target in jumps:
+        units.insert(draw(st.integers(min_value=0, max_value=len(units))), [f"{mnemonic} L{target}"])
+    lines = [line for unit in units for line in unit] + ["EM"]
+    lines += ["LBL SUB0", "L W2", "+ K1", "= W2", "EM", "LBL SUB1", "PS W0", "PL D12", "EM"]
+    return "\n".join(lines) + "\n"
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(source=_programs(), inputs=st.lists(st.integers(0, 7), min_size=3, max_size=3))
+def test_random_programs_run_the_same_in_fast_and_exact_code(tmp_path: Path, source: str, inputs: list) -> None:
+    prog = compile_text(tmp_path, source, overrides={"max_instructions_per_cycle": 120})
+    fast, exact = Machine(prog), Machine(prog, coverage=True)
+    for cycle, bits in enumerate(inputs):
+        writes = [("I", i, (bits >> i) & 1) for i in range(3)]
+        outcomes = []
+        for m in (fast, exact):
+            report = m.run_cycle(cycle, writes)
+            outcomes.append(([(f.code, f.op, f.cycle) for f in report.faults],
+                             [(w.code, w.op) for w in report.warnings], report.instructions,
+                             bytes(m.state.M[:8]), bytes(m.state.mem[:16]), m.registers))
+        assert outcomes[0] == outcomes[1], source
+        if fast.halted:
+            break

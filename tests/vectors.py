@@ -53,3 +53,25 @@ def load_vectors() -> list[Vector]:
         if isinstance(data, dict) and str(data.get("id", "")).startswith("TV-"):
             vectors.append(Vector(data["id"], data))
     return vectors
+
+
+def vector_scenario_yaml(vector: Vector) -> str:
+    """The vector's stimulus as a scenario file (given -> initial, inputs -> per-cycle set events, nc, mp)."""
+    data = vector.data
+    cycles = int(data.get("cycles", 1))
+    scenario: dict[str, Any] = {"name": vector.id, "cycles": cycles, "profile": vector.profile}
+    if data.get("given"):
+        scenario["initial"] = {str(k): v for k, v in data["given"].items()}
+    events = []
+    for name, values in (data.get("inputs") or {}).items():
+        for cycle, value in enumerate(values):
+            events.append({"cycle": cycle, "set": {str(name): value}})
+    for action in data.get("nc") or []:
+        action = dict(action)
+        cycle = action.pop("cycle")
+        events.append({"cycle": cycle, "nc": action})
+    if events:
+        scenario["events"] = sorted(events, key=lambda e: e["cycle"])
+    if data.get("mp"):
+        scenario["mp"] = {str(k): v for k, v in data["mp"].items()}
+    return yaml.safe_dump(scenario, sort_keys=False)

@@ -54,8 +54,11 @@ class Defines:
 
 def split_comment(text: str) -> tuple[str, str | None]:
     """Split a line into code and `;` comment; a ';' inside a string literal belongs to the string."""
-    if ";" not in text:
+    cut = text.find(";")
+    if cut < 0:
         return text, None
+    if '"' not in text[:cut]:          # the common case: no string before the first ';'
+        return text[:cut], text[cut + 1:]
     in_string = False
     for i, ch in enumerate(text):
         if ch == '"':
@@ -170,18 +173,18 @@ class Preprocessor:
         self.inactive: list[InactiveRegion] = []
 
     def run(self, display: str, lines: tuple[str, ...], include: Callable[[str, Span], tuple[str, tuple[str, ...]] | None] | None = None,
-            star_comments: bool = True, _depth: int = 0) -> list[Line]:
+            star_comments: bool = True, _chain: tuple[str, ...] = ()) -> list[Line]:
         out: list[Line] = []
         stack: list[_Frame] = []
         active = True
+        chain = _chain + (display,)        # the files being included, for cycle detection
         for index, raw in enumerate(lines):
             lineno = index + 1
             text = _normalise_dashes(raw)
-            stripped = text.lstrip()
-            col = len(text) - len(stripped) + 1
-            span = Span(display, lineno, col)
             directive = _PP_LINE.match(text)
             if directive:
+                stripped = text.lstrip()
+                span = Span(display, lineno, len(text) - len(stripped) + 1)
                 code, _ = split_comment(text)
                 parsed = self.pp.parse(code)
                 keyword = directive.group(1).lower()
@@ -236,19 +239,28 @@ class Preprocessor:
                     continue
             if not active:
                 continue
+            stripped = text.lstrip()
+            if not stripped:
+                continue                   # blank: nothing to parse and no comment to attach
+            span = Span(display, lineno, len(text) - len(stripped) + 1)
             if star_comments and stripped.startswith("*"):
                 out.append(Line("", stripped[1:], span))
                 continue
             code, comment = split_comment(text)
             inc = _INCLUDE_LINE.match(code) if include else None
             if inc:
-                if _depth > 32:
-                    self.diags.error("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested too deeply (a file includes itself?)")
+                if len(chain) > 32:
+                    self.diags.error("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested more than 32 files deep")
                     continue
                 got = include(inc.group(1), span)
                 if got is not None:
                     inc_display, inc_lines = got
-                    out.extend(self.run(inc_display, inc_lines, include, star_comments, _depth + 1))
+                    if inc_display in chain:
+                        # a cycle would otherwise be expanded again and again (exponentially with two INCLUDEs)
+                        self.diags.error("E-FILE-INCLUDE-CYCLE", span, f"{inc_display} includes itself "
+                                         f"({' -> '.join(chain[chain.index(inc_display):] + (inc_display,))})")
+                        continue
+                    out.extend(self.run(inc_display, inc_lines, include, star_comments, chain))
                 continue
             out.append(Line(code, comment, span))
         for frame in stack:

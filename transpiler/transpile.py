@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Mapping
 
 from .diagnostics import Diagnostics, NO_SPAN, Span
+from .iomap import IoMap, MapRow
 from .ir import Program
 from .parse import MpParser
 from .sources import ProjectFolders, read_source
@@ -58,13 +59,28 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     return Transpiled(result, st_text, files)
 
 
+def io_map_of(result: StResult) -> IoMap:
+    """Operand rows in a stable order, then one row per timer/counter preset variable."""
+    def order(r):
+        digits = r.operand[1:]
+        return (r.operand[0], int(digits) if digits.isdigit() else 0)
+    rows = [MapRow(r.symbol, r.operand, r.iec, r.iec_type, r.direction, r.comment)
+            for r in sorted(result.layout.rows, key=order)]
+    layout = result.layout
+    order_tag = "LE" if layout.little else "BE"
+    if layout.mem_array:
+        rows.append(MapRow("", "B*", layout.mem_array, f"BYTE@{order_tag}", "internal", "all byte memory (B/W/D)"))
+    for kind, arr in sorted(layout.bit_arrays.items()):
+        rows.append(MapRow("", f"{kind}*", arr, "BOOL", "internal", f"all {kind} operands"))
+    if layout.string_array:
+        rows.append(MapRow("", "S*", layout.string_array, "STRING", "internal", "all strings"))
+    for (number, index), name in sorted(result.preset_vars.items()):
+        rows.append(MapRow("", f"MP{number}.{index}", name, "DINT", "parameter", "preset in PLC cycles"))
+    return IoMap(rows)
+
+
 def render_io_map(result: StResult) -> str:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["symbol", "operand", "iec_variable", "iec_type", "direction", "comment"])
-    for row in sorted(result.layout.rows, key=lambda r: (r.operand[0], int(r.operand[1:]) if r.operand[1:].isdigit() else 0)):
-        writer.writerow([row.symbol, row.operand, row.iec, row.iec_type, row.direction, row.comment])
-    return buf.getvalue()
+    return io_map_of(result).to_csv()
 
 
 def render_report(program: Program, result: StResult, diags: Diagnostics) -> str:

@@ -24,6 +24,7 @@ below a line is located from the traceback at no run-time cost.
 from __future__ import annotations
 
 import dataclasses
+import sys
 import types
 from typing import Callable
 
@@ -69,9 +70,10 @@ class CompiledProgram:
         return self.line_ops[lineno - 1] if 0 < lineno <= len(self.line_ops) else -1
 
 
-def compile_program(program: Program, *, exact: bool = False, coverage: bool = False, native: bool = True,
-                    ) -> CompiledProgram:
-    """Generate and compile the program; `native`: the host byte order equals the profile's (memoryview casts)."""
+def compile_program(program: Program, *, exact: bool = False, coverage: bool = False) -> CompiledProgram:
+    """Generate and compile the program: `exact` counts every instruction, `coverage` (implies exact) records ops and branches."""
+    # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
+    native = (sys.byteorder == "little") == program.semantics.little_endian
     gen = _Generator(program, exact=exact or coverage, coverage=coverage, native=native)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
@@ -145,7 +147,7 @@ class _Generator:
                 self.out(1, f"_u{name[3]} = env[{name!r}].unpack_from")
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
-                   "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six",
+                   "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six", "srx",
                    "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "branch")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
@@ -337,10 +339,12 @@ class _Generator:
             return f"{'mwu' if k == 'W' else 'mdu'}[{index}] = ({expr}) & {mask}"
         return f"_p{'H' if k == 'W' else 'I'}(mem, {a}, ({expr}) & {mask})"
 
-    def string(self, o: Operand) -> str:
+    def string(self, o: Operand, write: bool = False) -> str:
         if o.kind == "STR":
             return repr(o.text)
-        return f"S[_six({o.addr}, X)]" if o.indexed else f"S[{o.addr}]"
+        if o.indexed:
+            return f"S[_six({o.addr}, X)]" if write else f"_srx({o.addr}, X)"
+        return f"S[{o.addr}]"
 
     def _kf_name(self, values: tuple[int, ...]) -> str:
         values = tuple(_int32(v) for v in values)
@@ -730,7 +734,7 @@ class _Generator:
         self.out(ind, f"SA = _scat(SA + {self.string(op.operand)}, {opid})", opid)
 
     def _op_SST(self, op: Op, opid: int, ind: int, *_: object) -> None:
-        self.out(ind, f"{self.string(op.operand)} = SA", opid)
+        self.out(ind, f"{self.string(op.operand, write=True)} = SA", opid)
 
     def _op_SCMP(self, op: Op, opid: int, ind: int, *_: object) -> None:
         self.set_la(ind, f"SA {_REL[op.rel]} {self.string(op.operand)}", opid)

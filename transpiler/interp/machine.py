@@ -95,8 +95,9 @@ class Machine:
         self.jobs = SubmitQueue(sem["submit_model"])
         self.runtime = Runtime(self.state, sem, self.sys, self.jobs, self._warn)
         self.coverage_enabled = coverage
-        if compiled is None or compiled.coverage != coverage:
-            compiled = compile_program(program, coverage=coverage, native=self.state.native)
+        op_count = sum(len(f.ops) for f in program.files)
+        if compiled is None or compiled.coverage != coverage or len(compiled.op_index) != op_count:
+            compiled = compile_program(program, coverage=coverage)
         self._primary = compiled
         self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(len(compiled.op_index), coverage))
         self._exact: tuple[CompiledProgram, tuple, Any, Any] | None = None
@@ -266,7 +267,7 @@ class Machine:
 
     def _exact_variant(self) -> tuple[CompiledProgram, tuple, Any, Any]:
         if self._exact is None:
-            compiled = compile_program(self.program, exact=True, native=self.state.native)
+            compiled = compile_program(self.program, exact=True)
             funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), False))
             self._exact = (compiled, funcs, get, set_)
         return self._exact

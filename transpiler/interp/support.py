@@ -55,6 +55,7 @@ class Runtime:
             "shl": shl_checked, "shr": shr_checked, "sat": saturate, "ps16": self.push16, "ps32": self.push32,
             "pl16": self.pop16, "pl32": self.pop32, "module": self.module, "subm": self.submit,
             "rply": self.jobs.reply, "can": self.cancel, "scat": self.concat, "six": self.string_index,
+            "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
             "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": self.hits, "branch": self.branches.add,
         }
@@ -131,8 +132,11 @@ class Runtime:
         unpack_bits(self.state.bits(kind), self._address(kind, base, x, nbits, True), nbits, value)  # type: ignore[arg-type]
 
     def string_index(self, base: int, x: int) -> int:
-        addr = self._address("S", base, x, 1, True)
-        return addr  # type: ignore[return-value]
+        return self._address("S", base, x, 1, True)  # type: ignore[return-value]
+
+    def read_string_indexed(self, base: int, x: int) -> str:
+        addr = self._address("S", base, x, 1, False)
+        return "" if addr is None else self.state.S[addr]
 
     # ---- division (A-11, A-12, 17b.4): (result, flag)
 

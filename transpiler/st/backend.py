@@ -46,11 +46,11 @@ class StResult:
     preset_vars: Mapping[tuple[int, int], str]   # (MP number, index) -> preset variable
 
 
-def timer_preset_cycles(value: Decimal, semantics) -> int:
+def timer_preset_cycles(value: Decimal, semantics, cycle_time_ms: int | None = None) -> int:
     """Spec 9.3: seconds -> ceil(t / cycle time) with exact decimals; cycle profiles use the integer as is."""
     if semantics["timer_unit"] == "seconds":
-        cycles = (value * 1000 / Decimal(int(semantics["cycle_time_ms"]))).to_integral_value(ROUND_CEILING)
-        return int(cycles)
+        cycle = Decimal(int(cycle_time_ms or semantics["cycle_time_ms"]))
+        return int((value * 1000 / cycle).to_integral_value(ROUND_CEILING))
     return int(value)
 
 

@@ -1,0 +1,202 @@
+"""Co-simulation: the reference interpreter and an ST executor driven in lockstep by one stimulus; every compared operand is checked after every cycle."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from decimal import Decimal
+from typing import Callable, Iterable, Protocol
+
+from .interp.machine import Machine
+from .interp.timers import load_presets
+from .diagnostics import Diagnostics
+from .iomap import IoMap
+from .ir import Program
+from .scenario import NameTable, OperandRef, Scenario
+from .shim import HandshakeTimeout, NcModel
+from .simulate import build_machine, machine_parameters, program_operands
+from .stimulus import Stimulus, build_stimulus
+
+
+class StSide(Protocol):
+    """An executor of the translated program (built-in ST interpreter or matiec-compiled C)."""
+
+    name: str
+
+    def get(self, path: str): ...
+    def set(self, path: str, value) -> None: ...
+    def run_cycle(self) -> None: ...
+
+
+@dataclasses.dataclass(frozen=True)
+class Divergence:
+    cycle: int
+    operand: str
+    name: str
+    original: int | str
+    translated: int | str
+
+
+@dataclasses.dataclass
+class CosimResult:
+    scenario: str
+    backend: str
+    cycles_run: int
+    divergence: Divergence | None
+    compared: int                       # operands compared each cycle
+    error: str | None = None            # runtime fault or harness problem (not a divergence)
+    seconds: float = 0.0
+    machine: Machine | None = None
+
+    @property
+    def equivalent(self) -> bool:
+        return self.divergence is None and self.error is None
+
+
+@dataclasses.dataclass(frozen=True)
+class Comparison:
+    """What the harness compares and drives: (display name, operand) pairs mapped to ST accessors."""
+
+    columns: tuple[tuple[str, OperandRef], ...]
+    inputs: tuple[OperandRef, ...]
+
+
+def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
+    """Every operand the program writes plus all outputs (timers and counters included), as far as the map has them."""
+    used, written, outputs = program_operands(program)
+    prof = program.semantics.profile
+    refs = set(written) | set(outputs)
+    for r in used:
+        if r.kind == "T" and prof.timer_running[0] <= r.addr <= prof.timer_running[1]:
+            refs.add(r)
+        if r.kind == "C" and prof.counter_running[0] <= r.addr <= prof.counter_running[1]:
+            refs.add(r)
+    cols = [(names.display_name(r), r) for r in sorted(refs, key=lambda r: ("IOMTCBWDS".index(r.kind), r.addr))
+            if iomap.accessor(str(r)) is not None]
+    inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
+    return Comparison(tuple(cols), inputs)
+
+
+class _StDriver:
+    """Applies stimulus, NC model writes and the input latch to an ST side through the io map."""
+
+    def __init__(self, side: StSide, iomap: IoMap, program: Program, cycle_time_ms: int):
+        self.side = side
+        self.iomap = iomap
+        self.program = program
+        self.nc = NcModel(cycle_time_ms, program.semantics.profile.name)
+        self.process_inputs: dict[str, int] = {}
+        sem = program.semantics
+        self.first_cycle_itf = sem.profile.interface.first_cycle
+        self.first_cycle_marker = int(sem["first_cycle_marker"])
+
+    def write(self, operand: str, value) -> None:
+        acc = self.iomap.accessor(operand)
+        if acc is not None:
+            acc.write(self.side, value)
+
+    def read(self, operand: str):
+        acc = self.iomap.accessor(operand)
+        return acc.read(self.side) if acc is not None else 0
+
+    def cycle(self, cycle: int, writes: Iterable, actions: Iterable) -> None:
+        for w in writes:
+            ref = w.ref
+            if ref.kind == "I":
+                self.process_inputs[str(ref)] = int(w.value)
+            else:
+                self.write(str(ref), w.value)
+        for action in actions:
+            self.nc.enqueue(action)
+        for kind, addr, value in self.nc.phase(cycle, lambda m: int(self.read(f"M{m}") or 0)):
+            if kind == "M" and addr == self.first_cycle_itf:
+                addr = self.first_cycle_marker
+            self.write(f"{kind}{addr}", value)
+        for operand, value in self.process_inputs.items():
+            self.write(operand, value)
+        self.side.run_cycle()
+
+
+def set_presets(side: StSide, iomap: IoMap, program: Program, mp: dict, cycle_time_ms: int) -> None:
+    """Timer and counter presets of the scenario into the ST program's preset variables."""
+    timers, counters = load_presets(mp, program.semantics, cycle_time_ms, Diagnostics())
+    for number, presets in ((4110, timers), (4120, counters)):
+        for row in iomap.rows:
+            if row.operand.startswith(f"MP{number}."):
+                index = int(row.operand.split(".")[1])
+                side.set(row.iec, presets.get(index, 0))
+
+
+def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
+               stimulus: Stimulus | None = None, *, cycles: int | None = None, coverage: bool = False,
+               progress: Callable[[int, int], None] | None = None,
+               record: Callable[[int, list, list], None] | None = None) -> CosimResult:
+    """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`."""
+    diags = Diagnostics()
+    stimulus = stimulus or build_stimulus(scenario, names)
+    machine = build_machine(program, scenario, diags, coverage=coverage)
+    mp, _ = machine_parameters(scenario, diags)
+    side = make_side()
+    cycle_time = machine.cycle_time_ms
+    set_presets(side, iomap, program, mp, cycle_time)
+    comparison = comparison_for(program, names, iomap)
+    accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
+    original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
+    driver = _StDriver(side, iomap, program, cycle_time)
+    total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
+    start = time.perf_counter()
+    result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine)
+    for cycle in range(total):
+        writes = stimulus.writes(cycle)
+        actions = stimulus.nc_actions(cycle)
+        report = machine.run_cycle(cycle, writes, actions)
+        if report.faults:
+            fault = report.faults[0]
+            result.error = f"{fault.code} in cycle {cycle}: {fault.message}"
+            break
+        try:
+            driver.cycle(cycle, writes, actions)
+        except HandshakeTimeout as exc:
+            result.error = f"E-SIM-HANDSHAKE-TIMEOUT on the translated side in cycle {exc.cycle}"
+            break
+        except Exception as exc:  # noqa: BLE001 - an executor fault is a result, reported with its message
+            result.error = f"translated program failed in cycle {cycle}: {type(exc).__name__}: {exc}"
+            break
+        result.cycles_run = cycle + 1
+        a_values = original()
+        b_values = [acc.read(side) for acc in accessors]
+        if record is not None:
+            record(cycle, a_values, b_values)
+        if a_values != b_values:
+            for (display, ref), a, b in zip(comparison.columns, a_values, b_values):
+                if a != b:
+                    result.divergence = Divergence(cycle, str(ref), display, a, b)
+                    break
+            break
+        if progress is not None:
+            progress(cycle + 1, total)
+    result.seconds = time.perf_counter() - start
+    return result
+
+
+def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
+    """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
+    from .stexec import load_st
+    project = load_st(st_text, filename)
+
+    class _Side:
+        name = "builtin"
+
+        def __init__(self) -> None:
+            self.rt = project.instantiate()
+
+        def get(self, path: str):
+            return self.rt.get(path)
+
+        def set(self, path: str, value) -> None:
+            self.rt.set(path, value)
+
+        def run_cycle(self) -> None:
+            self.rt.run_cycle()
+
+    return _Side
