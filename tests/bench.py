@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tests.bench_frontend import generate_project  # noqa: E402
+from tests.bench_frontend import bench_frontend, generate_project  # noqa: E402
 from transpiler.frontend import ProjectOptions  # noqa: E402
 from transpiler.interp import Machine, compile_program  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
@@ -69,7 +69,7 @@ def bench_interpreter(lines: int = 100_000, cycles: int = 20, sample_cycles: int
     return figures
 
 
-BENCHES: dict[str, Callable[..., object]] = {"interpreter": bench_interpreter}
+BENCHES: dict[str, Callable[..., object]] = {"frontend": bench_frontend, "interpreter": bench_interpreter}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -94,6 +94,8 @@ ERROR_CASES = [
      [("E-SYM-DUP", "a.def", 2, 1)]),
     ("sym-dup-label", {"main.src": "EM\nLBL A\nEM\nLBL A\nEM\n"}, [("E-SYM-DUP-LABEL", "main.src", 4, 1)]),
     ("sym-dup-kfield", {"main.src": "EM\nKFIELD T\nK1\nENDK\nEM\nKFIELD T\nK2\nENDK\n"}, [("E-SYM-DUP-LABEL", "main.src", 6, 1)]),
+    ("sym-label-after-kfield", {"main.src": "EM\nKFIELD T\nK1\nENDK\nLBL T\nEM\n"}, [("E-SYM-DUP-LABEL", "main.src", 5, 1)]),
+    ("sym-kfield-after-label", {"main.src": "EM\nLBL T\nEM\nKFIELD T\nK1\nENDK\n"}, [("E-SYM-DUP-LABEL", "main.src", 4, 1)]),
     ("sym-global-undef", {"main.src": "USES m.src\nEM\n", "m.src": "GLOBAL Fn\nLBL G\nEM\n"},
      [("E-SYM-GLOBAL-UNDEF", "m.src", 1, 1)]),
     ("sym-unresolved-no-extern", {"main.src": "USES m.src\nCM Fn\nEM\n", "m.src": "GLOBAL Fn\nLBL Fn\nEM\n"},

@@ -170,6 +170,23 @@ def test_spans_carry_the_column_of_the_first_character(tmp_path):
     assert [(op.span.line, op.span.col) for op in program_ops(result)] == [(1, 1), (2, 5), (3, 3)]
 
 
+def test_en_dash_spellings_of_l_minus():
+    """The manuals print `L–`; U+2013, its UTF-8 bytes read as Latin-1 and the cp1252 byte all mean '-'."""
+    from transpiler.preprocess import PPParser, Preprocessor, initial_defines
+    lines = ("L\u2013 W2", "L\xe2\x80\x93 W4", "L\x96 W6", "\u2013[")
+    out = Preprocessor(initial_defines({}), Diagnostics(), PPParser()).run("f.src", lines)
+    assert [_parse(line.code)[1] for line in out] == ["L-", "L-", "L-", "-["]
+
+
+def test_definition_template_cache_gives_the_same_result_as_a_direct_parse():
+    parser = DefParser()
+    shapes = ["{} M", "{} M 12", "{} W4", "{} K $FF", "{} K 99999999999", "/c {} M &Other", "{} I &{}", "{} Q 5",
+              "{} K", "#define /g {}", "{}", "{} S 4 x"]
+    for shape, name in itertools.product(shapes, NAME_CORPUS):
+        line = shape.format(name, name)
+        assert parser.parse_line(line) == parser.parse_uncached(line), line
+
+
 def test_canonical_spelling():
     assert [canonical(t) for t in ("a [", "X", "x", "X[", "l-", "mod[", "= n")] == ["A[", "x", "x", "x[", "L-", "MOD[", "=N"]
 

@@ -195,3 +195,29 @@ def test_default_observation_is_written_operands_and_outputs(project: Path) -> N
     assert simulate(project, scn, "--trace", str(out_csv)) == 0
     header = next(csv.reader(out_csv.open()))
     assert header == ["cycle", "O_lamp", "M4092", "TS_lamp", "WG_code"]
+
+
+def test_plc_error_messages_are_listed(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    (tmp_path / "main.src").write_text("L   I1\nS   M4805\nEM\n", encoding="latin-1")
+    scn = scenario(tmp_path, "cycles: 4\nevents:\n  - cycle: 2\n    set: {I1: 1}\n")
+    assert simulate(tmp_path, scn) == 0
+    assert "PLC error message 5 (M4805) was set, first after cycle 2" in capsys.readouterr().err
+
+
+SAMPLE = Path(__file__).resolve().parents[1] / "samples" / "basic_program"
+SAMPLE_SCENARIOS = sorted((SAMPLE / "scenarios").glob("*.yaml")) if (SAMPLE / "scenarios").is_dir() else []
+
+
+def _short(path: Path) -> bool:
+    # the long-running scenarios (e.g. minutes of lubrication) are left to `make demo`
+    import yaml
+    return int((yaml.safe_load(path.read_text(encoding="utf-8")) or {}).get("cycles", 0)) <= 2000
+
+
+@pytest.mark.skipif(not SAMPLE_SCENARIOS, reason="the sample project has no scenarios")
+@pytest.mark.parametrize("path", [p for p in SAMPLE_SCENARIOS if _short(p)], ids=lambda p: p.stem)
+def test_sample_project_scenarios_meet_their_expectations(path: Path, capsys: pytest.CaptureFixture) -> None:
+    code = main(["simulate", str(SAMPLE / "Main_PGM.src"), "--scenario", str(path)])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert " 0 failed" in captured.out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
@@ -41,20 +42,13 @@ def _common(p: argparse.ArgumentParser) -> None:
                    help="extra global definition file (as if loaded with #define /g)")
 
 
-def _load_subcommands() -> None:
-    # Subcommand modules register themselves in _EXTRA_COMMANDS when imported.
-    import importlib
-    for name in ("cli_transpile", "simulate", "equiv"):
-        try:
-            importlib.import_module(f"transpiler.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"transpiler.{name}":
-                raise
+# Modules of the later stages; each has `register(subparsers, common)`. Imported lazily so that
+# `check` does not load the interpreter, the C shim or the ST executor.
+SUBCOMMAND_MODULES = ("cli_transpile", "simulate", "equiv")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    if not _EXTRA_COMMANDS:
-        _load_subcommands()
+    import importlib
     parser = _ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check", help="preprocess, parse and resolve a project; print a summary")
@@ -63,13 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
     ex = sub.add_parser("explain", help="explain a diagnostic code")
     ex.add_argument("code")
     sub.add_parser("assumptions", help="list every semantic choice with its default per profile")
-    for register in _EXTRA_COMMANDS:
-        register(sub, _common)
+    for name in SUBCOMMAND_MODULES:
+        importlib.import_module(f"transpiler.{name}").register(sub, _common)
     return parser
-
-
-# Later stages add their subcommands here (transpile, simulate, equiv, fetch-schema).
-_EXTRA_COMMANDS: list[Callable] = []
 
 
 def options_from_args(args: argparse.Namespace) -> ProjectOptions:
@@ -189,6 +179,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130
+    except Exception as exc:  # noqa: BLE001 - the last line of defence: a bug must not show users a traceback
+        if os.environ.get("HH2IEC_DEBUG"):
+            raise
+        print(f"{NO_SPAN}: error[E-TOOL]: internal error ({type(exc).__name__}: {exc}); "
+              "this is a bug in hh2iec - rerun with HH2IEC_DEBUG=1 for the traceback", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
 
 def entry() -> None:

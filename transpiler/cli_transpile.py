@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from .atomic import write_files_atomically
-from .cli import (EXIT_BAD_INPUT, EXIT_OK, UsageError, _EXTRA_COMMANDS, compile_from_args, print_diagnostics)
+from .cli import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
 from .diagnostics import NO_SPAN
 from .transpile import find_mp_file, read_mp_file, transpile_program
 
@@ -77,4 +77,3 @@ def cmd_fetch_schema(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-_EXTRA_COMMANDS.append(register)

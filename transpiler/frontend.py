@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import Mapping
+from typing import Iterator, Mapping
 
 from . import ast
 from .diagnostics import Diagnostics, Span, NO_SPAN
@@ -13,6 +13,9 @@ from .preprocess import (DefineValue, Defines, InactiveRegion, PPParser, Preproc
                          initial_defines, read_config)
 from .semantics import Semantics
 from .sources import ProjectFolders, SourceText, read_source
+
+
+MAX_DEF_NESTING = 64          # #define inside definition files
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,7 +117,7 @@ class _Loader:
         src_files: list[ast.SourceFile] = []
         seen: set[Path] = set()
         def_requests: list[tuple[ast.DefineFile, str, Path]] = []
-        self._load_src(opts.main.resolve(), NO_SPAN, seen, src_files, def_requests)
+        self._load_sources(opts.main.resolve(), seen, src_files, def_requests)
 
         global_defs: list[ast.DefFile] = []
         local_defs: dict[str, list[ast.DefFile]] = {}
@@ -144,27 +147,41 @@ class _Loader:
     def _empty(self) -> ParsedProject:
         return ParsedProject((), (), {}, dict(self.defines.values), (), tuple(self.files_read), self.line_count)
 
-    def _load_src(self, path: Path, at: Span, seen: set[Path], out: list[ast.SourceFile],
-                  def_requests: list[tuple[ast.DefineFile, str, Path]]) -> None:
-        if path in seen:
-            return
-        seen.add(path)
-        text = self._read(path, at)
-        if text is None:
-            self.labels_incomplete = True
-            return
-        lines = self._preprocess(text)
-        parsed = self.src_parser.parse_file(text.display, lines, len(text.lines), self.diags)
-        out.append(parsed)
-        for stmt in parsed.statements:
-            if isinstance(stmt, ast.DefineFile):
-                def_requests.append((stmt, parsed.path, path.parent))
+    def _load_sources(self, main: Path, seen: set[Path], out: list[ast.SourceFile],
+                      def_requests: list[tuple[ast.DefineFile, str, Path]]) -> None:
+        """Read the main file and, depth-first in USES order, every module it uses (each file once).
+
+        An explicit stack of statement iterators instead of recursion: a USES chain may be longer than
+        Python's recursion limit, and the order is exactly that of the recursive walk (a module's own
+        #define and USES lines are taken when its USES line is reached)."""
+        stack: list[tuple[Path, str, Iterator[ast.Statement]]] = []
+
+        def enter(path: Path, at: Span) -> None:
+            if path in seen:
+                return
+            seen.add(path)
+            text = self._read(path, at)
+            if text is None:
+                self.labels_incomplete = True
+                return
+            parsed = self.src_parser.parse_file(text.display, self._preprocess(text), len(text.lines), self.diags)
+            out.append(parsed)
+            stack.append((path, parsed.path, iter(parsed.statements)))
+
+        enter(main, NO_SPAN)
+        while stack:
+            path, display, statements = stack[-1]
+            stmt = next(statements, None)
+            if stmt is None:
+                stack.pop()
+            elif isinstance(stmt, ast.DefineFile):
+                def_requests.append((stmt, display, path.parent))
             elif isinstance(stmt, ast.Uses):
                 target = self.folders.find(stmt.file, stmt.span, self.diags, path.parent)
                 if target is None:
                     self.labels_incomplete = True
                 else:
-                    self._load_src(target.resolve(), stmt.span, seen, out, def_requests)
+                    enter(target.resolve(), stmt.span)
 
     def _load_def(self, path: Path, at: Span, loaded: dict[Path, ast.DefFile], active: set[Path]) -> list[ast.DefFile]:
         path = path.resolve()
@@ -172,6 +189,11 @@ class _Loader:
             return [loaded[path]]
         if path in active:
             self.diags.error("E-FILE-INCLUDE-CYCLE", at, f"{path.name} includes itself")
+            return []
+        if len(active) >= MAX_DEF_NESTING:
+            # (a chain of distinct files this deep is generated, not written; it would exhaust the stack)
+            self.diags.error("E-FILE-INCLUDE-CYCLE", at, f"definition files nested more than {MAX_DEF_NESTING} deep")
+            self._def_missing = True
             return []
         text = self._read(path, at)
         if text is None:

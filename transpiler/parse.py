@@ -267,7 +267,7 @@ class SrcParser:
                 if not self.lenient_brackets and result[1].endswith("[") and _BLANK_BEFORE_BRACKET.match(code):
                     # reported, but the bracket is kept so that its ']' does not cascade into E-BRACKET-BALANCE
                     diags.error("E-SYNTAX", span, f"blank between {result[1][:-1]} and '[' (lenient_brackets is off, A-02b)")
-                instr = self._instruction(result[1], result[2], span, comments, diags)
+                instr = self._instruction(result[1], result[2], span, comments, diags, code)
                 if instr is not None:
                     statements.append(instr)
         if kfield is not None:
@@ -275,7 +275,7 @@ class SrcParser:
         return ast.SourceFile(display, tuple(statements), tuple(pending_comments), line_count)
 
     def _instruction(self, mnemonic: str, operand: ast.OperandSyntax | None, span: Span,
-                     comments: tuple[str, ...], diags: Diagnostics) -> ast.Instr | None:
+                     comments: tuple[str, ...], diags: Diagnostics, code: str = "") -> ast.Instr | None:
         info = MNEMONICS.get(mnemonic)
         if info is None:
             diags.error("E-SYNTAX", span, f"unknown mnemonic '{mnemonic}'")
@@ -287,12 +287,16 @@ class SrcParser:
             what = {"label": "a label", "call": "a label or module number"}.get(info.form, "an operand")
             diags.error("E-SYNTAX", span, f"{mnemonic} needs {what}")
             return None
-        if info.form == "label" and (operand.kind != "SYM" and operand.kind not in "MIOTCBWDX" or operand.indexed):
-            diags.error("E-SYNTAX", span, f"{mnemonic} needs a label name, not '{operand.text}'")
-            return None
-        if info.form == "call" and (operand.kind not in ("SYM", "NUM") and operand.kind not in "MIOTCBWDX" or operand.indexed):
-            diags.error("E-SYNTAX", span, f"{mnemonic} needs a label name or a module number, not '{operand.text}'")
-            return None
+        if info.form == "label" or info.form == "call" and operand.kind != "NUM":
+            # A jump or call target is a label name, whatever terminal it lexed as (`LBL S12` defines a
+            # label that `CM S12` must reach): take it exactly as written.
+            parts = code.split(None, 1)
+            written = parts[1].strip() if len(parts) == 2 else operand.text
+            if operand.indexed or not _LABEL_NAME.fullmatch(written):
+                what = "a label name" if info.form == "label" else "a label name or a module number"
+                diags.error("E-SYNTAX", span, f"{mnemonic} needs {what}, not '{operand.text}'")
+                return None
+            operand = ast.OperandSyntax("SYM", written, False, written)
         if info.form == "operand" and operand.kind == "NUM":
             diags.error("E-SYNTAX", span, f"'{operand.text}' is not an operand (a constant is written K{operand.text})")
             return None
@@ -311,6 +315,7 @@ class SrcParser:
         diags.error("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
 
 
+_LABEL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _BLANK_BEFORE_BRACKET = re.compile(r"\S+[ \t]+\[")
 
 

@@ -299,13 +299,13 @@ class _FileLowering:
 
     def run(self) -> None:
         stmts = self.src.statements
+        kfield_lines: dict[str, int] = {}
         for stmt in stmts:
             if isinstance(stmt, ast.KField):
                 if stmt.name in self.kfields:
                     self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
                 self.kfields[stmt.name] = stmt.values
-            elif isinstance(stmt, ast.Label):
-                pass
+                kfield_lines.setdefault(stmt.name, stmt.span.line)
         chain_open = False
         last_acc = "NONE"
         brackets: list[_Frame] = []
@@ -333,10 +333,17 @@ class _FileLowering:
                     self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} is defined twice in this file")
                 else:
                     self.labels[stmt.name] = index
+                    # KFIELD names live in the label name space of the file (spec 6.17): the later one is the fault
+                    if kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
+                        self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
+                                         f"KFIELD at line {kfield_lines[stmt.name]}")
                 self.ops.append(Op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=chain_open))
                 chain_open, last_acc = False, "NONE"
                 continue
             if isinstance(stmt, ast.KField):
+                if stmt.name in self.labels:
+                    self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} has the name of a label "
+                                     "defined above it")
                 prev = next((o for o in reversed(self.ops) if o.code not in ("KFIELD",)), None)
                 if prev is None or prev.mnemonic not in ("EM", "JP"):
                     self.diags.error("E-KF-PLACEMENT", stmt.span,

@@ -12,10 +12,10 @@ from typing import Any, Callable
 
 import yaml
 
-from .cli import _EXTRA_COMMANDS, UsageError, options_from_args
+from .cli import UsageError, options_from_args
 from .diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
 from .interp import Machine, MachineConfigError, RuntimeFault
-from .ir import BIT_KINDS, Program
+from .ir import Program
 from .parse import MpParser
 from .pipeline import compile_project
 from .scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
@@ -276,6 +276,10 @@ def _report(args: argparse.Namespace, scenario: Scenario, sim: SimulationResult)
               file=sys.stderr)
         return EXIT_BAD_INPUT
     _print_warnings(sim.warnings)
+    first_marker = sim.machine.profile.interface.error_markers[0]
+    for marker, cycle in sorted(sim.machine.error_messages.items()):
+        print(f"note: PLC error message {marker - first_marker} (M{marker}) was set, first after cycle {cycle}",
+              file=sys.stderr)
     for number, count in sorted(sim.machine.unknown_modules.items()):
         print(f"note: PLC module {number} ran {count} time(s) as a stub without a simulation model (A-46)",
               file=sys.stderr)
@@ -305,4 +309,3 @@ def _print_warnings(warnings: list[RuntimeFault]) -> None:
         print(first.render() + extra, file=sys.stderr)
 
 
-_EXTRA_COMMANDS.append(register)

@@ -57,7 +57,11 @@ class RuntimeFault:
 
 @dataclasses.dataclass
 class CycleReport:
-    """What one run_cycle produced: the fault that stopped it (if any), warnings, executed instruction count."""
+    """What one run_cycle produced: the fault that stopped it (if any), warnings, executed instruction count.
+
+    `instructions` is exact for a cycle that completes; the fast code counts the block in which a
+    fault happened as a whole.
+    """
 
     cycle: int
     faults: list[RuntimeFault] = dataclasses.field(default_factory=list)

@@ -106,6 +106,7 @@ class Machine:
         self.faults: list[RuntimeFault] = []
         self.warnings: list[RuntimeFault] = []
         self.instructions = 0
+        self.error_messages: dict[int, int] = {}     # PLC error-message marker -> first cycle it was set
         self._report = CycleReport(-1)
         self._first_cycle_itf = self.profile.interface.first_cycle
         self._first_cycle_marker = int(sem["first_cycle_marker"])
@@ -231,6 +232,13 @@ class Machine:
         self.state.process_outputs[:] = self.state.O
 
     def end_cycle(self) -> None:
+        """Bookkeeping after the cycle: PLC error-message markers that are set (13.2), then the clock advances."""
+        lo, hi = self.profile.interface.error_markers
+        window = self.state.M[lo:hi + 1]
+        if 1 in window:
+            for offset, bit in enumerate(window):
+                if bit:
+                    self.error_messages.setdefault(lo + offset, self.next_cycle)
         self.sys.tick()
         self.next_cycle += 1
 

@@ -34,7 +34,9 @@ def _pack(n: int) -> Pou:
     lines = ["V := 0;"]
     for i in range(n - 1):
         lines.append(f"IF B{i} THEN\n    V := V + {2 ** i};\nEND_IF;")
-    lines.append(f"IF B{n - 1} THEN\n    V := V - {2 ** (n - 1)};\nEND_IF;")
+    # 2^31 itself is no DINT literal: subtract it in two steps.
+    sign = f"V - {2 ** (n - 1)}" if n < 32 else "V - 2147483647 - 1"
+    lines.append(f"IF B{n - 1} THEN\n    V := {sign};\nEND_IF;")
     lines.append(f"{name} := V;")
     return _fn(name, "DINT", [(f"B{i}", "BOOL") for i in range(n)], "\n".join(lines),
                f"LB/LW/LD: {n} bit operands into the word accumulator, bit {n - 1} as sign", [("V", "DINT")])

@@ -63,6 +63,22 @@ class Structurer:
             i += 1
         return i < len(self.ops) and self.ops[i].code == "EM"
 
+    def _equiv(self, hi: int) -> set[int]:
+        """Targets that behave like reaching `hi`: labels and no-ops fall through, a JP forwards (jump threading)."""
+        found = {hi}
+        i = hi
+        for _ in range(64):
+            while i < len(self.ops) and self.ops[i].code in ("LBL", "NOP") and i not in self.info.other_entries:
+                i += 1
+                found.add(i)
+            if i < len(self.ops) and self.ops[i].code == "JP" and self.ops[i].target is not None \
+                    and self.ops[i].target > i and self.ops[i].target not in found:
+                i = self.ops[i].target
+                found.add(i)
+                continue
+            break
+        return found
+
     def _clean(self, lo: int, hi: int, exit_ok: set[int]) -> bool:
         """No jump from outside [lo, hi) lands strictly inside, and every jump inside stays inside or goes to exit_ok."""
         for t, sources in self.jumps_to.items():
@@ -74,7 +90,7 @@ class Structurer:
             op = self.ops[i]
             if op.code in JUMPS and op.target is not None:
                 t = op.target
-                if not (lo <= t < hi or t in exit_ok or self._is_return_at(t)):
+                if not (lo <= t < hi or t in exit_ok or t in self._equiv(hi) or self._is_return_at(t)):
                     return False
             if i != lo and i in self.info.other_entries:
                 return False
@@ -231,6 +247,8 @@ class Structurer:
             return i + 1
         if t <= i:
             raise NotStructured(f"backward jump to {self.ops[t].label or t} outside a loop", i)
+        if t > hi and t in self._equiv(hi):
+            t = hi          # reaching the end of this block leads straight to the target
         if self._is_return_at(t) and not (t <= hi and self._clean(i + 1, t, {t})):
             if op.code == "JP":
                 self._return(self.info.exit_live)
@@ -252,8 +270,8 @@ class Structurer:
         last = t - 1
         if last > i and self.ops[last].code == "JP" and self.ops[last].target is not None:
             e = self.ops[last].target
-            if (t < e <= hi and self.jumps_to.get(t) == [i] and self._clean(i + 1, last, {last})
-                    and self._clean(t, e, {e}) and all(s == last or t <= s < e for s in self.jumps_to.get(e, []) if s > i)):
+            if (t < e <= hi and self.jumps_to.get(t) == [i] and self._clean(i + 1, last, {last, e})
+                    and self._clean(t, e, {e}) and all(s < e for s in self.jumps_to.get(e, []) if s > i)):
                 else_end = e
         if else_end is None and not self._clean(i + 1, t, {t}):
             raise NotStructured(f"jumps into or out of the block skipped by {op.mnemonic} at line {op.span.line}", i)
@@ -326,7 +344,8 @@ class Structurer:
                 self.out.lines, self.out.indent = [], saved_indent + 1
                 self.depth += 1
                 self.region(h, j)
-                self.ex.index = j
+                # The back jump still reads LA: liveness is taken before it.
+                self.ex.index = j - 1
                 self.ex.keep_live(self._live(h) | self._live(exit_index))
                 cond = self._cond(tail, tail.code == "JPF")     # leave when the back jump is not taken
                 self.out.flush_comments()
