@@ -23,12 +23,15 @@ shim:
 
 test: venv shim
 	$(MAKE) -C runtime_shim test
+	-$(VENV)/bin/hh2iec fetch-schema
 	$(PY) -m pytest -q
 
 demo: venv shim
+	-$(VENV)/bin/hh2iec fetch-schema
 	$(VENV)/bin/hh2iec check $(SAMPLE)/Main_PGM.src
 	$(VENV)/bin/hh2iec transpile $(SAMPLE)/Main_PGM.src --out $(OUT)
-	$(VENV)/bin/hh2iec equiv $(SAMPLE)/Main_PGM.src --scenario $(SAMPLE)/scenarios/spindle_m3_m5.yaml --random-cycles 500 --seed 1
+	$(VENV)/bin/hh2iec equiv $(SAMPLE)/Main_PGM.src $(foreach s,$(wildcard $(SAMPLE)/scenarios/*.yaml),--scenario $(s)) \
+		--random-cycles 2000 --seed 1 --report $(OUT)/equiv.json --junit $(OUT)/equiv.junit.xml
 
 bench: venv shim
 	$(PY) -m tests.bench

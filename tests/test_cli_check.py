@@ -86,6 +86,13 @@ def test_options_reach_the_front_end(tmp_path, capsys):
     assert json.loads(out)["profile"] == "tnc426" and json.loads(out)["modules"] == 3
 
 
+def test_unreadable_definition_files_from_the_command_line(tmp_path, capsys):
+    write_project(tmp_path, {"main.src": "EM\n"})
+    for defs, code in ((tmp_path / "none.def", "E-FILE-NOT-FOUND"), (Path("/dev/zero"), "E-FILE-READ"), (tmp_path, "E-FILE-READ")):
+        status, out, err = _run(["check", tmp_path / "main.src", "--defs", defs], capsys)
+        assert status == 2 and [DIAGNOSTIC_LINE.match(line).group("code") for line in err.splitlines()] == [code]
+
+
 @pytest.mark.parametrize("argv, fragment", [
     (["frobnicate"], "invalid choice"),
     (["check"], "required"),

@@ -211,6 +211,8 @@ def _coerce(key: str, raw: Any) -> Any:
             return False
         raise SemanticsError(f"{key} expects true/false, not {raw!r}")
     if isinstance(a.default, int):
+        if str(raw) in {str(x) for x in a.alternatives}:
+            return str(raw)          # a named alternative of a numeric setting (bracket_width = operand)
         try:
             return int(raw)
         except (TypeError, ValueError):

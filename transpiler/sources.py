@@ -81,6 +81,13 @@ def _find_case_insensitive(root: Path, parts: list[str]) -> Path | None:
 def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostics) -> SourceText | None:
     """Read a file as Latin-1 (every byte sequence is accepted) and split it into lines."""
     try:
+        if not path.exists():
+            diags.error("E-FILE-NOT-FOUND", at, f"file {path} not found")
+            return None
+        if not path.is_file():
+            # a FIFO or a device (e.g. `--defs /dev/zero`) would block or never end
+            diags.error("E-FILE-READ", at, f"{path} is not a regular file")
+            return None
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:
             diags.error("E-FILE-READ", at, f"{path.name} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB")
