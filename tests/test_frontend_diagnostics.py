@@ -49,6 +49,10 @@ ERROR_CASES = [
     ("syntax-def-k-without-value", {"main.src": "#define /g a.def\nEM\n", "a.def": "KG_x K\n"}, [("E-SYNTAX", "a.def", 1, 1)]),
     # unsupported constructs (3.5, 3.7, A-16, A-23)
     ("unsupported-macro", {"main.src": "ERROR_MACRO 12\nEM\n"}, [("E-UNSUPPORTED", "main.src", 1, 1)]),
+    ("unsupported-macro-like-mnemonic", {"main.src": "  SET_ERROR 5\nEM\n"}, [("E-UNSUPPORTED", "main.src", 1, 3)]),
+    ("unsupported-glued", {"main.src": "LM12\nEM\n"}, [("E-UNSUPPORTED", "main.src", 1, 1)]),
+    ("syntax-bad-constant-line", {"main.src": "EM\nKFIELD T\nK 5x\nENDK\n"}, [("E-SYNTAX", "main.src", 3, 1)]),
+    ("syntax-directive-without-name", {"main.src": "GLOBAL\nEM\n"}, [("E-SYNTAX", "main.src", 1, 1)]),
     ("unsupported-typedef", {"main.src": "#define /g a.def\nEM\n", "a.def": "#TYPEDEF ApiSpin\n"},
      [("E-UNSUPPORTED", "a.def", 1, 1)]),
     ("unsupported-assign-not", {"main.src": "L I1\n=N O1\nEM\n"}, [("E-UNSUPPORTED", "main.src", 2, 1)]),
@@ -299,7 +303,7 @@ def test_independent_faults_are_all_reported_once(tmp_path):
 
 def test_syntax_error_on_the_last_em_is_not_also_a_fall_off(tmp_path):
     result = compile_files(tmp_path, {"main.src": "L I1\n= O1\nEMM\n"})
-    assert [e.code for e in errors(result)] == ["E-SYNTAX"]      # a misspelt mnemonic, not a macro
+    assert [e.code for e in errors(result)] == ["E-UNSUPPORTED"]     # "'EMM' is neither a mnemonic, ..."
     result = compile_files(tmp_path, {"main.src": "L I1\n= O1\nCASE B_undef\nCM A\nENDC\nEM\nLBL A\nEM\n"})
     assert [e.code for e in errors(result)] == ["E-SYM-UNDEF"]
 

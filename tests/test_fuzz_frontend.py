@@ -21,7 +21,9 @@ from transpiler.mnemonics import MNEMONICS
 from transpiler.semantics import make_semantics
 
 LIMIT = 10.0                     # seconds allowed per input (the machine may be shared and slow)
-SEEDS = fuzz.sample_seeds() + fuzz.vector_seeds()
+SAMPLE_SEEDS = fuzz.sample_seeds()
+VECTOR_SEEDS = fuzz.vector_seeds()
+SEEDS = SAMPLE_SEEDS + VECTOR_SEEDS
 HYPOTHESIS = settings(max_examples=40, deadline=timedelta(seconds=2 * LIMIT), derandomize=True,
                       suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 
@@ -41,11 +43,21 @@ def _only_diagnostics(tmp_path: Path, files: dict[str, bytes | str], bound: floa
 # ------------------------------------------------------------------------------------ mutation properties
 
 
-@pytest.mark.skipif(not SEEDS, reason="no sample projects and no spec vectors to mutate")
+
+
+@pytest.mark.skipif(not SAMPLE_SEEDS, reason="no sample projects to mutate")
 @HYPOTHESIS
 @given(index=st.integers(min_value=0, max_value=2 ** 40))
-def test_mutated_projects_give_only_diagnostics(tmp_path, index):
-    project, files, _ = fuzz._mutant(SEEDS, 7, index)
+def test_mutated_sample_projects_give_only_diagnostics(tmp_path, index):
+    project, files, _ = fuzz._mutant(SAMPLE_SEEDS, 7, index)
+    fuzz.check_project(tmp_path / "p", files, project.main, project.profile, LIMIT)
+
+
+@pytest.mark.skipif(not VECTOR_SEEDS, reason="the spec (and its vectors) is not available")
+@HYPOTHESIS
+@given(index=st.integers(min_value=0, max_value=2 ** 40))
+def test_mutated_vector_programs_give_only_diagnostics(tmp_path, index):
+    project, files, _ = fuzz._mutant(VECTOR_SEEDS, 7, index)
     fuzz.check_project(tmp_path / "p", files, project.main, project.profile, LIMIT)
 
 

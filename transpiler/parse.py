@@ -307,15 +307,18 @@ class SrcParser:
         first = re.match(r"\S+", code)
         word = first.group(0) if first else code
         col = span.col + max(0, (column or 1) - 1)
-        if first and canonical(word) not in MNEMONICS and not re.match(
-                r"(?i)(LBL|KFIELD|ENDK|USES|GLOBAL|EXTERN|#define|K[\s+\-$%0-9])", code):
-            if not any(canonical(word[:n]) in MNEMONICS for n in (1, 2, 3, 4) if word[:n] != word):
-                diags.error("E-UNSUPPORTED", span, f"'{word[:40]}' is neither a mnemonic, a directive nor a label definition")
-                return
+        # Spec 3.7: a first word that is no mnemonic, directive or label keyword is E-UNSUPPORTED (a macro call,
+        # or a typo such as EMM) naming the word; otherwise the line is malformed (E-SYNTAX at the column).
+        if first and canonical(word) not in MNEMONICS and not _DIRECTIVE_WORD.fullmatch(word) \
+                and not _CONSTANT_LINE.match(code):
+            diags.error("E-UNSUPPORTED", span, f"'{word[:40]}' is neither a mnemonic, a directive nor a label definition")
+            return
         diags.error("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
 
 
 _LABEL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_DIRECTIVE_WORD = re.compile(r"(?i)LBL|KFIELD|ENDK|USES|GLOBAL|EXTERN|#define")
+_CONSTANT_LINE = re.compile(r"(?i)K[\s+\-$%0-9]")
 _BLANK_BEFORE_BRACKET = re.compile(r"\S+[ \t]+\[")
 
 

@@ -10,7 +10,7 @@ from . import ast
 from .diagnostics import Diagnostics, Span
 from .frontend import ParsedProject
 from .ir import BIT_KINDS, BYTES, MEM_KINDS, Bracket, CallTarget, FileCode, Op, Operand, Program, Symbol
-from .mnemonics import BRACKET_OPS, MNEMONICS
+from .mnemonics import MNEMONICS
 from .modules import MODULES
 from .semantics import Semantics
 

@@ -101,7 +101,7 @@ class StBackend:
         presets = self._presets(layout)
         main = pous.pop((0, 0))
         main = self._with_services(main, layout)
-        user_pous = self._order(pous)
+        user_pous = [self._bit_accessor_pou(kind) for kind in sorted(layout.bit_access)] + self._order(pous)
         lib = [p for name, p in library.helper_pous().items() if name in self._helper_closure()]
         fbs = []
         if layout.timers:
@@ -189,8 +189,15 @@ class StBackend:
             callees.add(target.key)
             return f"{self.instance_names[target.key]}()"
 
+        accessors: dict[str, str] = {}
+
+        def bit_accessor(kind: str) -> str:
+            if kind not in accessors:
+                accessors[kind] = f"HH_{kind}_index"
+            return accessors[kind]
+
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
-                             self._kfield, self._stack_names, self._module_call, self.semantics)
+                             self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor)
         other_entries = {i: t for i, t in others.items() if t.file == key[0] and i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i))
@@ -218,6 +225,8 @@ class StBackend:
         if not any(not line.strip().startswith("(*") for line in lines):
             lines = lines + ["RETURN; (* the subprogram does nothing *)"]
         local = [IecVar(self.instance_names[c], self.pou_names[c]) for c in sorted(callees)]
+        local += [IecVar(inst, self.layout.bit_access[kind], comment=f"indexed access to {kind} operands")
+                  for kind, inst in sorted(accessors.items())]
         local += [IecVar(n, t) for n, t in temps]
         if not structured:
             local.append(IecVar("HH_STATE", "DINT", comment="state of the irreducible control flow"))
@@ -240,6 +249,24 @@ class StBackend:
     def _state_machine(self, info: RoutineInfo, ctx: RoutineContext, temp) -> None:
         from .structure import state_machine
         state_machine(info, Executor(ctx))
+
+    def _bit_accessor_pou(self, kind: str) -> Pou:
+        """Indexed access to a bit space: a CASE over the named operands, the rest in one array (spec 6.13)."""
+        layout = self.layout
+        arr = layout.bit_arrays[kind]
+        named = layout.named_bits(kind)
+        write = [f"        {addr}: {name} := VALUE;" for addr, name in named]
+        read = [f"    {addr}: Q := {name};" for addr, name in named]
+        if named:
+            body = ("IF WRITE THEN\n    CASE IDX OF\n" + "\n".join(write) + f"\n    ELSE\n        {arr}[IDX] := VALUE;\n"
+                    "    END_CASE;\nEND_IF;\nCASE IDX OF\n" + "\n".join(read) + f"\nELSE\n    Q := {arr}[IDX];\nEND_CASE;")
+        else:
+            body = f"IF WRITE THEN\n    {arr}[IDX] := VALUE;\nEND_IF;\nQ := {arr}[IDX];"
+        return Pou(layout.bit_access[kind], "FUNCTION_BLOCK", (
+            VarSection("VAR_INPUT", (IecVar("IDX", "DINT", comment=f"{kind} operand address (base + X)"),
+                                     IecVar("WRITE", "BOOL"), IecVar("VALUE", "BOOL"))),
+            VarSection("VAR_OUTPUT", (IecVar("Q", "BOOL", comment="value of the operand (after a write: the new one)"),)),
+        ), body, comment=f"indexed access to the {kind} operands: named operands keep their variables")
 
     def _presets(self, layout: Layout) -> dict[str, int]:
         presets: dict[str, int] = {}

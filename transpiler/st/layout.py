@@ -51,7 +51,8 @@ class Layout:
         self.rows: list[OperandVar] = []
         self._bit_var: dict[tuple[str, int], str] = {}
         self._mem_var: dict[tuple[str, int], str] = {}
-        self.bit_arrays: dict[str, str] = {}          # kind -> array variable
+        self.bit_arrays: dict[str, str] = {}          # kind -> array of the addresses that have no name of their own
+        self.bit_access: dict[str, str] = {}          # kind -> accessor FB type for indexed access
         self.mem_array: str | None = None
         self.string_array: str | None = None
         self._string_var: dict[int, str] = {}
@@ -128,15 +129,16 @@ class Layout:
         self.timers, self.counters = timers, counters
         for kind in "IOMTC":
             if kind in bit_indexed:
+                # Indexed access reaches named operands through an accessor FB (a CASE over the named
+                # addresses); addresses without a name of their own live in one array.
                 size = self.profile.ranges.size(kind)
                 tname = BIT_ARRAY_TYPE.format(kind=kind)
                 self.types[tname] = ("BOOL", 0, size - 1)
-                arr = self.names.name(f"array:{kind}", f"HH_{kind}")
+                arr = self.names.name(f"array:{kind}", f"HH_{kind}_other")
                 self.bit_arrays[kind] = arr
-                self._add_global(GlobalVar(arr, tname, "marker", comment=f"all {kind} operands (indexed access)"))
-                for addr in sorted(bits.get(kind, ())):
-                    self._row(kind, addr, f"{arr}[{addr}]", "BOOL")
-                continue
+                self.bit_access[kind] = self.names.name(f"access:{kind}", f"HH_ACCESS_{kind}")
+                self._add_global(GlobalVar(arr, tname, "marker",
+                                           comment=f"{kind} operands reached only through the index register"))
             for addr in sorted(bits.get(kind, ())):
                 self._declare_bit(kind, addr)
         self._plan_memory(mem, mem_indexed)
@@ -256,15 +258,16 @@ class Layout:
     # ---- access
 
     def bit_lvalue(self, op: Operand, x: E.Expr | None, offset: int = 0) -> E.Expr:
-        """The BOOL variable (or array element) of a bit operand, offset for LB/B= sequences."""
-        arr = self.bit_arrays.get(op.kind)
-        if op.indexed:
-            index = _index(op.addr + offset, x, 1, self.program.semantics)
-            return E.Expr(f"{arr}[{index.text}]", "BOOL", frozenset([arr.upper()]) | index.deps, 0, 1, var=f"{arr}[{index.text}]")
-        if arr is not None:
-            text = f"{arr}[{op.addr + offset}]"
-            return E.Expr(text, "BOOL", frozenset([arr.upper()]), 0, 1, var=text)
-        return E.var(self._declare_bit(op.kind, op.addr + offset), "BOOL")
+        """The BOOL variable of a (non-indexed) bit operand, offset for LB/B= sequences."""
+        name = self._declare_bit(op.kind, op.addr + offset)
+        return E.Expr(name, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=name)
+
+    def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:
+        """The operand address of an indexed bit operand (for the accessor FB)."""
+        return _index(op.addr + offset, x, 1, self.program.semantics)
+
+    def named_bits(self, kind: str) -> list[tuple[int, str]]:
+        return sorted((addr, name) for (k, addr), name in self._bit_var.items() if k == kind)
 
     def timer_var(self, kind: str, addr: int) -> E.Expr:
         return self.bit_lvalue(Operand(kind, addr), None)

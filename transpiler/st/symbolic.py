@@ -74,7 +74,7 @@ class RoutineContext:
     def __init__(self, layout: Layout, emitter: Emitter, live_after: Callable[[int], frozenset[str]],
                  register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
                  kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
-                 module_call: Callable[[int], str], semantics):
+                 module_call: Callable[[int], str], semantics, bit_accessor: Callable[[str], str]):
         self.layout = layout
         self.out = emitter
         self.live_after = live_after
@@ -85,6 +85,7 @@ class RoutineContext:
         self.stack_names = stack_names
         self.module_call = module_call
         self.semantics = semantics
+        self.bit_accessor = bit_accessor
         self.flag_markers = semantics.profile.interface
 
 
@@ -217,7 +218,27 @@ class Executor:
         return x
 
     def bit(self, o: Operand, offset: int = 0) -> Expr:
-        return self.ctx.layout.bit_lvalue(o, self._xi(o), offset)
+        """Read a bit operand: a variable, or for an indexed one the value read now through the accessor FB."""
+        if not o.indexed:
+            return self.ctx.layout.bit_lvalue(o, None, offset)
+        inst = self.ctx.bit_accessor(o.kind)
+        index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := FALSE);")
+        name = self.ctx.temp("BOOL")
+        self.ctx.out.line(f"{name} := {inst}.Q;")
+        return E.var(name, "BOOL")
+
+    def bit_store(self, o: Operand, value: Callable[[], Expr], keep: frozenset[str], offset: int = 0) -> Expr | None:
+        """Write a bit operand; returns the target variable (None for an indexed write)."""
+        if not o.indexed:
+            return self.store(lambda: self.ctx.layout.bit_lvalue(o, None, offset), value, keep)
+        inst = self.ctx.bit_accessor(o.kind)
+        # Any operand of this space may change: values in flight that read one of them are saved first.
+        deferred = self.prepare_write(f"#{o.kind}", keep | {"X"})
+        index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := TRUE, VALUE := {value().text});")
+        self.drop(deferred)
+        return None
 
     def value(self, o: Operand) -> Expr:
         """A value operand as DINT-compatible typed expression (SINT/INT/DINT)."""
@@ -441,19 +462,26 @@ class Executor:
         self.s.set("LA", E.b_not(self.s.reg("LA")))
 
     def op_ST(self, op: Op) -> None:
-        target = self.store(lambda: self.bit(op.operand), lambda: self.s.reg("LA"), frozenset(["LA", "X"]))
-        if not op.operand.indexed:
+        target = self.bit_store(op.operand, lambda: self.s.reg("LA"), frozenset(["LA", "X"]))
+        if target is not None:
             self.s.set("LA", target)
 
     def op_STN(self, op: Op) -> None:
-        self.store(lambda: self.bit(op.operand), lambda: E.b_not(self.s.reg("LA")), frozenset(["LA", "X"]))
+        self.bit_store(op.operand, lambda: E.b_not(self.s.reg("LA")), frozenset(["LA", "X"]))
 
     def _conditional_bit(self, op: Op, when: bool, value: bool) -> None:
         la = self.s.reg("LA")
+        if op.operand.indexed:
+            # S/R through the index: the accessor writes the old value back when LA does not act.
+            old = self.bit(op.operand)
+            cond = la if when else E.b_not(la)
+            new = E.b_or(cond, old) if value else E.b_and(E.b_not(cond), old)
+            self.bit_store(op.operand, lambda: new, frozenset(["LA", "X"]))
+            return
         target = self.bit(op.operand)
         if la.bool_const is not None:
             if la.bool_const == when:
-                self.store(lambda: self.bit(op.operand), lambda: E.bool_const(value), frozenset(["X"]))
+                self.bit_store(op.operand, lambda: E.bool_const(value), frozenset(["X"]))
             return
         deferred = self.prepare_write(E.base_name(target.text), frozenset(["LA", "X"]))
         target = self.bit(op.operand)
@@ -513,9 +541,9 @@ class Executor:
         self.s.set("WA", wa)
         self.ctx.helper("HH_BIT")
         for k in range(op.nbits):
-            self.store(lambda k=k: self.bit(op.operand, k),
-                       lambda k=k: E.Expr(f"HH_BIT({self.s.reg('WA').text}, {k})", "BOOL", self.s.reg("WA").deps, 0, 1),
-                       frozenset(["WA", "X"]))
+            self.bit_store(op.operand,
+                           lambda k=k: E.Expr(f"HH_BIT({self.s.reg('WA').text}, {k})", "BOOL", self.s.reg("WA").deps, 0, 1),
+                           frozenset(["WA", "X"]), offset=k)
 
     def _word_gate(self, op: Op, kind: str, negate: bool) -> None:
         v = self.value(op.operand)
@@ -564,7 +592,8 @@ class Executor:
     def _incdec(self, op: Op, delta: int) -> None:
         o = op.operand
         if o.is_bit:
-            self.store(lambda: self.bit(o), lambda: E.b_not(self.bit(o)), frozenset(["X"]))
+            old = self.bit(o)
+            self.bit_store(o, lambda: E.b_not(old), frozenset(["X"]))
             return
         self._store_value(o, lambda: self._add(self.value(o), E.int_const(abs(delta)), sub=delta < 0))
 
@@ -620,7 +649,7 @@ class Executor:
         o = op.operand
         if o.is_bit:
             value = self._pop("bit")
-            self.store(lambda: self.bit(o), lambda: value, frozenset(["X"]))
+            self.bit_store(o, lambda: value, frozenset(["X"]))
             return
         value = self._pop("val")
         self._store_value(o, lambda: value)
