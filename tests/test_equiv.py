@@ -1,0 +1,110 @@
+"""Equivalence by co-simulation: the sample and the vectors are equivalent; a broken translation is caught and shrunk."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from transpiler.cosim import builtin_side_factory, cosimulate
+from transpiler.equiv import random_scenario, shrink
+from transpiler.scenario import load_scenario
+from transpiler.simulate import project_names
+from transpiler.transpile import io_map_of
+
+from test_st_backend import SAMPLE, transpile_sample, transpile_vector
+from vectors import SKIP_REASON, SPEC, load_vectors, vector_scenario_yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = sorted((SAMPLE / "scenarios").glob("*.yaml"))
+
+
+@pytest.fixture(scope="module")
+def sample():
+    program, out = transpile_sample()
+    return program, out, builtin_side_factory(out.st_text), io_map_of(out.result), project_names(program)
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
+def test_sample_scenario_is_equivalent(sample, path):
+    program, out, factory, iomap, names = sample
+    result = cosimulate(program, factory, iomap, load_scenario(path, names), names)
+    assert result.error is None
+    assert result.divergence is None
+    assert result.compared > 100 and result.cycles_run > 0
+
+
+def test_sample_random_cycles_are_equivalent(sample):
+    program, out, factory, iomap, names = sample
+    result = cosimulate(program, factory, iomap, random_scenario(program, names, 2000, seed=11), names)
+    assert result.equivalent, (result.divergence, result.error)
+    assert result.cycles_run == 2000
+
+
+def _runtime_vectors():
+    if not SPEC.is_file():
+        return []
+    return [v for v in load_vectors() if not v.expect_error and v.id != "TV-73"]
+
+
+@pytest.mark.skipif(not SPEC.is_file(), reason=SKIP_REASON)
+@pytest.mark.parametrize("vector", _runtime_vectors(), ids=lambda v: v.id)
+def test_vector_is_equivalent(vector, tmp_path):
+    program, out = transpile_vector(vector, tmp_path)
+    names = project_names(program)
+    path = tmp_path / "scenario.yaml"
+    path.write_text(vector_scenario_yaml(vector))
+    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result), load_scenario(path, names), names)
+    assert result.equivalent, (result.divergence, result.error)
+
+
+def _break(st: str) -> str:
+    """A deliberately wrong translation: the coolant flood pump ignores the door (AND -> OR)."""
+    broken, count = re.subn(r"O_coolant_flood := ML_sel_flood AND MG_control_ok AND I_door_closed;",
+                            "O_coolant_flood := ML_sel_flood AND MG_control_ok OR I_door_closed;", st)
+    assert count == 1, "the mutation site moved: update the test"
+    return broken
+
+
+def test_broken_translation_diverges_and_is_shrunk(sample):
+    program, out, _, iomap, names = sample
+    factory = builtin_side_factory(_break(out.st_text))
+    scenario = load_scenario(SAMPLE / "scenarios" / "coolant_m8_m9.yaml", names)
+    first = cosimulate(program, factory, iomap, scenario, names)
+    assert first.divergence is not None and first.divergence.operand == "O" + str(
+        next(s.addr for s in program.symbols.values() if s.name == "O_coolant_flood"))
+    shrunk, runs = shrink(program, factory, iomap, scenario, names, first)
+    assert shrunk.cycles <= first.divergence.cycle + 1
+    assert len(shrunk.events) <= len(scenario.events)
+    again = cosimulate(program, factory, iomap, shrunk, names)
+    assert again.divergence is not None
+
+
+def test_cli_equiv_reports_divergence_with_exit_1(tmp_path, sample):
+    program, out, *_ = sample
+    st = tmp_path / "broken.st"
+    st.write_text(_break(out.st_text))
+    (tmp_path / "io_map.csv").write_bytes(out.files["io_map.csv"])
+    proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "equiv", str(SAMPLE / "Main_PGM.src"),
+                           "--scenario", str(SAMPLE / "scenarios" / "coolant_m8_m9.yaml"), "--st", str(st),
+                           "--backend", "builtin", "--report", str(tmp_path / "r.json"), "--junit", str(tmp_path / "j.xml")],
+                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 1, proc.stderr
+    assert "DIVERGENCE" in proc.stdout and "O_coolant_flood" in proc.stdout
+    shrunk_yaml = proc.stdout.split("rerun it with --scenario:\n", 1)[1].split("coverage:")[0]
+    data = yaml.safe_load(shrunk_yaml)
+    assert data["cycles"] >= 1 and "events" in data or "initial" in data
+    assert (tmp_path / "r.json").is_file() and 'failures="1"' in (tmp_path / "j.xml").read_text()
+
+
+def test_cli_equiv_sample_is_equivalent(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "equiv", str(SAMPLE / "Main_PGM.src"),
+                           "--scenario", str(SAMPLE / "scenarios" / "spindle_m3_m5.yaml"), "--backend", "builtin"],
+                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 0, proc.stderr
+    assert "EQUIVALENT" in proc.stdout and "backend builtin" in proc.stdout and "coverage:" in proc.stdout
