@@ -1,0 +1,187 @@
+"""The matiec executor of the co-simulation: compiles project.st with iec2c, links the generated C with a generated
+accessor harness into a shared library, and drives it cycle by cycle through ctypes (the path a user with OpenPLC has)."""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Callable
+
+from .iec_model import IecProject
+from .st_check import matiec_home
+
+SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
+           "UINT": "UINT", "UDINT": "UDINT", "BYTE": "BYTE", "WORD": "WORD", "DWORD": "DWORD"}
+TIMEOUT_S = 300
+
+
+class MatiecBuildError(Exception):
+    pass
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("HH2IEC_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "hh2iec")
+    return Path(base) / "matiec"
+
+
+def _variables(project: IecProject) -> list[tuple[str, str, str]]:
+    """(C name, element type, 'scalar'|'array'|'string') of every configuration global the harness can reach."""
+    arrays = {t.name.upper(): t for t in project.types if t.kind == "array"}
+    out = []
+    for section in project.configuration.globals:
+        for v in section.vars:
+            typ = v.type.upper()
+            if typ in SCALARS:
+                out.append((v.name.upper(), typ, "scalar"))
+            elif typ == "STRING":
+                out.append((v.name.upper(), "STRING", "string"))
+            elif typ in arrays and (arrays[typ].base or "").upper() in SCALARS:
+                out.append((v.name.upper(), arrays[typ].base.upper(), "array"))
+            elif typ in arrays and (arrays[typ].base or "").upper() == "STRING":
+                out.append((v.name.upper(), "STRING", "string_array"))
+    return out
+
+
+def harness_source(project: IecProject) -> str:
+    """C glue: located storage, init/run with the simulated clock, and get/set of every global by number."""
+    located = [v.address for s in project.configuration.globals for v in s.vars if v.address]
+    lines = ['#include <string.h>', '#include "iec_std_lib.h"', '#include "POUS.h"',
+             f'#include "{project.configuration.name}.h"', "",
+             "TIME __CURRENT_TIME;", "BOOL __DEBUG = 0;", "extern unsigned long long common_ticktime__;",
+             "void config_init__(void);", "void config_run__(unsigned long tick);", "static unsigned long hh_tick;", ""]
+    types = {v.address: v.type.upper() for s in project.configuration.globals for v in s.vars if v.address}
+    for address in located:
+        c = "__" + address[1:].replace(".", "_")
+        lines.append(f"static {SCALARS.get(types[address], 'BOOL')} {c}_store;")
+        lines.append(f"{SCALARS.get(types[address], 'BOOL')} *{c} = &{c}_store;")
+    lines += ["", "void hh_init(void) {"]
+    for address in located:
+        c = "__" + address[1:].replace(".", "_")
+        lines.append(f"    memset(&{c}_store, 0, sizeof {c}_store);")
+    lines += ["    __CURRENT_TIME.tv_sec = 0;", "    __CURRENT_TIME.tv_nsec = 0;", "    hh_tick = 0;",
+              "    config_init__();", "}", "",
+              "void hh_run(void) {", "    config_run__(hh_tick++);",
+              "    __CURRENT_TIME.tv_nsec += common_ticktime__;",
+              "    while (__CURRENT_TIME.tv_nsec >= 1000000000) {",
+              "        __CURRENT_TIME.tv_nsec -= 1000000000;", "        __CURRENT_TIME.tv_sec++;", "    }", "}", ""]
+    variables = _variables(project)
+    get = ["long long hh_get(int id, int index) {", "    switch (id) {"]
+    put = ["void hh_set(int id, int index, long long value) {", "    switch (id) {"]
+    sget = ["int hh_get_str(int id, int index, char *out) {", "    IEC_STRING *s = 0;", "    switch (id) {"]
+    sput = ["void hh_set_str(int id, int index, const char *text) {", "    IEC_STRING *s = 0;", "    switch (id) {"]
+    for n, (name, typ, shape) in enumerate(variables):
+        if shape == "scalar":
+            get.append(f"    case {n}: return (long long)*__GET_GLOBAL_{name}();")
+            put.append(f"    case {n}: *__GET_GLOBAL_{name}() = ({typ})value; break;")
+        elif shape == "array":
+            get.append(f"    case {n}: return (long long)__GET_GLOBAL_{name}()->table[index];")
+            put.append(f"    case {n}: __GET_GLOBAL_{name}()->table[index] = ({typ})value; break;")
+        elif shape == "string":
+            sget.append(f"    case {n}: s = __GET_GLOBAL_{name}(); break;")
+            sput.append(f"    case {n}: s = __GET_GLOBAL_{name}(); break;")
+        else:
+            sget.append(f"    case {n}: s = &__GET_GLOBAL_{name}()->table[index]; break;")
+            sput.append(f"    case {n}: s = &__GET_GLOBAL_{name}()->table[index]; break;")
+    get += ["    }", "    return 0;", "}", ""]
+    put += ["    }", "}", ""]
+    sget += ["    }", "    if (!s) return -1;", "    memcpy(out, s->body, s->len);", "    out[s->len] = 0;",
+             "    return s->len;", "}", ""]
+    sput += ["    }", "    if (!s) return;", "    size_t n = strlen(text);", "    if (n > STR_MAX_LEN) n = STR_MAX_LEN;",
+             "    memcpy(s->body, text, n);", "    s->len = (__strlen_t)n;", "}", ""]
+    return "\n".join(lines + get + put + sget + sput)
+
+
+def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
+    """Compile once per distinct ST text (cached by hash); raises MatiecBuildError with the tool's message."""
+    home = matiec_home(iec2c)
+    digest = hashlib.sha256((st_text + str(iec2c)).encode("utf-8")).hexdigest()[:20]
+    folder = _cache_dir() / digest
+    lib = folder / "libhhplc.so"
+    if lib.is_file():
+        return lib
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix="build-", dir=folder.parent))
+    (work / "project.st").write_text(st_text, encoding="utf-8")
+    gen = work / "gen"
+    gen.mkdir()
+    run = subprocess.run([str(iec2c), "-I", str(home / "lib"), "-T", str(gen), str(work / "project.st")],
+                         capture_output=True, text=True, timeout=TIMEOUT_S)
+    if run.returncode != 0:
+        shutil.rmtree(work, ignore_errors=True)
+        raise MatiecBuildError(f"iec2c failed: {(run.stdout + run.stderr).strip()[:2000]}")
+    (gen / "hh_harness.c").write_text(harness_source(project), encoding="utf-8")
+    sources = [str(gen / "hh_harness.c")] + sorted(str(p) for p in gen.glob("*.c")
+                                                   if p.name not in ("POUS.c", "hh_harness.c"))
+    cc = subprocess.run(["gcc", "-shared", "-fPIC", "-O1", "-fwrapv", "-Wno-unused-function", "-w",
+                         f"-I{home / 'lib' / 'C'}", f"-I{gen}", "-o", str(work / "libhhplc.so"), *sources, "-lm"],
+                        capture_output=True, text=True, timeout=TIMEOUT_S)
+    if cc.returncode != 0:
+        shutil.rmtree(work, ignore_errors=True)
+        raise MatiecBuildError(f"gcc failed on the matiec output: {cc.stderr.strip()[:2000]}")
+    try:
+        os.replace(work, folder)
+    except OSError:
+        if not lib.is_file():          # a concurrent build may have won the race; otherwise report
+            raise MatiecBuildError(f"cannot store the build in {folder}") from None
+    return lib
+
+
+def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Callable[[], object]:
+    """Build the library once; each call gives the program re-initialised (config_init__, cleared I/O)."""
+    lib_path = build_library(st_text, project, iec2c)
+    lib = ctypes.CDLL(str(lib_path))
+    lib.hh_get.restype = ctypes.c_longlong
+    lib.hh_get.argtypes = [ctypes.c_int, ctypes.c_int]
+    lib.hh_set.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_longlong]
+    lib.hh_get_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
+    lib.hh_set_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
+    variables = _variables(project)
+    ids = {name: (n, typ, shape) for n, (name, typ, shape) in enumerate(variables)}
+    buffer = ctypes.create_string_buffer(512)
+
+    located: dict[str, tuple[int, int, str, str]] = {}
+
+    def locate(path: str) -> tuple[int, int, str, str]:
+        found = located.get(path)
+        if found is None:
+            found = located[path] = _locate(path)
+        return found
+
+    def _locate(path: str) -> tuple[int, int, str, str]:
+        m = re.fullmatch(r"(\w+)(?:\[(-?\d+)\])?", path.strip())
+        if m is None or m.group(1).upper() not in ids:
+            raise KeyError(path)
+        n, typ, shape = ids[m.group(1).upper()]
+        return n, int(m.group(2) or 0), typ, shape
+
+    class _Side:
+        name = "matiec"
+
+        def __init__(self) -> None:
+            lib.hh_init()
+
+        def get(self, path: str):
+            n, index, typ, shape = locate(path)
+            if shape.startswith("string"):
+                length = lib.hh_get_str(n, index, buffer)
+                return buffer.raw[:max(length, 0)].decode("latin-1")
+            value = lib.hh_get(n, index)
+            return bool(value) if typ == "BOOL" else int(value)
+
+        def set(self, path: str, value) -> None:
+            n, index, typ, shape = locate(path)
+            if shape.startswith("string"):
+                lib.hh_set_str(n, index, str(value).encode("latin-1", "replace"))
+            else:
+                lib.hh_set(n, index, int(value))
+
+        def run_cycle(self) -> None:
+            lib.hh_run()
+
+    return _Side
