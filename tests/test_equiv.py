@@ -108,3 +108,18 @@ def test_cli_equiv_sample_is_equivalent(tmp_path):
                           capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.returncode == 0, proc.stderr
     assert "EQUIVALENT" in proc.stdout and "backend builtin" in proc.stdout and "coverage:" in proc.stdout
+
+
+@pytest.mark.skipif(__import__("transpiler.st_check", fromlist=["find_iec2c"]).find_iec2c() is None,
+                    reason="iec2c not found ($MATIEC_HOME/iec2c or PATH): the matiec co-simulation backend is skipped")
+def test_sample_is_equivalent_on_matiec(sample):
+    from transpiler.matiec_side import matiec_side_factory
+    from transpiler.st_check import find_iec2c
+    program, out, _, iomap, names = sample
+    factory = matiec_side_factory(out.st_text, out.result.project, find_iec2c())
+    for name in ("spindle_m3_m5", "tool_call_magazine"):
+        result = cosimulate(program, factory, iomap, load_scenario(SAMPLE / "scenarios" / f"{name}.yaml", names), names)
+        assert result.equivalent, (name, result.divergence, result.error)
+    broken = matiec_side_factory(_break(out.st_text), out.result.project, find_iec2c())
+    result = cosimulate(program, broken, iomap, load_scenario(SAMPLE / "scenarios" / "coolant_m8_m9.yaml", names), names)
+    assert result.divergence is not None

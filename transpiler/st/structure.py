@@ -236,8 +236,9 @@ class Structurer:
                 self.ex.flush(self._live(t))
                 self.out.line("EXIT;")
                 return self._skip_dead(i + 1, hi)
-            cond = self._cond(op, op.code == "JPT")
-            self.ex.flush(self._live(t) | self._live(i + 1))
+            # Registers live after the loop or in the rest of the body reach their variables; LA stays
+            # symbolic for the test itself.
+            self.ex.keep_live(self._live(t) | self._live(i + 1))
             cond = self._cond(op, op.code == "JPT")
             self.out.line(f"IF {cond.text} THEN")
             self.out.indent += 1
