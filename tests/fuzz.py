@@ -415,6 +415,8 @@ def _report(args, seeds: list[Seed], results: dict[int, dict], elapsed: float) -
     if slowest is not None:
         print(f"fuzz: slowest input {slowest.get('seconds', 0):.2f} s (limit {args.limit} s)")
     print(f"fuzz: crashes: {len(crashes)}, hangs: {len(hangs)}" + (f", not run: {missing}" if missing else ""))
+    if crashes or hangs:
+        print(f"fuzz: failing mutations: {', '.join(str(r['index']) for r in (crashes + hangs)[:50])}")
     first = (crashes + hangs)[:1]
     for r in first:
         seeds_now = _seeds(args.with_vectors)

@@ -292,6 +292,14 @@ def test_rejected_definitions_do_not_cascade(tmp_path):
                               Found("E-LIT-RANGE", "a.def", 3, 1), Found("E-SYNTAX", "a.def", 4, 1)]
 
 
+def test_a_rejected_label_line_is_not_reported_again_at_its_uses(tmp_path):
+    files = {"main.src": "USES m.src\nEXTERN F\nCM F\nJP Loc\nEM\nLBL Loc Extra\nEM\n",
+             "m.src": "GLOBAL F\nLBL F junk\nEM\n"}
+    result = compile_files(tmp_path, files)
+    assert errors(result) == [Found("E-SYNTAX", "m.src", 2, 7), Found("E-SYNTAX", "main.src", 6, 9)]
+    assert warnings(result) == []
+
+
 def test_independent_faults_are_all_reported_once(tmp_path):
     program = ("L I_undef\n= O1\nL W3\n= W0\nJP Nowhere\nL I1\nA[\nL I2\nEM\n]\n= O3\nL K1\n= K2\n"
                "L I1 I2\nERROR_MACRO\nEM\n")

@@ -162,10 +162,11 @@ def test_uses_cycles_and_self_inclusion(tmp_path):
 
 def test_missing_and_escaping_files(tmp_path):
     files = {"main.src": "USES nope.src\n#define /g nope.def\nINCLUDE nope.inc\nUSES ../../etc/passwd\nUSES /etc/passwd\n"
-                         "USES \nUSES .\nUSES sub\nINCLUDE \"\"\nEM\n", "sub/x.src": "EM\n"}
+                         "USES \nUSES .\nUSES sub\nINCLUDE \"\"\nUSES " + "x" * 400 + ".src\nUSES a\x00b.src\nEM\n",
+             "sub/x.src": "EM\n"}
     result = _only_diagnostics(tmp_path, files)
     assert [e.code for e in errors(result)] == ["E-FILE-NOT-FOUND"] * 3 + ["E-FILE-ESCAPE"] * 2 + [
-        "E-SYNTAX", "E-FILE-NOT-FOUND", "E-FILE-NOT-FOUND", "E-SYNTAX"]     # a folder is not a file
+        "E-SYNTAX", "E-FILE-NOT-FOUND", "E-FILE-NOT-FOUND", "E-SYNTAX", "E-FILE-NOT-FOUND", "E-FILE-NOT-FOUND"]
 
 
 def test_chains_of_files_longer_than_the_recursion_limit(tmp_path):

@@ -94,6 +94,7 @@ class SourceFile:
     statements: tuple[Statement, ...]
     trailing_comments: tuple[str, ...]
     line_count: int
+    broken_labels: tuple[str, ...] = ()   # names of LBL/KFIELD lines rejected with an error (not reported again)
 
 
 @dataclasses.dataclass(frozen=True, slots=True)

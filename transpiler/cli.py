@@ -7,7 +7,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
 
 from .diagnostics import CompileFailed, Diagnostics, NO_SPAN, explain
 from .frontend import ProjectOptions

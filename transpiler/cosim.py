@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from decimal import Decimal
 from typing import Callable, Iterable, Protocol
 
 from .interp.machine import Machine

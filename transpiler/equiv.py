@@ -13,14 +13,13 @@ from xml.sax.saxutils import escape, quoteattr
 
 from .cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
 from .cosim import CosimResult, StSide, builtin_side_factory, cosimulate
-from .diagnostics import CompileFailed, Diagnostics, NO_SPAN, Span
+from .diagnostics import CompileFailed, Diagnostics, NO_SPAN
 from .iomap import IoMap
 from .ir import Program
 from .pipeline import compile_project
 from .scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
-from .semantics import SemanticsError, make_semantics
 from .shim import ShimUnavailable
-from .simulate import _peek, program_operands, project_names
+from .simulate import program_operands, project_names, scenario_semantics
 from .stimulus import materialize_random, scenario_to_yaml
 from .transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
 
@@ -139,17 +138,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
             raise UsageError(f"scenario file '{path}' does not exist")
     if args.st is not None and not args.st.is_file():
         raise UsageError(f"ST file '{args.st}' does not exist")
-    scenario_profile, scenario_semantics, sem_span = _peek(args.scenario[0]) if args.scenario else (None, {}, None)
-    overrides = {str(k): v for k, v in scenario_semantics.items()}
-    for item in args.semantic_overrides:
-        if "=" not in item:
-            raise UsageError(f"-S expects KEY=VALUE, got '{item}'")
-        key, value = item.split("=", 1)
-        overrides[key.strip()] = value.strip()
-    try:
-        semantics = make_semantics(args.profile or scenario_profile or "itnc530", overrides)
-    except SemanticsError as exc:
-        print(f"{sem_span or NO_SPAN}: error[E-SCENARIO]: {exc}", file=sys.stderr)
+    semantics = scenario_semantics(args, args.scenario[0] if args.scenario else None)
+    if semantics is None:
         return EXIT_BAD_INPUT
     compiled = compile_project(options_from_args(args), semantics)
     for d in compiled.diagnostics.items:

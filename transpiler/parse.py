@@ -220,6 +220,7 @@ class SrcParser:
         statements: list[ast.Statement] = []
         pending_comments: list[str] = []
         kfield: _PendingKField | None = None
+        broken_labels: list[str] = []
         for line in lines:
             code = line.code.strip()
             if not code:
@@ -235,6 +236,7 @@ class SrcParser:
                 continue
             if status == "syntax":
                 self._report_syntax(code, span, result, diags)
+                broken_labels.extend(_LABEL_LINE.findall(code)[:1])
                 continue
             tag = result[0]
             if kfield is not None:
@@ -272,7 +274,7 @@ class SrcParser:
                     statements.append(instr)
         if kfield is not None:
             diags.error("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
-        return ast.SourceFile(display, tuple(statements), tuple(pending_comments), line_count)
+        return ast.SourceFile(display, tuple(statements), tuple(pending_comments), line_count, tuple(broken_labels))
 
     def _instruction(self, mnemonic: str, operand: ast.OperandSyntax | None, span: Span,
                      comments: tuple[str, ...], diags: Diagnostics, code: str = "") -> ast.Instr | None:
@@ -317,7 +319,8 @@ class SrcParser:
 
 
 _LABEL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-_DIRECTIVE_WORD = re.compile(r"(?i)LBL|KFIELD|ENDK|USES|GLOBAL|EXTERN|#define")
+_LABEL_LINE = re.compile(r"(?i)^\s*(?:LBL|KFIELD)\s+([A-Za-z_][A-Za-z0-9_]*)")      # the name a bad LBL line meant
+_DIRECTIVE_WORD = re.compile(r"(?i)LBL|KFIELD|ENDK|USES|GLOBAL|EXTERN|#define|INCLUDE|#include")
 _CONSTANT_LINE = re.compile(r"(?i)K[\s+\-$%0-9]")
 _BLANK_BEFORE_BRACKET = re.compile(r"\S+[ \t]+\[")
 

@@ -702,6 +702,8 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) ->
         if _flow_is_complete(low, diags):
             _check_flow(i, f, diags)
     for i, low in enumerate(lowerings[1:], start=1):
+        if low.src.broken_labels:            # the first LBL may be the line that was rejected
+            continue
         for op in files[i].ops:
             if op.code == "LBL":
                 break
@@ -720,7 +722,8 @@ def _exports(lowerings: list[_FileLowering], diags: Diagnostics) -> dict[str, Ca
     for low in lowerings:
         for g in low.globals:
             if g.name not in low.labels:
-                diags.error("E-SYM-GLOBAL-UNDEF", g.span, f"GLOBAL {g.name}: no such label in this file")
+                if g.name not in low.src.broken_labels:
+                    diags.error("E-SYM-GLOBAL-UNDEF", g.span, f"GLOBAL {g.name}: no such label in this file")
                 continue
             if g.name in exports and exports[g.name].file != low.file_index:
                 diags.error("E-SYM-DUP-GLOBAL", g.span, f"label {g.name} is also exported at {where[g.name]}")
@@ -754,8 +757,11 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
             found = exports.get(name)
             if found is not None:
                 return found
-            if not labels_incomplete:       # else the unreadable module (already reported) may export it
+            # (not again when the module that would export it is unreadable, or its LBL line was rejected)
+            if not labels_incomplete and not any(name in o.src.broken_labels for o in lowerings):
                 diags.error("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
+            return None
+        if name in low.src.broken_labels:   # its LBL line was rejected already
             return None
         elsewhere = [o.src.path for o in lowerings if name in o.labels]
         hint = f" (it is defined in {elsewhere[0]}: add GLOBAL there and EXTERN here)" if elsewhere else ""
@@ -776,7 +782,7 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
         name = spelled(name, low.labels)
         if name in low.labels:
             low.ops[index] = dataclasses.replace(low.ops[index], target=low.labels[name])
-        else:
+        elif name not in low.src.broken_labels:
             elsewhere = [o.src.path for o in lowerings if name in o.labels]
             where = f"; it is in {elsewhere[0]} (jumps stay inside a file, A-31)" if elsewhere else ""
             diags.error("E-JUMP-SCOPE", span, f"jump target {name} is not a label of this file{where}")

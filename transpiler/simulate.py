@@ -19,7 +19,7 @@ from .ir import Program
 from .parse import MpParser
 from .pipeline import compile_project
 from .scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
-from .semantics import PROFILES, SemanticsError, make_semantics
+from .semantics import Semantics, PROFILES, SemanticsError, make_semantics
 from .shim import NcActionError, ShimUnavailable, UnknownModule
 from .stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
 from .traces import TraceRecorder
@@ -222,22 +222,31 @@ def _print(items: list[Diagnostic], stream: Any = None) -> None:
         print(d.render(), file=stream or sys.stderr)
 
 
-def cmd_simulate(args: argparse.Namespace) -> int:
-    path: Path = args.scenario
-    if not path.is_file():
-        raise UsageError(f"scenario file '{path}' does not exist")
-    scenario_profile, scenario_semantics, sem_span = _peek(path)
-    overrides = {str(k): v for k, v in scenario_semantics.items()}
+def scenario_semantics(args: argparse.Namespace, path: Path | None) -> Semantics | None:
+    """Profile and semantic choices: the scenario's `profile`/`semantics`, overridden by --profile and -S.
+
+    Prints the error and returns None when a setting is unknown or invalid."""
+    scenario_profile, overrides, sem_span = _peek(path) if path is not None else (None, {}, None)
+    overrides = {str(k): v for k, v in overrides.items()}
     for item in args.semantic_overrides:
         if "=" not in item:
             raise UsageError(f"-S expects KEY=VALUE, got '{item}'")
         key, value = item.split("=", 1)
         overrides[key.strip()] = value.strip()
     try:
-        semantics = make_semantics(args.profile or scenario_profile or "itnc530", overrides)
+        return make_semantics(args.profile or scenario_profile or "itnc530", overrides)
     except SemanticsError as exc:
-        where = sem_span or Span(str(path), 1, 1)
+        where = sem_span or Span(str(path or "<command line>"), 1, 1)
         print(f"{where}: error[E-SCENARIO]: {exc}", file=sys.stderr)
+        return None
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    path: Path = args.scenario
+    if not path.is_file():
+        raise UsageError(f"scenario file '{path}' does not exist")
+    semantics = scenario_semantics(args, path)
+    if semantics is None:
         return EXIT_BAD_INPUT
     result = compile_project(options_from_args(args), semantics)
     _print(result.diagnostics.items)

@@ -49,11 +49,18 @@ class ProjectFolders:
             return None
         search = ([relative_to] if relative_to else []) + self.roots
         for root in search:
-            found = _find_case_insensitive(root, parts)
+            try:
+                found = _find_case_insensitive(root, parts)
+                escapes = found is not None and not self.inside(found)
+            except (OSError, ValueError, RuntimeError) as exc:
+                # The file system rejects the name (too long, NUL byte) or meets a symlink loop: no such file.
+                diags.error("E-FILE-NOT-FOUND", at, f"file '{clean[:120]}' cannot be looked up: "
+                            f"{getattr(exc, 'strerror', None) or exc}"[:300])
+                return None
+            if escapes:
+                diags.error("E-FILE-ESCAPE", at, f"'{clean}' resolves outside the project folders (symlink)")
+                return None
             if found is not None:
-                if not self.inside(found):
-                    diags.error("E-FILE-ESCAPE", at, f"'{clean}' resolves outside the project folders (symlink)")
-                    return None
                 return found
         diags.error("E-FILE-NOT-FOUND", at, f"file '{clean}' not found in {', '.join(map(str, self.roots))}")
         return None

@@ -86,20 +86,45 @@ def check_blark(st_text: str, filename: str) -> list[str]:
 
     text, problems = strip_configuration(st_text)
     messages = [f"{filename}:{problem}" for problem in problems]
-    try:
-        result = parse_source_code(text, fn=filename)
-        error = result.exception
-        if error is None:
-            result.transform()
-    except Exception as exc:  # blark's transformer may fail on trees it accepted; that is a finding, not a crash
-        error = exc
-    if error is not None:
-        line = getattr(error, "line", None)
-        column = getattr(error, "column", None)
-        where = f"{filename}:{line}:{column}" if isinstance(line, int) and line > 0 else f"{filename}:1:1"
-        first = str(error).strip().splitlines()
-        messages.append(f"{where}: error: blark: {first[0] if first else type(error).__name__}")
+    # blark parses with Earley, which is far slower than linear on a long file: give it one top-level
+    # declaration at a time, padded with blank lines so that its line numbers stay those of the file.
+    lines = text.split("\n")
+    for start, end in _top_level_chunks(lines):
+        chunk = "\n" * start + "\n".join(lines[start:end])
+        try:
+            result = parse_source_code(chunk, fn=filename)
+            error = result.exception
+            if error is None:
+                result.transform()
+        except Exception as exc:  # blark's transformer may fail on trees it accepted; that is a finding, not a crash
+            error = exc
+        if error is not None:
+            line = getattr(error, "line", None)
+            column = getattr(error, "column", None)
+            where = f"{filename}:{line}:{column}" if isinstance(line, int) and line > 0 else f"{filename}:{start + 1}:1"
+            first = str(error).strip().splitlines()
+            messages.append(f"{where}: error: blark: {first[0] if first else type(error).__name__}")
     return messages
+
+
+_TOP_START = re.compile(r"^(TYPE|FUNCTION_BLOCK|FUNCTION|PROGRAM|VAR_GLOBAL)\b", re.IGNORECASE)
+_TOP_END = re.compile(r"^(END_TYPE|END_FUNCTION_BLOCK|END_FUNCTION|END_PROGRAM|END_VAR)\b", re.IGNORECASE)
+
+
+def _top_level_chunks(lines: list[str]) -> list[tuple[int, int]]:
+    """Line ranges [start, end) of the top-level declarations (a declaration starts at column 0)."""
+    chunks: list[tuple[int, int]] = []
+    start = None
+    for index, line in enumerate(lines):
+        if start is None and _TOP_START.match(line):
+            start = index
+        elif start is not None and _TOP_END.match(line) and not line.startswith((" ", "\t")):
+            if (lines[start].upper().startswith("VAR_GLOBAL") or not line.upper().startswith("END_VAR")):
+                chunks.append((start, index + 1))
+                start = None
+    if start is not None or not chunks:
+        chunks.append((0 if start is None else start, len(lines)))
+    return chunks
 
 
 def find_iec2c() -> Path | None:

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
-import sys
 from decimal import Decimal
 from pathlib import Path
 from typing import Mapping
 
-from .diagnostics import Diagnostics, NO_SPAN, Span
+from .diagnostics import Diagnostics, NO_SPAN
 from .iomap import IoMap, MapRow
 from .ir import Program
 from .parse import MpParser

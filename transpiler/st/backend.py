@@ -372,7 +372,6 @@ def library_global(name: str, typ: str, init: str, comment: str):
 def add_externals(project: IecProject) -> IecProject:
     """Give every POU that reads a global a VAR_EXTERNAL declaration of it (found in its body text)."""
     globals_by_upper = {v.name.upper(): v for s in project.configuration.globals for v in s.vars}
-    constant_types = set()
     new_pous = []
     ident = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
     for pou in project.pous:

@@ -78,7 +78,6 @@ class Layout:
         string_indexed = False
         timers: set[int] = set()
         counters: set[int] = set()
-        sem = self.program.semantics
         prof = self.profile
         for f in self.program.files:
             for op in f.ops:

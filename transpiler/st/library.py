@@ -130,7 +130,7 @@ def counter_fb(semantics: Semantics) -> Pou:
     edges = semantics["counter_counts"] == "rising_edges"
     consumed = semantics["counter_start_consumed"]
     release = "RELEASE AND NOT LAST_RELEASE" if edges else "RELEASE"
-    body = (f"IF START THEN\n    COUNT := PRESET;\n" + ("    START := FALSE;\n" if consumed else "")
+    body = ("IF START THEN\n    COUNT := PRESET;\n" + ("    START := FALSE;\n" if consumed else "")
             + f"ELSIF COUNT > 0 AND {release} THEN\n    COUNT := COUNT - 1;\nEND_IF;\n"
             + "LAST_RELEASE := RELEASE;\nRUNNING := COUNT > 0;")
     return Pou("HH_COUNTER", "FUNCTION_BLOCK", (

@@ -283,7 +283,6 @@ class Structurer:
         then_lines = self._branch(i + 1, t if else_end is None else last, live_join)
         else_lines: list[str] = []
         if else_end is not None:
-            after_then = self.ex.snapshot()
             self.ex.restore(snap)
             else_lines = self._branch(t, else_end, live_join)
         self.ex.s.regs = {k: None for k in self.ex.s.regs}
@@ -332,7 +331,6 @@ class Structurer:
             raise NotStructured("jumps into the middle of a loop", h)
         if any(s >= h and s != j for s in self.jumps_to[h]):
             raise NotStructured("loop with several back edges", h)
-        head = self.ops[h]
         tail = self.ops[j]
         self.ex.flush(self._live(h) | frozenset(["LA"]))
         self.ex.index = h
