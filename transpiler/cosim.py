@@ -7,7 +7,7 @@ import time
 from typing import Callable, Iterable, Protocol
 
 from .interp.machine import Machine
-from .interp.timers import load_presets
+from .presets import load_presets
 from .diagnostics import Diagnostics
 from .iomap import IoMap
 from .ir import Program

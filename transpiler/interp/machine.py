@@ -29,7 +29,8 @@ from .faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineCon
 from .state import MachineState, sext
 from .submit import SubmitQueue
 from .support import Runtime
-from .timers import TimerService, load_presets
+from ..presets import load_presets
+from .timers import TimerService
 
 PSEUDO = ("LA", "WA", "X", "SA")
 WriteLike = Any   # stimulus.Write (ref, value, name), or a (kind, addr, value) tuple

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from decimal import Decimal, ROUND_CEILING
+from decimal import Decimal
 from typing import Mapping
 
 from ..diagnostics import Diagnostics, Span
 from ..iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
                          Task, VarSection)
 from ..ir import CallTarget, Operand, Program
+from ..presets import COUNTER_MP, TIMER_MP, load_presets
 from ..resolve import routine_body
 from . import library
 from .layout import Layout
@@ -44,14 +45,6 @@ class StResult:
     counters: tuple[int, ...]
     presets: Mapping[str, int]          # preset variable -> value in cycles
     preset_vars: Mapping[tuple[int, int], str]   # (MP number, index) -> preset variable
-
-
-def timer_preset_cycles(value: Decimal, semantics, cycle_time_ms: int | None = None) -> int:
-    """Spec 9.3: seconds -> ceil(t / cycle time) with exact decimals; cycle profiles use the integer as is."""
-    if semantics["timer_unit"] == "seconds":
-        cycle = Decimal(int(cycle_time_ms or semantics["cycle_time_ms"]))
-        return int((value * 1000 / cycle).to_integral_value(ROUND_CEILING))
-    return int(value)
 
 
 class StBackend:
@@ -269,22 +262,19 @@ class StBackend:
         ), body, comment=f"indexed access to the {kind} operands: named operands keep their variables")
 
     def _presets(self, layout: Layout) -> dict[str, int]:
+        """Preset variables (in cycles) of the timers and counters the program uses; the MP file gives the defaults."""
         presets: dict[str, int] = {}
         self.preset_vars: dict[tuple[int, int], str] = {}
-        prof = self.semantics.profile
-        for t in layout.timers:
-            value = self.mp.get((4110, t), Decimal(0))
-            cycles = timer_preset_cycles(value, self.semantics)
-            name = self.layout.add_register(f"mp:4110.{t}", f"MP4110_{t}", "DINT",
-                                            f"timer T{t} preset in cycles (MP4110.{t} = {value})", str(cycles), group="mp")
-            presets[name] = cycles
-            self.preset_vars[(4110, t)] = name
-        for c in layout.counters:
-            value = self.mp.get((4120, c), Decimal(0))
-            name = self.layout.add_register(f"mp:4120.{c}", f"MP4120_{c}", "DINT",
-                                            f"counter C{c} preset (MP4120.{c} = {value})", str(int(value)), group="mp")
-            presets[name] = int(value)
-            self.preset_vars[(4120, c)] = name
+        timers, counters = load_presets(self.mp, self.semantics, int(self.semantics["cycle_time_ms"]), self.diags)
+        for number, used, values, what in ((TIMER_MP, layout.timers, timers, "timer T"),
+                                           (COUNTER_MP, layout.counters, counters, "counter C")):
+            for n in used:
+                cycles = values.get(n, 0)
+                name = self.layout.add_register(f"mp:{number}.{n}", f"MP{number}_{n}", "DINT",
+                                                f"{what}{n} preset in cycles (MP{number}.{n} = "
+                                                f"{self.mp.get((number, n), Decimal(0))})", str(cycles), group="mp")
+                presets[name] = cycles
+                self.preset_vars[(number, n)] = name
         return presets
 
     def _with_services(self, main: Pou, layout: Layout) -> Pou:
