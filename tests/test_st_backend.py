@@ -99,11 +99,17 @@ def test_sample_keeps_names_comments_and_source_tags():
     assert "HH_LA :=" not in coolant.body
 
 
-def test_output_is_deterministic(monkeypatch):
-    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
-    _, first = transpile_sample()
-    _, second = transpile_sample()
-    assert first.files == second.files
+def test_output_is_deterministic(tmp_path):
+    """Two processes with different hash seeds (set and dict orders) write byte-identical files."""
+    outputs = []
+    for seed in ("1", "2"):
+        out = tmp_path / f"out{seed}"
+        env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONHASHSEED": seed, "SOURCE_DATE_EPOCH": "1700000000"}
+        proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "transpile", str(SAMPLE / "Main_PGM.src"),
+                               "--out", str(out)], capture_output=True, text=True, env=env)
+        assert proc.returncode == 0, proc.stderr
+        outputs.append({p.name: p.read_bytes() for p in out.iterdir()})
+    assert outputs[0] == outputs[1]
 
 
 def test_golden_sample_output_is_reviewed():

@@ -12,7 +12,8 @@ from typing import Any, Callable
 from xml.sax.saxutils import escape, quoteattr
 
 from .cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
-from .cosim import CosimResult, StSide, builtin_side_factory, cosimulate
+from .atomic import write_files_atomically
+from .cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from .diagnostics import CompileFailed, Diagnostics, NO_SPAN
 from .iomap import IoMap
 from .ir import Program
@@ -21,6 +22,7 @@ from .scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError,
 from .shim import ShimUnavailable
 from .simulate import program_operands, project_names, scenario_semantics
 from .stimulus import materialize_random, scenario_to_yaml
+from .traces import TraceRecorder
 from .transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
 
 SHRINK_BUDGET = 150
@@ -232,7 +234,7 @@ def _backend(choice: str, st_text: str, st_name: str, transpiled) -> tuple[str, 
         elif choice == "matiec":
             return "matiec", None, "iec2c not found ($MATIEC_HOME/iec2c or PATH)"
     factory = _builtin(st_text, st_name)
-    return "builtin", factory, ""
+    return "builtin", factory, "" if factory is not None else f"the built-in ST executor cannot load {st_name}"
 
 
 def _builtin(st_text: str, st_name: str):
@@ -301,7 +303,6 @@ def _print_outcomes(outcomes: list[Outcome], backend: str, coverage: dict[str, A
 
 
 def _write_json(path: Path, outcomes: list[Outcome], backend: str, coverage: dict[str, Any]) -> None:
-    from .atomic import write_files_atomically
     runs = []
     for o in outcomes:
         r = o.result
@@ -315,7 +316,6 @@ def _write_json(path: Path, outcomes: list[Outcome], backend: str, coverage: dic
 
 
 def _write_junit(path: Path, outcomes: list[Outcome], backend: str) -> None:
-    from .atomic import write_files_atomically
     failures = sum(1 for o in outcomes if o.result.divergence)
     errors = sum(1 for o in outcomes if o.result.error)
     total = sum(o.result.seconds for o in outcomes)
@@ -339,8 +339,6 @@ def _write_junit(path: Path, outcomes: list[Outcome], backend: str) -> None:
 
 def _write_vcd(folder: Path, scenario: Scenario, res: CosimResult, traces: list, program: Program,
                names: NameTable, iomap: IoMap) -> None:
-    from .cosim import comparison_for
-    from .traces import TraceRecorder
     columns = list(comparison_for(program, names, iomap).columns)
     folder.mkdir(parents=True, exist_ok=True)
     for side, pick in (("original", 1), ("translated", 2)):

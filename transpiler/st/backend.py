@@ -14,10 +14,10 @@ from ..ir import CallTarget, Operand, Program
 from ..presets import COUNTER_MP, TIMER_MP, load_presets
 from ..resolve import routine_body
 from . import library
-from .layout import Layout
+from .layout import GlobalVar, Layout
 from .liveness import Liveness
 from .names import NameTable
-from .structure import NotStructured, RoutineInfo, Structurer
+from .structure import NotStructured, RoutineInfo, Structurer, state_machine
 from .symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
 
 GROUP_TITLES = [("io_in", "Inputs (process image)"), ("io_out", "Outputs (process image)"),
@@ -153,7 +153,7 @@ class StBackend:
                                        comment=f"constant field {o.text} (KFIELD)"))
             self.kfields[key] = (name, o.kfield)
             init = "[" + ", ".join(str(v) for v in o.kfield) + "]"
-            self.layout.globals[name] = library_global(name, tname, init, f"KFIELD {o.text}")
+            self.layout.globals[name] = GlobalVar(name, tname, "kfield", initial=init, comment=f"KFIELD {o.text}")
         return self.kfields[key][0]
 
     def _module_call(self, number: int) -> str:
@@ -204,7 +204,7 @@ class StBackend:
             temps.clear()
             callees.clear()
             ctx.out = emitter
-            self._state_machine(info, ctx, temp)
+            state_machine(info, Executor(ctx))
         except Unsupported as exc:
             self.untranslated.append((file.ops[body[0]].span if body else Span(file.path, 1), str(exc)))
             self.diags.warning("E-UNSUPPORTED", file.ops[body[0]].span if body else Span(file.path, 1),
@@ -238,10 +238,6 @@ class StBackend:
             comment += "\n" + "\n".join(comments)
         return Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "\n".join(lines),
                    comment=comment, source_map=(SourceRange(file.path, first, last),))
-
-    def _state_machine(self, info: RoutineInfo, ctx: RoutineContext, temp) -> None:
-        from .structure import state_machine
-        state_machine(info, Executor(ctx))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (spec 6.13)."""
@@ -352,11 +348,6 @@ class StBackend:
         inst = self.names.name("instance", f"PLC_{self.main_pou}")
         return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
                              (Task(task, cycle, 0),), (ProgramInstance(inst, task, self.main_pou),), tuple(sections))
-
-
-def library_global(name: str, typ: str, init: str, comment: str):
-    from .layout import GlobalVar
-    return GlobalVar(name, typ, "kfield", initial=init, comment=comment)
 
 
 def add_externals(project: IecProject) -> IecProject:

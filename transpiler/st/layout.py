@@ -89,8 +89,6 @@ class Layout:
                         bit_indexed.add(o.kind)
                     n = op.nbits or 1
                     bits[o.kind].update(range(o.addr, o.addr + n))
-                    if op.code == "INC" or op.code == "DEC":
-                        pass
                     if o.kind == "T":
                         for a in range(o.addr, o.addr + n):
                             if prof.timer_start[0] <= a <= prof.timer_start[1]:
@@ -193,14 +191,15 @@ class Layout:
         wanted = syms[0].name if syms else f"{kind}{addr}"
         name = self.names.name(f"{kind}{addr}", wanted)
         self._bit_var[key] = name
-        address = None
-        group = "nc" if self._is_nc(kind, addr, syms) else {"I": "io_in", "O": "io_out", "T": "timer", "C": "timer"}.get(kind, "marker")
-        if kind == "I":
-            address = f"%IX{addr // 8}.{addr % 8}"
-        elif kind == "O":
-            address = f"%QX{addr // 8}.{addr % 8}"
-        self._add_global(GlobalVar(name, "BOOL", group if kind not in "IO" else {"I": "io_in", "O": "io_out"}[kind],
-                                   address=address, comment=self._comment(kind, addr)))
+        # Inputs and outputs are located in the process image; NC-owned operands get their own list.
+        address = {"I": f"%IX{addr // 8}.{addr % 8}", "O": f"%QX{addr // 8}.{addr % 8}"}.get(kind)
+        if kind in "IO":
+            group = {"I": "io_in", "O": "io_out"}[kind]
+        elif self._is_nc(kind, addr, syms):
+            group = "nc"
+        else:
+            group = {"T": "timer", "C": "timer"}.get(kind, "marker")
+        self._add_global(GlobalVar(name, "BOOL", group, address=address, comment=self._comment(kind, addr)))
         self._row(kind, addr, name, "BOOL")
         return name
 

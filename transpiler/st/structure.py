@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
+from ..iec_model import st_comment
 from ..ir import CallTarget, FileCode, Op
 from . import exprs as E
 from .symbolic import Executor, Unsupported
@@ -153,8 +154,6 @@ class Structurer:
                 raise Unsupported(f"submit jobs ({op.mnemonic}) at {op.span}")
             self.ex.run(op, i)
             i += 1
-        if hi < len(self.ops) and hi in self.jumps_to:
-            pass
 
     def _end(self, i: int, hi: int) -> int:
         op = self.ops[i]
@@ -219,7 +218,6 @@ class Structurer:
             note = op.case_notes[n] if n < len(op.case_notes) else None
             comment = ""
             if note and note[1]:
-                from ..iec_model import st_comment
                 comment = " " + st_comment(" ".join(note[1]))
             self.out.line(f"    {n}: {self.info.call_name(target)};{comment}")
         self.out.line("END_CASE;")
@@ -417,12 +415,14 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
                 ex.flush(all_regs)
                 next_state = str(block_id[op.target])
                 break
-            if op.code in ("JPT", "JPF"):
+            if op.code in ("JPT", "JPF", "EMT", "EMF"):
+                # Conditional jump or return: the taken branch goes to its target (or ends), else fall through.
                 ex.flush(all_regs)
                 la = ex.s.reg("LA")
-                cond = la if op.code == "JPT" else E.b_not(la)
+                cond = la if op.code in ("JPT", "EMT") else E.b_not(la)
+                taken = block_id[op.target] if op.code in ("JPT", "JPF") else -1
                 out.line(f"IF {cond.text} THEN")
-                out.line(f"    HH_STATE := {block_id[op.target]};")
+                out.line(f"    HH_STATE := {taken};")
                 out.line("ELSE")
                 out.line(f"    HH_STATE := {block_id.get(i + 1, -1)};")
                 out.line("END_IF;")
@@ -431,17 +431,6 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
             if op.code == "EM":
                 ex.flush(all_regs)
                 next_state = "-1"
-                break
-            if op.code in ("EMT", "EMF"):
-                ex.flush(all_regs)
-                la = ex.s.reg("LA")
-                cond = la if op.code == "EMT" else E.b_not(la)
-                out.line(f"IF {cond.text} THEN")
-                out.line("    HH_STATE := -1;")
-                out.line("ELSE")
-                out.line(f"    HH_STATE := {block_id.get(i + 1, -1)};")
-                out.line("END_IF;")
-                next_state = ""
                 break
             if op.code in ("CALL", "CALLT", "CALLF"):
                 structurer._call(op, i)

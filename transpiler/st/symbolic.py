@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
+from ..iec_model import st_comment
 from ..ir import Op, Operand
 from . import exprs as E
 from .exprs import Expr
@@ -38,7 +39,6 @@ class Emitter:
         self.pending_comments.append(text)
 
     def flush_comments(self) -> None:
-        from ..iec_model import st_comment
         for text in self.pending_comments:
             self.lines.append("    " * self.indent + st_comment(text))
         self.pending_comments = []
