@@ -25,6 +25,7 @@ class StSide(Protocol):
     def get(self, path: str): ...
     def set(self, path: str, value) -> None: ...
     def run_cycle(self) -> None: ...
+    # Optional: `bulk_reader(places) -> () -> list` reads all compared places at once (the matiec side has one).
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,6 +142,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     comparison = comparison_for(program, names, iomap)
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
+    bulk_reader = getattr(side, "bulk_reader", None)
+    translated = (bulk_reader([acc.place for acc in accessors]) if bulk_reader is not None
+                  else lambda: [acc.read(side) for acc in accessors])
     driver = _StDriver(side, iomap, program, cycle_time)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     start = time.perf_counter()
@@ -163,7 +167,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             break
         result.cycles_run = cycle + 1
         a_values = original()
-        b_values = [acc.read(side) for acc in accessors]
+        b_values = translated()
         if record is not None:
             record(cycle, a_values, b_values)
         if a_values != b_values:

@@ -27,12 +27,23 @@ class MapRow:
 
 
 @dataclasses.dataclass(frozen=True)
+class Place:
+    """Where an operand's value lives in the ST program, for executors that read many operands in one call."""
+
+    path: str                  # the variable, or for width > 0 the array element holding the operand's first byte
+    width: int = 0             # 0: the variable itself; 1, 2, 4: that many bytes of a byte array, combined
+    big_endian: bool = False
+    text: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
 class Accessor:
     """Reads and writes one operand in an ST runtime with the operand's HEIDENHAIN value convention."""
 
     operand: str
     read: Callable[[StRuntime], int | str]
     write: Callable[[StRuntime, int | str], None]
+    place: Place
 
 
 def _sext(value: int, bits: int) -> int:
@@ -64,16 +75,17 @@ def _accessor(row: MapRow) -> Accessor:
             for significance, offset in enumerate(order):
                 rt.set(f"{arr}[{base + offset}]", (v >> (8 * significance)) & 0xFF)
 
-        return Accessor(row.operand, read, write)
+        return Accessor(row.operand, read, write, Place(row.iec, size, not little))
     if typ == "BOOL":
         return Accessor(row.operand, lambda rt, p=row.iec: 1 if rt.get(p) else 0,
-                        lambda rt, v, p=row.iec: rt.set(p, bool(int(v))))
+                        lambda rt, v, p=row.iec: rt.set(p, bool(int(v))), Place(row.iec))
     if typ in BYTES or typ in ("LINT",):
         bits = 8 * BYTES.get(typ, 8)
         return Accessor(row.operand, lambda rt, p=row.iec: int(rt.get(p)),
-                        lambda rt, v, p=row.iec, b=bits: rt.set(p, _sext(int(v), b)))
+                        lambda rt, v, p=row.iec, b=bits: rt.set(p, _sext(int(v), b)), Place(row.iec))
     if typ == "STRING":
-        return Accessor(row.operand, lambda rt, p=row.iec: str(rt.get(p)), lambda rt, v, p=row.iec: rt.set(p, str(v)))
+        return Accessor(row.operand, lambda rt, p=row.iec: str(rt.get(p)), lambda rt, v, p=row.iec: rt.set(p, str(v)),
+                        Place(row.iec, text=True))
     raise ValueError(f"io_map: unsupported IEC type '{typ}' for {row.operand}")
 
 

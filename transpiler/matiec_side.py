@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Callable
 
 from .iec_model import IecProject
+from .iomap import Place
 from .st_check import matiec_home
 
 SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
@@ -94,13 +95,34 @@ def harness_source(project: IecProject) -> str:
              "    return s->len;", "}", ""]
     sput += ["    }", "    if (!s) return;", "    size_t n = strlen(text);", "    if (n > STR_MAX_LEN) n = STR_MAX_LEN;",
              "    memcpy(s->body, text, n);", "    s->len = (__strlen_t)n;", "}", ""]
-    return "\n".join(lines + get + put + sget + sput)
+    return "\n".join(lines + get + put + sget + sput + BULK_READ)
+
+
+# One call per cycle reads every compared operand: a column is (variable id, index, width, big endian); width 0 reads
+# the variable, 1/2/4 combines that many bytes of a byte array into a signed value.
+BULK_READ = [
+    "void hh_get_many(int n, const int *columns, long long *out) {",
+    "    for (int i = 0; i < n; i++) {",
+    "        const int *c = columns + 4 * i;",
+    "        int width = c[2];",
+    "        if (width == 0) { out[i] = hh_get(c[0], c[1]); continue; }",
+    "        unsigned long long v = 0;",
+    "        for (int k = 0; k < width; k++) {",
+    "            int offset = c[3] ? width - 1 - k : k;",
+    "            v |= ((unsigned long long)hh_get(c[0], c[1] + offset) & 0xFFu) << (8 * k);",
+    "        }",
+    "        unsigned long long sign = 1ULL << (8 * width - 1);",
+    "        out[i] = (long long)((v ^ sign) - sign);",
+    "    }",
+    "}", ""]
 
 
 def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
     """Compile once per distinct ST text (cached by hash); raises MatiecBuildError with the tool's message."""
     home = matiec_home(iec2c)
-    digest = hashlib.sha256((st_text + str(iec2c)).encode("utf-8")).hexdigest()[:20]
+    harness = harness_source(project)
+    # The harness is part of the key: a changed harness must not reuse a library built from an older one.
+    digest = hashlib.sha256((st_text + str(iec2c) + harness).encode("utf-8")).hexdigest()[:20]
     folder = _cache_dir() / digest
     lib = folder / "libhhplc.so"
     if lib.is_file():
@@ -115,7 +137,7 @@ def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
     if run.returncode != 0:
         shutil.rmtree(work, ignore_errors=True)
         raise MatiecBuildError(f"iec2c failed: {(run.stdout + run.stderr).strip()[:2000]}")
-    (gen / "hh_harness.c").write_text(harness_source(project), encoding="utf-8")
+    (gen / "hh_harness.c").write_text(harness, encoding="utf-8")
     sources = [str(gen / "hh_harness.c")] + sorted(str(p) for p in gen.glob("*.c")
                                                    if p.name not in ("POUS.c", "hh_harness.c"))
     cc = subprocess.run(["gcc", "-shared", "-fPIC", "-O1", "-fwrapv", "-Wno-unused-function", "-w",
@@ -141,6 +163,7 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
     lib.hh_set.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_longlong]
     lib.hh_get_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
     lib.hh_set_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
+    lib.hh_get_many.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_longlong)]
     variables = _variables(project)
     ids = {name: (n, typ, shape) for n, (name, typ, shape) in enumerate(variables)}
     buffer = ctypes.create_string_buffer(512)
@@ -183,5 +206,26 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
 
         def run_cycle(self) -> None:
             lib.hh_run()
+
+        def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
+            """Reads all places in one C call (texts, which C cannot return as numbers, one by one)."""
+            spec = (ctypes.c_int * (4 * len(places)))()
+            texts = []
+            for i, place in enumerate(places):
+                if place.text:
+                    texts.append((i, place.path))
+                    continue
+                n, index, _, _ = locate(place.path)
+                spec[4 * i:4 * i + 4] = [n, index, place.width, int(place.big_endian)]
+            out = (ctypes.c_longlong * len(places))()
+            count = len(places)
+
+            def read() -> list:
+                lib.hh_get_many(count, spec, out)
+                values = out[:]
+                for i, path in texts:
+                    values[i] = self.get(path)
+                return values
+            return read
 
     return _Side
