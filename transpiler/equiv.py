@@ -35,11 +35,14 @@ class Outcome:
     shrink_runs: int = 0
 
 
-def random_scenario(program: Program, names: NameTable, cycles: int, seed: int) -> Scenario:
-    """N cycles in which every input the program reads may toggle (probability 0.05 per input and cycle)."""
+def random_scenario(program: Program, names: NameTable, cycles: int, seed: int,
+                    machine_parameters: Path | None = None) -> Scenario:
+    """N cycles in which every input the program reads may toggle (probability 0.05 per input and cycle); timers
+    and counters take their presets from the project's MP file when there is one."""
     used, _, _ = program_operands(program)
     inputs = sorted({names.display_name(r) for r in used if r.kind == "I"}) or ["I0"]
     scenario = Scenario(name=f"random_seed{seed}", cycles=cycles, profile=program.semantics.profile.name,
+                        machine_parameters=machine_parameters,
                         random=RandomStimulus(seed=seed, inputs=inputs, toggle_probability=0.05))
     return bind(scenario, names)
 
@@ -176,7 +179,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         for path in args.scenario:
             scenarios.append(load_scenario(path, names))
         if args.random_cycles > 0:
-            scenarios.append(random_scenario(program, names, args.random_cycles, args.seed))
+            scenarios.append(random_scenario(program, names, args.random_cycles, args.seed, mp_path))
     except ScenarioError as exc:
         for d in exc.diagnostics:
             print(d.render(), file=sys.stderr)

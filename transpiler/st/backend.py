@@ -16,7 +16,7 @@ from ..resolve import routine_body
 from . import library
 from .layout import GlobalVar, Layout
 from .liveness import Liveness
-from .names import NameTable
+from .names import TEMP_PREFIX, NameTable
 from .structure import NotStructured, RoutineInfo, Structurer, state_machine
 from .symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
 
@@ -171,7 +171,7 @@ class StBackend:
         pou_name = self.main_pou if is_main else self.pou_names[key]
 
         def temp(typ: str) -> str:
-            name = f"t{len(temps) + 1}"
+            name = f"{TEMP_PREFIX}{len(temps) + 1}"
             temps.append((name, typ))
             return name
 

@@ -21,6 +21,11 @@ TON TP TRUNC EOF BUFSIZ INT_MAX CHAR_BIT EXIT_SUCCESS EXIT_FAILURE INFINITY NAN 
 CHAR VOID THIS SUPER METHOD CLASS INTERFACE SIZEOF ADR
 """.split())
 MAX_LEN = 64
+# Temporaries of a POU body are named tmp1, tmp2, ... They are declared per POU, after the globals the body uses may
+# have been named, and IEC names are case-insensitive: so no other name may ever take this form (a symbol that
+# wants it is renamed), or a temporary could shadow an operand such as T5.
+TEMP_PREFIX = "tmp"
+_TEMP_NAME = re.compile(TEMP_PREFIX + r"[0-9]+", re.IGNORECASE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,8 +59,10 @@ class NameTable:
         legal, reason = legalise(wanted)
         candidate = legal
         n = 2
-        while candidate.upper() in self._taken or candidate.upper() in RESERVED:
-            if candidate.upper() in RESERVED and not reason:
+        while candidate.upper() in self._taken or candidate.upper() in RESERVED or _TEMP_NAME.fullmatch(candidate):
+            if _TEMP_NAME.fullmatch(candidate) and not reason:
+                reason = "the form of the translator's temporaries"
+            elif candidate.upper() in RESERVED and not reason:
                 reason = "IEC keyword or standard name"
             elif not reason:
                 reason = "differs from another name only in case" if legal.upper() in self._taken else reason
