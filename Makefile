@@ -39,5 +39,15 @@ bench: venv shim
 fuzz: venv
 	$(PY) -m tests.fuzz --mutations 10000
 
+# Mutation self-check of the co-simulation on the sample (issue 7): prints the detection rate and the survivors.
+mutants: venv shim
+	$(PY) -m tests.mutants
+
+# Random-program differential testing (issue 8): make difftest N=10000 SEED=1
+N ?= 200
+SEED ?= 1
+difftest: venv shim
+	$(PY) -m tests.difftest.run --count $(N) --seed $(SEED) --reduce
+
 clean:
 	rm -rf out build runtime_shim/build .pytest_cache

@@ -202,9 +202,23 @@ class Harness:
         self.scenarios = sorted(candidates, key=lambda s: s.cycles)
 
     def _perturbed(self, scenario: Scenario, inputs: list[str], seed: int) -> Scenario:
-        """A hand-written scenario with rare random toggles of every input: the states next to the intended path."""
+        """A hand-written scenario from dirty memory (every marker and word the program writes starts with a random
+        value, as after a restart with remanent memory) with rare random toggles of every input: the states next to
+        the intended path, and initialisations that would otherwise only ever write the value already there."""
+        rng = random.Random(seed)
+        _, written, _ = program_operands(self.program)
+        dirty = {}
+        for ref in sorted(written, key=lambda r: (r.kind, r.addr)):
+            if ref.kind == "M":
+                dirty[self.names.display_name(ref)] = rng.randrange(2)
+            elif ref.kind in "BWD":
+                bits = {"B": 8, "W": 16, "D": 32}[ref.kind]
+                value = (rng.choice(WORD_VALUES) if rng.random() < 0.5
+                         else rng.randrange(-(1 << (bits - 1)), 1 << (bits - 1)))
+                dirty[self.names.display_name(ref)] = max(-(1 << (bits - 1)), min((1 << (bits - 1)) - 1, value))
+        initial = {**dirty, **scenario.initial}
         return bind(scenario.model_copy(update={
-            "name": f"{scenario.name}_perturbed", "expect": [],
+            "name": f"{scenario.name}_perturbed", "expect": [], "initial": initial,
             "random": RandomStimulus(seed=seed, inputs=inputs, toggle_probability=PERTURBED_TOGGLE)}), self.names)
 
     def _nc_run(self, written: list[Scenario], inputs: list[str], seed: int) -> Scenario:
@@ -220,13 +234,15 @@ class Harness:
                        and profile.is_interface(r.kind, r.addr, 2 if r.kind == "W" else 4))
         cycle = 40
         while cycle < NC_RUN_CYCLES - 50:
-            kind = rng.choice(("m_function", "m_function", "tool_call", "spindle_speed", "mode", "tool_def", "gear"))
+            kind = rng.choice(("m_function", "m_function", "tool_call", "spindle_speed", "mode", "tool_def", "gear",
+                               "restart"))
             value = {"m_function": lambda: rng.choice(M_CODES),
                      "tool_call": lambda: {"tool": rng.randrange(0, 30), "pocket": rng.randrange(0, 25)},
                      "tool_def": lambda: {"tool": rng.randrange(0, 30), "pocket": rng.randrange(0, 25)},
                      "spindle_speed": lambda: rng.choice((0, 59, 60, 61, 1500, 4000, 12000)),
                      "mode": lambda: rng.choice((0, 1, 2, 5, 6)),
-                     "gear": lambda: rng.randrange(1, 3)}[kind]()
+                     "gear": lambda: rng.randrange(1, 3),
+                     "restart": lambda: rng.choice(("program", "machine_parameters"))}[kind]()
             events.append(Event(cycle=cycle, nc=NcAction(**{kind: value})))
             if words:
                 operand = rng.choice(words)
@@ -320,7 +336,7 @@ def pick_backend(choice: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--count", type=int, default=150, help="mutants to run, spread over the operators")
+    parser.add_argument("--count", type=int, default=100, help="mutants to run, spread over the operators")
     parser.add_argument("--all", action="store_true", help="run every mutation site (slow)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--backend", choices=("auto", "builtin", "matiec"), default="auto")

@@ -81,12 +81,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=REGRESSIONS, help="where reduced cases go")
     parser.add_argument("--quiet", action="store_true", help="only the summary")
     args = parser.parse_args(argv)
-    jobs = jobs_for(args)
+    start = time.perf_counter()
+    results = run_batch(jobs_for(args), args.jobs)
+    failures = [(job, v) for job, v, _ in results if v.status != OK]
+    print_summary(results, time.perf_counter() - start, quiet=args.quiet)
+    if args.reduce:
+        for job, verdict in failures:
+            print(f"reducing program {job.program_seed} ({verdict.blame}) ...", flush=True)
+            print(f"  -> {reduce_failure(job, verdict, args.out)}")
+    return 0 if not failures else 1
+
+
+def run_batch(jobs: list[Job], processes: int) -> list[tuple[Job, Verdict, float]]:
+    """Every job, in worker processes when asked; results in program-seed order."""
     start = time.perf_counter()
     results: list[tuple[Job, Verdict, float]] = []
-    if args.jobs > 1 and len(jobs) > 1:
-        with multiprocessing.get_context("fork").Pool(args.jobs) as pool:
-            for res in pool.imap_unordered(run_job, jobs, chunksize=4):
+    if processes > 1 and len(jobs) > 1:
+        with multiprocessing.get_context("fork").Pool(processes) as pool:
+            for res in pool.imap_unordered(run_job, jobs, chunksize=2):
                 results.append(res)
                 _progress(len(results), len(jobs), start)
     else:
@@ -95,14 +107,7 @@ def main(argv: list[str] | None = None) -> int:
             _progress(len(results), len(jobs), start)
     if sys.stderr.isatty():
         print(file=sys.stderr)
-    results.sort(key=lambda r: r[0].program_seed)
-    failures = [(job, v) for job, v, _ in results if v.status != OK]
-    print_summary(results, time.perf_counter() - start, quiet=args.quiet)
-    if args.reduce:
-        for job, verdict in failures:
-            print(f"reducing program {job.program_seed} ({verdict.blame}) ...", flush=True)
-            print(f"  -> {reduce_failure(job, verdict, args.out)}")
-    return 0 if not failures else 1
+    return sorted(results, key=lambda r: r[0].program_seed)
 
 
 def _progress(done: int, total: int, start: float) -> None:
