@@ -18,7 +18,15 @@ def test_regression_folder_is_not_empty():
     assert CASES, "tests/regressions/ holds the reduced cases of found bugs; it must not silently be empty"
 
 
-@pytest.mark.parametrize("folder", CASES, ids=lambda p: p.name)
+def _case(folder: Path):
+    """A case whose bug is still open (`open: true`) must keep failing: a strict xfail turns its fix into a prompt to
+    clear the flag, and a flagged case cannot silently hide a different new failure of the same folder."""
+    meta = yaml.safe_load((folder / "regression.yaml").read_text(encoding="utf-8"))
+    marks = [pytest.mark.xfail(strict=True, reason=f"open bug: {meta['detail']}")] if meta.get("open") else []
+    return pytest.param(folder, marks=marks, id=folder.name)
+
+
+@pytest.mark.parametrize("folder", [_case(f) for f in CASES])
 def test_regression_case_is_equivalent(folder):
     meta = yaml.safe_load((folder / "regression.yaml").read_text(encoding="utf-8"))
     mp = sorted(folder.glob("*.mp"))

@@ -213,6 +213,11 @@ class Structurer:
             sel_text = selector.text
         else:
             sel_text = f"{selector.typ}_TO_DINT({selector.text})"
+        if not op.case_targets:
+            # An empty table calls nothing; 'CASE x OF END_CASE;' is not valid ST (IEC needs at least one case).
+            self.out.line(f"(* CASE {sel_text} without entries: nothing to call *) {self._tag(i)}")
+            self.ex.s.regs = {k: None for k in self.ex.s.regs}
+            return
         self.out.line(f"CASE {sel_text} OF {self._tag(i)}")
         for n, target in enumerate(op.case_targets):
             note = op.case_notes[n] if n < len(op.case_notes) else None
