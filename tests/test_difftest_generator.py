@@ -1,35 +1,340 @@
-"""The random-program generator: deterministic, valid for the front end, and covering every instruction group."""
+"""The random-program generator of the differential test: deterministic, covers spec section 6, well-formed output."""
 
 from __future__ import annotations
 
+import collections
+import hashlib
+import os
 import re
+import subprocess
+import sys
+import time
+from pathlib import Path
 
-from tests.difftest.check import prepare
-from tests.difftest.generator import generate
+import pytest
 
-# One mnemonic per instruction group of spec section 6 (6.18 submit jobs and PLC module calls excluded).
-GROUPS = {"6.1 load": "LN", "6.2 assign": "SN", "6.3 logic": "XON", "6.5 arithmetic": "MOD", "6.6 compare": "<=",
-          "6.7 shift": "<<", "6.8 bit": "BT", "6.9 brackets": "A[", "6.10 stack": "PSW", "6.11 jumps": "JPF",
-          "6.12 calls": "CMT", "6.13 index": "=     X", "6.14 extended": "INCW", "6.15 structured": "WHILEF",
-          "6.15.1 case": "CASE", "6.16 strings": "S#", "6.17 kfield": "KFIELD"}
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from tests.difftest.generator import (  # noqa: E402
+    DEFAULT_OFF, FEATURES, KNOWN_DIVERGENT, GeneratedProject, default_features, generate, main as generator_main)
+from transpiler.diagnostics import Diagnostics  # noqa: E402
+from transpiler.frontend import ProjectOptions  # noqa: E402
+from transpiler.interp import Machine  # noqa: E402
+from transpiler.mnemonics import MNEMONICS, canonical  # noqa: E402
+from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.semantics import make_semantics  # noqa: E402
+from transpiler.transpile import read_mp_file  # noqa: E402
+
+COVERAGE_SEEDS = range(1, 101)
+
+# Mnemonics of spec section 6 by section; 6.18 (SUBM/RPLY/CAN) and =N (A-16, off by default) are not generated.
+SECTION_6 = {
+    "6.1 load": {"L", "LN", "L-", "LB", "LW", "LD"},
+    "6.2 assign": {"=", "B=", "W=", "D=", "S", "R", "SN", "RN"},
+    "6.3/6.4 gating": {"A", "AN", "O", "ON", "XO", "XON"},
+    "6.5 arithmetic": {"+", "-", "x", "/", "MOD"},
+    "6.6 compare": {"==", "<>", "<", ">", "<=", ">="},
+    "6.7 shift": {"<<", ">>"},
+    "6.8 bit": {"BS", "BC", "BT"},
+    "6.9 brackets": {"A[", "AN[", "O[", "ON[", "XO[", "XON[", "+[", "-[", "x[", "/[", "MOD[",
+                     "==[", "<>[", "<[", ">[", "<=[", ">=[", "]"},
+    "6.10 stack": {"PS", "PL", "PSW", "PLW", "PSL", "PLL", "PSX", "PLX"},
+    "6.11 jumps": {"JP", "JPT", "JPF"},
+    "6.12 calls": {"CM", "CMT", "CMF", "EM", "EMT", "EMF"},
+    "6.14 extended": {"INC", "DEC", "INCW", "DECW", "INCX", "DECX", "NOTL", "NOTW", "TWOC"},
+    "6.15 structured": {"IFT", "IFF", "ELSE", "ENDI", "WHILET", "WHILEF", "ENDW", "REPEAT", "UNTILT", "UNTILF",
+                        "CASE", "ENDC"},
+}
+NOT_GENERATED = {"SUBM", "RPLY", "CAN", "=N"}
+
+BIT_OPERAND = re.compile(r"^(?:[MIOTC] ?\d+|[MIOTC][A-Z]_\w+|ML_\w+|MG_\w+)(?:\[X\])?$")
+WORD_OPERAND = re.compile(r"^(?:[BWD] ?\d+|K[-+$%]?[0-9A-F]+|[BWD][GL]_\w+|KG_\w+|X|KF \w+\[X\])(?:\[X\])?$")
 
 
-def test_same_seed_same_files_and_different_seeds_differ():
-    assert generate(7).files == generate(7).files
-    assert generate(7).files != generate(8).files
+def instructions(project: GeneratedProject):
+    """(file, mnemonic, operand) of every instruction line of every .src file."""
+    for name, text in sorted(project.files.items()):
+        if not name.endswith(".src"):
+            continue
+        in_kfield = False
+        for raw in text.splitlines():
+            line = raw.split(";", 1)[0].strip() if '"' not in raw else raw.strip()
+            if not line or line.startswith("#"):
+                continue
+            word, _, rest = line.partition(" ")
+            if word.upper() == "KFIELD":
+                in_kfield = True
+            if in_kfield:
+                in_kfield = word.upper() != "ENDK"
+                continue
+            if word.upper() in ("LBL", "USES", "GLOBAL", "EXTERN"):
+                continue
+            yield name, canonical(word), rest.strip()
 
 
-def test_every_instruction_group_occurs():
-    text = "\n".join(t for s in range(60) for t in generate(s).files.values()).upper()
-    missing = [g for g, m in GROUPS.items() if not re.search(r"(^|\s)" + re.escape(m), text, re.M)]
+@pytest.fixture(scope="module")
+def projects() -> list[GeneratedProject]:
+    return [generate(seed) for seed in COVERAGE_SEEDS]
+
+
+def _digest(project: GeneratedProject) -> str:
+    h = hashlib.sha256()
+    for name in sorted(project.files):
+        h.update(name.encode() + b"\0" + project.files[name].encode() + b"\0")
+    return h.hexdigest()
+
+
+# ------------------------------------------------------------------------------------------------------------
+# determinism and API
+
+
+def test_same_seed_gives_identical_files():
+    for seed in (0, 1, 17, 123456789):
+        a, b = generate(seed), generate(seed)
+        assert a == b
+        assert _digest(a) == _digest(b)
+        assert a.seed == seed and a.main == "main.src" and a.main in a.files
+
+
+def test_same_seed_is_identical_across_processes_with_other_hash_seeds():
+    code = ("import sys, hashlib; sys.path.insert(0, sys.argv[1]);"
+            "from tests.difftest.generator import generate;"
+            "p = generate(4242, size=30);"
+            "print(hashlib.sha256(repr(sorted(p.files.items())).encode()).hexdigest())")
+    digests = set()
+    for hash_seed in ("1", "987"):
+        env = dict(os.environ, PYTHONHASHSEED=hash_seed)
+        out = subprocess.run([sys.executable, "-c", code, str(ROOT)], env=env, capture_output=True, text=True,
+                             check=True)
+        digests.add(out.stdout.strip())
+    p = generate(4242, size=30)
+    assert digests == {hashlib.sha256(repr(sorted(p.files.items())).encode()).hexdigest()}
+
+
+def test_different_seeds_give_different_programs(projects):
+    mains = [p.files["main.src"].split("\n", 1)[1] for p in projects]      # without the header naming the seed
+    assert len(set(mains)) == len(mains)
+
+
+def test_size_controls_the_number_of_main_blocks():
+    for size in (1, 5, 40, 120):
+        text = generate(7, size=size).files["main.src"]
+        body = text.split("\nEM\n", 1)[0]
+        assert body.count("; @block") == size
+
+
+def test_generation_is_fast():
+    start = time.perf_counter()
+    for seed in range(40):
+        generate(seed)
+    assert (time.perf_counter() - start) / 40 < 0.05
+
+
+def test_write_creates_every_file(tmp_path):
+    p = generate(3)
+    main = p.write(tmp_path / "proj")
+    assert main == tmp_path / "proj" / "main.src"
+    for name, text in p.files.items():
+        assert (tmp_path / "proj" / name).read_text(encoding="ascii") == text
+    if p.cfg:
+        assert p.cfg in p.files and p.cfg.endswith(".cfg")
+    if p.mp:
+        assert p.mp in p.files and re.search(r"^MP41[12]0\.\d+ : ", p.files[p.mp], re.M)
+
+
+def test_command_line_writes_a_project(tmp_path, capsys):
+    assert generator_main(["--seed", "5", "--size", "6", "--out", str(tmp_path / "cli")]) == 0
+    assert (tmp_path / "cli" / "main.src").read_text() == generate(5, size=6).files["main.src"]
+    assert "main.src" in capsys.readouterr().out
+
+
+def test_feature_switches():
+    assert set(KNOWN_DIVERGENT) <= set(FEATURES) and DEFAULT_OFF <= set(FEATURES)
+    assert default_features() == set(FEATURES) - DEFAULT_OFF - set(KNOWN_DIVERGENT)
+    with pytest.raises(ValueError):
+        generate(1, disable={"no_such_feature"})
+    # only logic chains: no word, stack or control-flow mnemonics at all
+    logic = generate(11, features={"logic"})
+    used = {m for _, m, _ in instructions(logic)}
+    assert used and used <= {"L", "LN", "A", "AN", "O", "ON", "XO", "XON", "=", "S", "R", "SN", "RN", "EM"}
+    # a switched-off feature leaves no trace
+    for seed in range(20):
+        text = "\n".join(generate(seed, disable={"stack", "strings"}).files.values())
+        assert not re.search(r"^(PS|PL|PSW|PLW|PSL|PLL|PSX|PLX)\b", text, re.M | re.I)
+        assert 'S"' not in text and "S#" not in text
+    # a known divergence can be switched back on
+    assert any("[X]" in line and line.startswith("=") and re.match(r"=\s+[WD]\d+\[X\]", line)
+               for seed in range(30) for line in generate(seed, enable={"index_wide"}).files["main.src"].splitlines())
+
+
+# ------------------------------------------------------------------------------------------------------------
+# coverage of spec section 6
+
+
+def test_every_mnemonic_group_of_section_6_occurs(projects):
+    seen = collections.Counter(m for p in projects for _, m, _ in instructions(p))
+    missing = {section: sorted(group - set(seen)) for section, group in SECTION_6.items() if group - set(seen)}
+    assert not missing
+    # and the table of the front end has nothing else that we should generate
+    table = {m for m in MNEMONICS} - NOT_GENERATED
+    assert table - set(seen) == set()
+    assert not NOT_GENERATED & set(seen)
+
+
+def test_gates_occur_with_bit_and_word_operands(projects):
+    bit, word = set(), set()
+    for p in projects:
+        for _, m, operand in instructions(p):
+            if m in SECTION_6["6.3/6.4 gating"]:
+                if BIT_OPERAND.match(operand):
+                    bit.add(m)
+                elif WORD_OPERAND.match(operand):
+                    word.add(m)
+    assert bit == word == SECTION_6["6.3/6.4 gating"]
+
+
+def test_operand_forms_and_other_constructs_occur(projects):
+    text = "\n".join(t for p in projects for n, t in sorted(p.files.items()))
+    wanted = {
+        "indexed byte": r"\bB\d+\[X\]", "indexed bit": r"\b[MIO]\d+\[X\]", "KF access": r"KF \w+\[X\]",
+        "KFIELD": r"^KFIELD \w+$", "X operand": r"^\S+\s+X$", "hex constant": r"K\$[0-9A-F]+",
+        "binary constant": r"K%[01]+", "negative constant": r"K-\d+", "plus constant": r"K\+\d+",
+        "string literal": r'S"', "error text": r"S#E\d+", "dialog text": r"S#D\d+",
+        "timer start": r"^(=|S)\s+(T\d|TS_)", "timer running": r"\bT(4[89]|[5-9]\d)\b|TR_",
+        "counter start": r"^=\s+C\d\b", "counter release": r"\bC(9[6-9]|1[01]\d)\b",
+        "counter running": r"\bC(4[89]|[56]\d)\b", "first cycle": r"\bM4172\b", "NC code word": r"\bW26[024]\b",
+        "acknowledgement": r"^=\s+M409[0-5]$", "error markers": r"\bM420[012]\b",
+        "USES": r"^USES \w+\.src$", "GLOBAL": r"^GLOBAL \w+$", "EXTERN": r"^EXTERN \w+$",
+        "#define /g": r"^#define /g defs\.def$", "local #define": r"^#define \w+\.def$",
+        "#if": r"^#if \w+ (=|<>) ", "#else": r"^#else$", "#ifdef": r"^#ifdef ", "#ifndef": r"^#ifndef ",
+        "DEFINE": r"^DEFINE CFG_\w+ = ", "auto-assigned symbol": r"^\w+L_auto\d+\s+[MBWD]$",
+        "alias": r"^/c \w+ +M &\w+$", "constant symbol": r"^KG_\w+ +K ", "MP4110": r"^MP4110\.\d+ : ",
+        "MP4120": r"^MP4120\.\d+ : ", "label": r"^LBL \w+$",
+    }
+    missing = [what for what, pattern in wanted.items() if not re.search(pattern, text, re.M)]
     assert not missing
 
 
-def test_generated_projects_pass_the_front_end(tmp_path):
-    for seed in range(12):
-        project = generate(seed)
-        root = tmp_path / str(seed)
-        project.write(root)
-        prepared = prepare(root / project.main, root / project.cfg if project.cfg else None,
-                           root / project.mp if project.mp else None)
-        assert not hasattr(prepared, "status"), (seed, prepared)
+# ------------------------------------------------------------------------------------------------------------
+# structure: blocks, labels, balanced stack
+
+
+def _main_blocks(text: str) -> tuple[list[list[str]], list[str]]:
+    """The top-level blocks of the main program and the lines after its EM."""
+    body, _, tail = text.partition("\nEM\n")
+    blocks = [b.splitlines()[1:] for b in body.split("; @block\n")[1:]]
+    return blocks, tail.splitlines()
+
+
+def test_blocks_are_self_contained(projects):
+    for p in projects:
+        for name, text in p.files.items():
+            if not name.endswith(".src"):
+                continue
+            if name == p.main:
+                blocks, tail = _main_blocks(text)
+                tail_blocks = [b.splitlines()[1:] for b in "\n".join(tail).split("; @block\n")[1:]]
+                assert tail[0] == "; @block" if tail else True
+            else:
+                blocks, tail_blocks = [], [b.splitlines()[1:] for b in text.split("; @block\n")[1:]]
+            for block in blocks + tail_blocks:
+                labels = {line.split()[1] for line in block if line.startswith("LBL ")}
+                for line in block:
+                    word, _, operand = line.partition(" ")
+                    if word.upper() in ("JP", "JPT", "JPF"):
+                        assert operand.strip() in labels, (p.seed, name, line)
+                opened = sum(1 for line in block if line.endswith("[") and " " not in line)
+                assert opened == sum(1 for line in block if line == "]")
+            for block in tail_blocks:                  # subprograms end with EM, tables with ENDK
+                assert block[-1] in ("EM", "ENDK") or block[-1].lower() == "em"
+
+
+def test_the_main_program_ends_outside_the_blocks(projects):
+    for p in projects:
+        lines = p.files[p.main].splitlines()
+        em = lines.index("EM")
+        assert lines[em + 1:em + 2] in ([], ["; @block"])
+        assert all(not line.startswith(("LBL", "KFIELD")) for line in lines[:em])
+
+
+def test_the_stack_is_balanced_in_every_block(projects):
+    words = {"PS": None, "PSW": 2, "PSL": 1, "PSX": 2, "PL": None, "PLW": -2, "PLL": -1, "PLX": -2}
+    for p in projects:
+        blocks, _ = _main_blocks(p.files[p.main])
+        for block in blocks:
+            if any(line.split()[0].upper() in ("CM", "CMT", "CMF", "CASE") for line in block if line.split()):
+                continue                                # calls of stack subprograms move values across
+            depth = 0
+            for line in block:
+                parts = line.split()
+                if not parts or parts[0].upper() not in words:
+                    continue
+                m = parts[0].upper()
+                if words[m] is not None:
+                    depth += words[m]
+                else:
+                    size = 1 if BIT_OPERAND.match(" ".join(parts[1:])) else 2
+                    depth += size if m == "PS" else -size
+                assert depth >= 0, (p.seed, block)
+            assert depth == 0, (p.seed, block)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the front end and the reference interpreter accept the programs
+
+
+def _compile(project: GeneratedProject, root: Path):
+    main = project.write(root)
+    result = compile_project(ProjectOptions(main=main, cfg=root / project.cfg if project.cfg else None),
+                             make_semantics("itnc530"))
+    return result, main
+
+
+@pytest.mark.parametrize("seed", [2, 3, 5, 8, 13, 21, 34, 55, 89, 144, 233, 377, 610, 987, 1597, 2584, 4181,
+                                  6765, 10946, 17711])
+def test_front_end_accepts_generated_projects(seed, tmp_path):
+    result, _ = _compile(generate(seed), tmp_path / str(seed))
+    errors = [d.render() for d in result.diagnostics.items if d.severity.value == "error"]
+    assert result.ok and errors == []
+
+
+def test_all_features_on_and_bigger_projects_pass_the_front_end(tmp_path):
+    for seed in (1, 2, 3):
+        result, _ = _compile(generate(seed, size=90, enable=set(FEATURES)), tmp_path / str(seed))
+        assert result.ok, [d.render() for d in result.diagnostics.items if d.severity.value == "error"]
+
+
+@pytest.mark.parametrize("seed", [4, 9, 16, 25, 36])
+def test_interpreter_runs_without_runtime_faults(seed, tmp_path):
+    project = generate(seed, size=25)
+    result, main = _compile(project, tmp_path)
+    assert result.ok
+    mp = read_mp_file(tmp_path / project.mp, Diagnostics()) if project.mp else {}
+    machine = Machine(result.program, mp)
+    for cycle in range(60):
+        writes = []  # inputs stay 0: the program must be well defined for any input
+        report = machine.run_cycle(cycle, writes, [])
+        assert not report.faults, [f.render() for f in report.faults]
+
+
+def test_fault_injection_gives_one_runtime_fault(tmp_path):
+    faulted = 0
+    for seed in range(6):
+        project = generate(seed, size=6, faults=True)
+        text = project.files[project.main]
+        assert text.count("; injected runtime fault") == 1
+        result, _ = _compile(project, tmp_path / str(seed))
+        assert result.ok
+        machine = Machine(result.program, {})
+        from transpiler.scenario import OperandRef
+        from transpiler.stimulus import Write
+        inputs = [Write(OperandRef("I", i), 1) for i in range(32)]
+        for cycle in range(3):
+            report = machine.run_cycle(cycle, inputs, [])
+            if report.faults:
+                assert report.faults[0].code.startswith("E-RT-")
+                faulted += 1
+                break
+    assert faulted >= 4      # an EMT/EMF in front of the fault may hide it when every input is 1
