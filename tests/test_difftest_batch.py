@@ -13,7 +13,7 @@ CYCLES = 200
 MATIEC_EVERY = 20          # matiec compiles each program (seconds): a share of the batch where it is installed
 # Programs of this batch that expose a bug not fixed yet (program seed -> finding). The batch must fail on exactly
 # these: a new failure fails the test, and so does a fix that was not recorded here.
-KNOWN_OPEN = {1000018: "W24 differs in cycle 0 (original 462, translated 0); reduce with --only 1000018 --reduce"}
+KNOWN_OPEN: dict[int, str] = {}
 
 
 def test_fixed_seed_batch_of_random_programs_is_equivalent(capsys):

@@ -24,7 +24,9 @@ from transpiler.frontend import ProjectOptions  # noqa: E402
 from transpiler.interp import Machine  # noqa: E402
 from transpiler.mnemonics import MNEMONICS, canonical  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.scenario import OperandRef  # noqa: E402
 from transpiler.semantics import make_semantics  # noqa: E402
+from transpiler.stimulus import Write  # noqa: E402
 from transpiler.transpile import read_mp_file  # noqa: E402
 
 COVERAGE_SEEDS = range(1, 101)
@@ -120,9 +122,12 @@ def test_different_seeds_give_different_programs(projects):
 
 def test_size_controls_the_number_of_main_blocks():
     for size in (1, 5, 40, 120):
-        text = generate(7, size=size).files["main.src"]
-        body = text.split("\nEM\n", 1)[0]
-        assert body.count("; @block") == size
+        project = generate(7, size=size)
+        body = project.files["main.src"].split("\nEM\n", 1)[0]
+        subs = sum(text.count("\nEM\n") + text.count("\nem\n") for text in project.files.values())
+        # `size` blocks, plus at most one call for each subprogram that no block calls
+        assert size <= body.count("; @block") <= size + subs
+        assert generate(7, size=size, disable={"calls"}).files["main.src"].split("\nEM\n")[0].count("; @block") == size
 
 
 def test_generation_is_fast():
@@ -224,7 +229,7 @@ def test_operand_forms_and_other_constructs_occur(projects):
 def _main_blocks(text: str) -> tuple[list[list[str]], list[str]]:
     """The top-level blocks of the main program and the lines after its EM."""
     body, _, tail = text.partition("\nEM\n")
-    blocks = [b.splitlines()[1:] for b in body.split("; @block\n")[1:]]
+    blocks = [b.splitlines() for b in body.split("; @block\n")[1:]]
     return blocks, tail.splitlines()
 
 
@@ -235,10 +240,9 @@ def test_blocks_are_self_contained(projects):
                 continue
             if name == p.main:
                 blocks, tail = _main_blocks(text)
-                tail_blocks = [b.splitlines()[1:] for b in "\n".join(tail).split("; @block\n")[1:]]
-                assert tail[0] == "; @block" if tail else True
+                tail_blocks = [b.splitlines() for b in "\n".join(tail + [""]).split("; @block\n")[1:]]
             else:
-                blocks, tail_blocks = [], [b.splitlines()[1:] for b in text.split("; @block\n")[1:]]
+                blocks, tail_blocks = [], [b.splitlines() for b in text.split("; @block\n")[1:]]
             for block in blocks + tail_blocks:
                 labels = {line.split()[1] for line in block if line.startswith("LBL ")}
                 for line in block:
@@ -248,15 +252,19 @@ def test_blocks_are_self_contained(projects):
                 opened = sum(1 for line in block if line.endswith("[") and " " not in line)
                 assert opened == sum(1 for line in block if line == "]")
             for block in tail_blocks:                  # subprograms end with EM, tables with ENDK
-                assert block[-1] in ("EM", "ENDK") or block[-1].lower() == "em"
+                assert block[0].startswith(("LBL ", "GLOBAL ", "KFIELD ")), (p.seed, name, block)
+                assert block[-1].upper() in ("EM", "ENDK"), (p.seed, name, block)
 
 
 def test_the_main_program_ends_outside_the_blocks(projects):
     for p in projects:
         lines = p.files[p.main].splitlines()
-        em = lines.index("EM")
+        em = lines.index("EM")                       # the first EM ends the main program ...
         assert lines[em + 1:em + 2] in ([], ["; @block"])
-        assert all(not line.startswith(("LBL", "KFIELD")) for line in lines[:em])
+        assert lines[em - 1] != "; @block"           # ... after the last block, not inside one
+        blocks, _ = _main_blocks(p.files[p.main])
+        for block in blocks:                         # no subprogram inside the main program's blocks
+            assert not any(line.upper() == "EM" or line.startswith("GLOBAL") for line in block)
 
 
 def test_the_stack_is_balanced_in_every_block(projects):
@@ -328,9 +336,7 @@ def test_fault_injection_gives_one_runtime_fault(tmp_path):
         result, _ = _compile(project, tmp_path / str(seed))
         assert result.ok
         machine = Machine(result.program, {})
-        from transpiler.scenario import OperandRef
-        from transpiler.stimulus import Write
-        inputs = [Write(OperandRef("I", i), 1) for i in range(32)]
+        inputs = [Write(OperandRef("I", i), 1, f"I{i}") for i in range(32)]
         for cycle in range(3):
             report = machine.run_cycle(cycle, inputs, [])
             if report.faults:

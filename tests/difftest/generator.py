@@ -9,9 +9,9 @@ structured statements are closed inside their block, subprograms call only subpr
 
 Layout of a project: `main.src` (preamble, top-level blocks, the EM of the main program, subprogram and
 KFIELD blocks), optional modules `mod1.src`/`mod2.src` (USES/GLOBAL/EXTERN), `defs.def` (global symbols),
-`mod<n>.def` (file-local symbols), `OEM.cfg` (DEFINEs for `#if`), `timers.mp` (MP4110/MP4120 presets) and
-`scenario.yaml` (random input stimulus that also loads the presets; `hh2iec equiv --random-cycles` alone
-runs with all presets 0).
+`m<n>_local.def` (file-local symbols), `OEM.cfg` (DEFINEs for `#if`), `timers.mp` (MP4110/MP4120 presets)
+and `scenario.yaml` (300 cycles of random stimulus on I0..I31 plus a few NC handshakes and restarts, for
+`hh2iec equiv main.src --scenario scenario.yaml`).
 
 Every top-level block starts with a line `; @block` and is self-contained: jump labels never cross blocks;
 a block depends on other blocks only through calls of subprograms (each in its own block) and reads of a
@@ -70,7 +70,10 @@ FEATURES: dict[str, str] = {
     "strings": "string accumulator: L/+/= on S, S\"..\", S#E/S#D, string comparisons (6.16)",
     "strings_long": "string results longer than 128 characters, truncated with a warning (6.16, A-50)",
     "main_em": "EMT/EMF in the main program (ends the cycle early) (6.12)",
+    "goto_mix": "jumps that cross: overlapping forward jumps, jumps out of WHILE/REPEAT bodies, a loop's "
+                "backward jump inside an IFT (never into a structure)",
     "acc_carry": "a block that continues with the WA/LA left by the block before it (or by the previous cycle)",
+    "reg_flow": "WA/LA live across conditional jumps, IFT/ELSE and loops (saved with PSW/PLW), merged afterwards",
     "write_input": "writes to input operands (allowed, overwritten by the next input latch, A-33)",
     "case_mix": "mnemonics in lower case and blanks between operand letter and number (2.3, 2.5)",
 }
@@ -124,10 +127,10 @@ M_GEN = 128              # M0..M127 general markers
 O_GEN = 48               # O0..O47 general outputs (O48..O63 indexed output tables)
 N_INPUTS = 32            # I0..I31
 M_TABLE = 300            # M300..M395: indexed marker tables
-LOOP_WORDS = 400         # W400, W402, ...: loop counters and bounds (one per loop)
-SUB_DOUBLES = 600        # D600, D604, ...: parameters of stack subprograms
-M_EDGE = 1000            # M1000...: edge memories and edge results
-M_SUBPAR = 1400          # M1400...: bit parameters of stack subprograms
+LOOP_WORDS = 2000        # W2000, W2002, ...: loop counters and bounds (one per loop)
+SUB_DOUBLES = 4000       # D4000, D4004, ...: parameters and results of stack subprograms
+M_EDGE = 1000            # M1000...: edge memories and edge results (one per edge)
+M_SUBPAR = 3000          # M3000...: bit parameters of stack subprograms
 N_TIMERS = 24
 N_COUNTERS = 16
 N_STRINGS = 10
@@ -153,6 +156,7 @@ class _Sub:
     rank: int
     params: int = 0
     cost: int = 1
+    calls: int = 0
     exported: bool = False
     lines: list[str] = dataclasses.field(default_factory=list)
 
@@ -217,9 +221,8 @@ class _Gen:
         self.reserved_edges = 0
         self.reserved_subbits = 0
         self.defines: list[tuple[str, str]] = []
-        self.nc_events = False
         self.strings_used: set[int] = set()
-        self.units: list[_Unit] = []
+        self.dyn_words: list[str] = []
         self.all_subs: list[_Sub] = []
 
     # ---------------------------------------------------------------- emission
@@ -412,21 +415,40 @@ class _Gen:
                 self.op(self.rng.choice(GATES), self.bit_r())
 
     def cond(self) -> None:
-        """Leaves a condition in LA."""
+        """Leaves a condition in LA, usually one that changes from cycle to cycle (inputs, varying words)."""
         r = self.rng.random()
         if r < 0.55 or not (self.has("compare") or self.has("shift")):
-            self.chain_start()
-            self.gates(0, 2)
+            if self.chance(0.7):
+                self.op(self.rng.choice(("L", "L", "LN")), self.inp())
+            else:
+                self.chain_start()
+            for _ in range(self.rng.randint(0, 2)):
+                self.op(self.rng.choice(GATES), self.inp() if self.chance(0.6) else self.bit_r())
         elif r < 0.9 and self.has("compare"):
-            self.op("L", self.val_r())
-            if self.chance(0.3):
+            self.op("L", self.dyn_val())
+            if self.chance(0.4):
+                self.op("A", self.rng.choice(("K1", "K3", "K7", "K15", "K$FF")))
+            elif self.chance(0.2):
                 self.word_op()
-            self.op(self.rng.choice(COMPARES), self.val_r())
+            self.op(self.rng.choice(COMPARES), self.rng.choice((f"K{self.rng.randint(-2, 9)}", self.dyn_val(),
+                                                                  self.val_r())))
             if self.chance(0.3):
                 self.op(self.rng.choice(GATES), self.bit_r())
         else:
-            self.op("L", self.val_r())
+            self.op("L", self.dyn_val())
             self.op("BT", self.count())
+
+    def bit_cond(self) -> None:
+        """A condition from bit operands only: WA is left alone."""
+        self.op(self.rng.choice(("L", "L", "LN")), self.inp())
+        for _ in range(self.rng.randint(0, 2)):
+            self.op(self.rng.choice(GATES), self.inp() if self.chance(0.6) else self.bit_r())
+
+    def dyn_val(self) -> str:
+        """A word that probably changes while the program runs (written from inputs or accumulated)."""
+        if self.dyn_words and self.chance(0.75):
+            return self.rng.choice(self.dyn_words)
+        return self.mem()
 
     def word_op(self, x_ok: bool = False) -> None:
         r = self.rng.random()
@@ -508,7 +530,7 @@ class _Gen:
         kinds: list[tuple[Callable[[_Ctx], None], float, bool]] = [
             (self.s_logic, 14, f("logic")),
             (self.s_word, 11, f("word")),
-            (self.s_accumulate, 5, f("word")),
+            (self.s_accumulate, 7, f("word")),
             (self.s_overlap, 3, f("word")),
             (self.s_compare, 7, f("compare")),
             (self.s_shift, 4, f("shift")),
@@ -534,6 +556,7 @@ class _Gen:
             (self.s_string, 1, f("strings")),
             (self.s_main_em, 0.6, f("main_em") and ctx.top),
             (self.s_carry, 1, f("acc_carry")),
+            (self.s_flow, 4, f("reg_flow") and nest_ok),
             (self.s_write_input, 0.5, f("write_input")),
         ]
         return [(fn, w) for fn, w, ok in kinds if ok]
@@ -601,40 +624,43 @@ class _Gen:
             self.op("=", self.bit_w())
 
     def s_accumulate(self, ctx: _Ctx) -> None:
+        """Words that change from cycle to cycle: packed inputs, sums, counts of input cycles."""
         r = self.rng.random()
-        if r < 0.35 and self.has("bitpack"):
+        if r < 0.4 and self.has("bitpack"):
             base = {"LB": 24, "LW": 16, "LD": 0}
             mn = self.rng.choice(("LB", "LB", "LW", "LW", "LD"))
             start = self.rng.randint(0, base[mn])
             self.op(mn, f"I{start}")
             if self.chance(0.5):
                 self.word_op()
-            self.op("=", self.val_w())
+            acc = self.val_w()
         elif r < 0.7:
             acc = self.mem(self.rng.choice("WDD"))
             self.op("L", acc)
-            self.op(self.rng.choice(("+", "+", "-")), self.rng.choice((self.mem(), self.const(), "K1")))
-            self.op("=", acc)
-        elif r < 0.85:
+            self.op(self.rng.choice(("+", "+", "-")), self.rng.choice((self.dyn_val(), self.const(), "K1")))
+        elif r < 0.8:
             acc = self.mem("D")
             self.op("L", acc)
             self.op("x", self.rng.choice(("K3", "K7", "K-5", "K257", self.mem())))
             self.op("+", self.rng.choice(("K1", "K13", self.mem())))
-            self.op("=", acc)
         else:
             self.op("L", self.inp())
             if self.has("logic"):
                 self.op(self.rng.choice(("A", "O", "XO")), self.inp())
+            acc = self.mem()
             if self.has("jumps"):
                 skip = self.cur.fresh("Lb")
                 self.op("JPF", skip)
-                acc = self.mem()
                 self.op("L", acc)
                 self.op("+", self.rng.choice(("K1", "K3", "K-1", "K100")))
                 self.op("=", acc)
                 self.label(skip)
-            else:
-                self.assigns(1, 1)
+                self.dyn_words.append(acc)
+                return
+            self.op("L", acc)
+            self.op("+", "K1")
+        self.op("=", acc)
+        self.dyn_words.append(acc)
 
     def s_overlap(self, ctx: _Ctx) -> None:
         """A double word written, then read back through its bytes and words (5.2)."""
@@ -677,6 +703,8 @@ class _Gen:
         else:
             self.chain_start()
             self.gates(0, 1)
+            if self.has("extended") and self.chance(0.1):
+                self.op(self.rng.choice(("INC", "DEC")), self.mem())   # last_acc NONE: LOGIC mode, chain kept
             self.logic_bracket(1)
         self.gates(0, 2, 1)
         self.assigns(1, 2)
@@ -686,6 +714,8 @@ class _Gen:
         if self.chance(0.3):
             self.word_op()
         kind = self.rng.choice(("arith", "arith", "compare", "wlogic"))
+        if kind != "wlogic" and self.has("extended") and self.chance(0.1):
+            self.op(self.rng.choice(("INC", "DEC")), self.mem())      # last_acc NONE: WORD mode for + - x / ==
         self.word_bracket(kind, 1)
         if kind == "compare":
             if self.has("logic"):
@@ -716,6 +746,8 @@ class _Gen:
                 self.word_load()
                 if self.chance(0.5):
                     self.word_op()
+                if self.chance(0.3):
+                    self.barrier(ctx)                 # WA crosses a label, call or CASE before it is pushed
                 self.op("PSW")
                 pushed.append("val")
             elif r < 0.9 or not x_ok:
@@ -763,6 +795,26 @@ class _Gen:
                     self.op("L", "X")
                     self.op("=", self.val_w())
 
+    def barrier(self, ctx: _Ctx) -> None:
+        """A point where control flow meets, leaving WA and LA alone: a label, a call, a CASE table."""
+        subs = self.callable(ctx, case=True) if self.has("calls") and not ctx.x_locked else []
+        subs = [s for s in subs if s.kind == "plain"]
+        r = self.rng.random()
+        if subs and r < 0.35 and self.has("case"):
+            self.op("CASE", self.mem("B"))
+            s = self.pick_sub(subs)
+            self.op("CM", s.name)
+            self.op("ENDC")
+            self.cost += s.cost
+        elif subs and r < 0.6:
+            s = self.pick_sub(subs)
+            self.op("CM", s.name)
+            self.cost += s.cost
+        elif self.has("jumps"):
+            lbl = self.cur.fresh("Lb")
+            self.op("JP", lbl)
+            self.label(lbl)
+
     # jumps and loops --------------------------------------------------------------------------------
 
     def s_jump(self, ctx: _Ctx) -> None:
@@ -794,7 +846,7 @@ class _Gen:
             self.label(keep)
             self.assigns(1, 1)
             self.op("=", self.val_w())
-        else:
+        elif r < 0.9 or not self.has("goto_mix"):
             other, end = unit.fresh("Lb"), unit.fresh("Lb")
             self.cond()
             self.op("JPF", other)
@@ -803,6 +855,17 @@ class _Gen:
             self.label(other)
             self.body(ctx.deeper(), 1, 2)
             self.label(end)
+        else:                                       # crossing forward jumps: A ... B ... LBL A ... LBL B
+            first, second = unit.fresh("Lb"), unit.fresh("Lb")
+            self.cond()
+            self.op(self.rng.choice(("JPF", "JPT")), first)
+            self.body(ctx.deeper(), 1, 1)
+            self.cond()
+            self.op(self.rng.choice(("JPF", "JPT", "JP")), second)
+            self.body(ctx.deeper(), 1, 1)
+            self.label(first)
+            self.body(ctx.deeper(), 1, 1)
+            self.label(second)
 
     def loop_bound(self) -> tuple[str, int]:
         """A loop bound operand (constant or masked data in a reserved word) and its largest value."""
@@ -810,7 +873,7 @@ class _Gen:
             n = self.rng.randint(0, 6)
             return f"K{n}", n
         bound = self.reserve_word()
-        self.op("L", self.val_r())
+        self.op("L", self.dyn_val())
         self.op("A", "K7")
         self.op("=", bound)
         return bound, 7
@@ -906,6 +969,29 @@ class _Gen:
             self.op("=", f"D{a}")
 
     def s_ift(self, ctx: _Ctx) -> None:
+        if self.has("goto_mix") and self.has("loops") and ctx.loops < 2 and ctx.mult <= 8 and self.chance(0.15):
+            # a loop whose backward jump sits inside an IFT: LBL top ... IFT ... JPT top ... ENDI
+            cnt = self.reserve_word()
+            n = self.rng.randint(1, 5)
+            top = self.cur.fresh("Lp")
+            inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * n)
+            self.op("L", "K0")
+            self.op("=", cnt)
+            self.label(top)
+            start = self.cost
+            self.body(inner, 1, 2)
+            self.cond()
+            self.op(self.rng.choice(("IFT", "IFF")))
+            self.body(inner, 0, 1)
+            self.op("L", cnt)
+            self.op("+", "K1")
+            self.op("=", cnt)
+            self.op("<", f"K{n}")
+            self.op("JPT", top)
+            self.body(inner, 0, 1)
+            self.op("ENDI")
+            self.cost += (self.cost - start) * n
+            return
         out = self.cur.fresh("Lb") if self.has("jumps") and self.chance(0.12) else None
         self.cond()
         self.op(self.rng.choice(("IFT", "IFT", "IFF")))
@@ -918,6 +1004,9 @@ class _Gen:
             self.op("ELSE")
             self.body(ctx.deeper(), 1, 2)
         self.op("ENDI")
+        if self.has("brackets_logic") and self.chance(0.08):
+            self.logic_bracket(1)                     # mode LOGIC, chain closed: a load bracket (A-04)
+            self.assigns(1, 1)
         if out:
             self.body(ctx.deeper(), 0, 1)
             self.label(out)
@@ -936,13 +1025,27 @@ class _Gen:
         test()
         self.op("WHILET" if true_form else "WHILEF")
         start = self.cost
-        self.body(ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1)), 1, 2)
+        inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1))
+        self.body(inner, 1, 2)
+        out = self.break_out(inner)
         self.op("L", cnt)
         self.op("+", "K1")
         self.op("=", cnt)
         test()
         self.op("ENDW")
         self.cost += (self.cost - start) * max(n, 1)
+        if out:
+            self.label(out)
+
+    def break_out(self, ctx: _Ctx) -> str | None:
+        """Maybe a conditional jump out of a loop body to a label right after the loop (returned)."""
+        if not (self.has("goto_mix") and self.has("jumps") and self.chance(0.2)):
+            return None
+        out = self.cur.fresh("Lb")
+        self.cond()
+        self.op(self.rng.choice(("JPT", "JPF")), out)
+        self.body(ctx, 0, 1)
+        return out
 
     def s_repeat(self, ctx: _Ctx) -> None:
         cnt = self.reserve_word()
@@ -951,7 +1054,9 @@ class _Gen:
         self.op("=", cnt)
         self.op("REPEAT")
         start = self.cost
-        self.body(ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1)), 1, 2)
+        inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1))
+        self.body(inner, 1, 2)
+        out = self.break_out(inner)
         self.op("L", cnt)
         self.op("+", "K1")
         self.op("=", cnt)
@@ -962,6 +1067,8 @@ class _Gen:
             self.op("<", bound)
             self.op("UNTILF")
         self.cost += (self.cost - start) * max(n, 1)
+        if out:
+            self.label(out)
 
     # calls ------------------------------------------------------------------------------------------
 
@@ -978,8 +1085,16 @@ class _Gen:
                 found.append(s)
         return found
 
+    def pick_sub(self, subs: list[_Sub]) -> _Sub:
+        """Subprograms not called yet are preferred, so that few of them stay dead."""
+        s = self.rng.choices(subs, [1 if s.calls else 4 for s in subs])[0]
+        s.calls += 1
+        return s
+
     def s_call(self, ctx: _Ctx) -> None:
-        s = self.rng.choice(self.callable(ctx))
+        self.call_sub(ctx, self.pick_sub(self.callable(ctx)))
+
+    def call_sub(self, ctx: _Ctx, s: _Sub) -> None:
         if s.kind == "plain":
             r = self.rng.random()
             if r < 0.5:
@@ -1025,13 +1140,15 @@ class _Gen:
 
     def s_case(self, ctx: _Ctx) -> None:
         subs = self.callable(ctx, case=True)
-        if self.chance(0.6):
+        if self.chance(0.7):
             sel = self.mem("B")
-            self.op("L", self.val_r())
+            self.op("L", self.dyn_val())
             self.op("A", self.rng.choice(("K3", "K7", "K1")))
             self.op("=", sel)
+        elif self.chance(0.8):
+            sel = self.mem(self.rng.choice("BBWWD"))          # often out of range: nothing is called
         else:
-            sel = self.mem(self.rng.choice("BW"))
+            sel = f"K{self.rng.randint(-1, 3)}"                # a constant selector ([LINT])
         self.op("CASE", sel)
         worst = 0
         n = self.rng.randint(1, 5)
@@ -1039,7 +1156,7 @@ class _Gen:
             n = 0                                   # a table without entries: nothing is ever called
         plain = self.rng.randrange(n) if n and not self.has("case_empty") else -1
         for i in range(n):
-            s = self.rng.choice(subs)
+            s = self.pick_sub(subs)
             worst = max(worst, s.cost)
             if i != plain and self.has("cfg") and self.defines and self.chance(0.2):
                 self.put(self.pp_cond())
@@ -1053,10 +1170,10 @@ class _Gen:
     # index register, KF -----------------------------------------------------------------------------
 
     def set_x(self, mask: int) -> None:
-        if self.chance(0.25):
+        if self.chance(0.2):
             self.op("L", f"K{self.rng.randint(0, mask) & mask}")
         else:
-            self.op("L", self.val_r())
+            self.op("L", self.dyn_val() if self.chance(0.7) else self.val_r())
             self.op("A", f"K{mask}")
         self.op("=", "X")
 
@@ -1192,9 +1309,14 @@ class _Gen:
             if self.chance(0.3):
                 self.op("L", self.bit_r())
                 self.op("R", start)
-        else:
+        elif r < 0.96:
             self.op("L", run)
             self.op("=", self.mem("B"))
+        else:                                                    # the running operand written by the program
+            self.cond()
+            self.op(self.rng.choice(("=", "S", "R")), run)
+            self.op("L", run)
+            self.assigns(1, 1)
         self.timers.setdefault(n, "0.1")
 
     def s_counter(self, ctx: _Ctx) -> None:
@@ -1260,7 +1382,7 @@ class _Gen:
         if r < 0.25:
             self.op("L", "M4172")
             if plain and self.chance(0.5):
-                s = self.rng.choice(plain)
+                s = self.pick_sub(plain)
                 self.op("CMT", s.name)
                 self.cost += s.cost
             else:
@@ -1280,7 +1402,6 @@ class _Gen:
                 self.op("S", self.obit())
                 self.op("L", f"M{strobe}")
             self.op("=", f"M{ack}")
-            self.nc_events = True
         elif r < 0.85:
             self.op("L", self.rng.choice(("D280", "D284", "D356", "W264")))
             self.op("+", self.rng.choice(("D284", "K1", self.mem())))
@@ -1444,6 +1565,81 @@ class _Gen:
         else:
             self.assigns(1, 1)
 
+    def s_flow(self, ctx: _Ctx) -> None:
+        """WA and LA live across labels, conditional jumps, structured statements and loops, merged afterwards."""
+        unit = self.cur
+        r = self.rng.random()
+        if r < 0.25 and self.has("jumps"):                 # WA changed on one path only
+            lbl = unit.fresh("Lb")
+            self.chain_start()
+            self.word_load()
+            self.op(self.rng.choice(("JPF", "JPT")), lbl)
+            for _ in range(self.rng.randint(1, 2)):
+                self.word_op()
+            if self.chance(0.3):
+                self.op("L", self.bit_r())                  # ... and LA too
+            self.label(lbl)
+            if self.chance(0.4):
+                self.word_op()
+            self.op("=", self.val_w())
+            if self.chance(0.5):
+                self.assigns(1, 1)
+        elif r < 0.45 and self.has("jumps"):               # LA changed on one path only
+            lbl = unit.fresh("Lb")
+            self.chain_start()
+            self.op(self.rng.choice(("JPF", "JPT")), lbl)
+            self.chain_start()
+            self.gates(0, 1)
+            self.label(lbl)
+            self.gates(0, 1)
+            self.assigns(1, 2)
+        elif r < 0.7 and self.has("struct"):               # WA/LA through IFT/ELSE
+            self.word_load()
+            self.bit_cond()
+            self.op(self.rng.choice(("IFT", "IFF")))
+            for _ in range(self.rng.randint(0, 2)):
+                self.word_op()
+            if self.chance(0.4):
+                self.chain_start()
+            if self.chance(0.5):
+                self.op("ELSE")
+                for _ in range(self.rng.randint(0, 2)):
+                    self.word_op()
+                if self.chance(0.3):
+                    self.op(self.rng.choice(("L", "LN")), self.bit_r())
+            self.op("ENDI")
+            self.op("=", self.val_w())
+            self.assigns(1, 1)
+        elif self.has("loops") and self.has("stack") and ctx.loops < 2 and ctx.mult <= 8:
+            # WA accumulates across the iterations of a loop; the counter test saves it on the stack
+            cnt = self.reserve_word()
+            n = self.rng.randint(1, 6)
+            top = unit.fresh("Lp")
+            self.op("L", "K0")
+            self.op("=", cnt)
+            self.word_load()
+            self.label(top)
+            start = self.cost
+            for _ in range(self.rng.randint(1, 2)):
+                self.word_op()
+            self.op("PSW")
+            if self.has("extended") and self.chance(0.5):
+                self.op("INC", cnt)
+                self.op("L", cnt)
+            else:
+                self.op("L", cnt)
+                self.op("+", "K1")
+                self.op("=", cnt)
+            self.op("<", f"K{n}")
+            self.op("PLW")
+            self.op("JPT", top)
+            self.cost += (self.cost - start) * n
+            self.op("=", self.val_w())
+            if self.chance(0.5):
+                self.assigns(1, 1)                     # LA of the last counter test
+        else:
+            self.s_carry(ctx)
+
     def s_write_input(self, ctx: _Ctx) -> None:
         i = self.rng.randrange(20, N_INPUTS)
         self.chain_start()
@@ -1516,6 +1712,10 @@ class _Gen:
                 self.stmt(ctx)
         elif sub.kind == "wa":
             for _ in range(self.rng.randint(1, 3)):
+                self.word_op()
+            if self.chance(0.3):                      # an early return with the WA computed so far
+                self.bit_cond()
+                self.op(self.rng.choice(("EMT", "EMF")))
                 self.word_op()
             if self.chance(0.4):
                 self.op("=", self.val_w())
@@ -1661,7 +1861,6 @@ class _Gen:
         if self.has("defs"):
             self.make_defs()
         main = _Unit("main.src", True, "Sub_")
-        self.units = [main]
         mods: list[_Unit] = []
         if self.has("modules") and self.has("calls") and rng.random() < 0.6:
             for k in range(rng.randint(1, 2)):
@@ -1669,7 +1868,6 @@ class _Gen:
             if len(mods) == 2 and rng.random() < 0.7:
                 mods[1].uses.append(mods[0])
             main.uses.extend(mods)
-            self.units += mods
         # file-local symbols of the modules (#define without /g)
         for m in mods:
             if self.has("defs") and rng.random() < 0.5:
@@ -1702,17 +1900,26 @@ class _Gen:
         ctx = _Ctx(main, rank=10 ** 6, top=True)
         n_blocks = self.size
         fault_at = rng.randrange(n_blocks) if self.faults else -1
-        seeds = min(2, n_blocks) if self.has("word") else 0
+        seeds = min(max(2, n_blocks // 10), n_blocks) if self.has("word") else 0
         for b in range(n_blocks):
             self.lines = []
             self.cost = 0
-            if b < seeds:
+            if b == 0 and self.has("acc_carry") and rng.random() < 0.15:
+                self.s_carry(ctx)                     # WA/LA as the previous cycle left them (8.1 phase 4)
+            elif b < seeds:
                 self.s_accumulate(ctx)
             else:
                 self.stmt(ctx)
             if b == fault_at:
                 self.fault_block(main)
             blocks.append(self.lines)
+        if self.has("calls"):                         # one more block for each subprogram nobody calls yet
+            for s in self.callable(ctx):
+                if s.calls == 0:
+                    self.lines = []
+                    s.calls += 1
+                    self.call_sub(ctx, s)
+                    blocks.append(self.lines)
         # main.src
         out = [f"; generated by tests/difftest/generator.py, seed {self.seed}, size {self.size}"]
         if self.def_lines:
@@ -1747,8 +1954,7 @@ class _Gen:
         if self.timers or self.counters:
             mp = ["; timer (MP4110.n, seconds) and counter (MP4120.n, cycles) presets"]
             for n in sorted(self.timers):
-                if self.timers[n] != "omit":
-                    mp.append(f"MP4110.{n} : {self.timers[n]}")
+                mp.append(f"MP4110.{n} : {self.timers[n]}")
             for n in sorted(self.counters):
                 mp.append(f"MP4120.{n} : {self.counters[n]}")
             files["timers.mp"] = "\n".join(mp) + "\n"
@@ -1776,7 +1982,7 @@ class _Gen:
         lines.append(f"  seed: {self.seed}")
         lines.append(f"  inputs: [{', '.join(f'I{i}' for i in range(N_INPUTS))}]")
         lines.append("  toggle_probability: 0.1")
-        if self.nc_events or self.has("nc"):
+        if self.has("nc"):
             lines.append("events:")
             cycle = 5
             for _ in range(self.rng.randint(1, 4)):
