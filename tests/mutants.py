@@ -33,6 +33,7 @@ from transpiler.cosim import builtin_side_factory, cosimulate  # noqa: E402
 from transpiler.diagnostics import CompileFailed, Diagnostics  # noqa: E402
 from transpiler.equiv import random_scenario  # noqa: E402
 from transpiler.frontend import ProjectOptions  # noqa: E402
+from transpiler.interp import compile_program  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
 from transpiler.semantics import make_semantics  # noqa: E402
@@ -192,11 +193,15 @@ class Harness:
         self.out = transpile_program(self.program, diags, read_mp_file(SAMPLE / "MP_data.mp", diags), {"st"})
         self.iomap = io_map_of(self.out.result)
         self.names = project_names(self.program)
+        self.compiled = compile_program(self.program)      # the reference side, compiled once for every run
         written = [load_scenario(p, self.names) for p in sorted((SAMPLE / "scenarios").glob("*.yaml"))]
-        candidates = written + [random_scenario(self.program, self.names, RANDOM_CYCLES, seed=1)]
-        inputs = random_scenario(self.program, self.names, 1, seed=0).random.inputs
-        candidates += [self._perturbed(s, inputs, seed) for seed, s in enumerate(written, 1) if s.cycles <= 1000]
-        candidates += [self._nc_run(written, inputs, seed) for seed in (1, 2, 3)]
+        random_run = random_scenario(self.program, self.names, RANDOM_CYCLES, seed=1,
+                                     machine_parameters=SAMPLE / "MP_data.mp")
+        inputs = random_run.random.inputs
+        generated = [self._perturbed(s, inputs, seed) for seed, s in enumerate(written, 1) if s.cycles <= 1000]
+        generated += [self._nc_run(written, inputs, seed) for seed in (1, 2, 3)]
+        self.generated = {s.name for s in generated}        # may be cut short by keep_equivalent_scenarios
+        candidates = written + [random_run] + generated
         self.backend = backend
         self.iec2c = find_iec2c() if backend == "matiec" else None
         self.scenarios = sorted(candidates, key=lambda s: s.cycles)
@@ -258,8 +263,8 @@ class Harness:
         factory = self.side_factory(self.out.st_text)
         kept, failing = [], []
         for scenario in self.scenarios:
-            result = cosimulate(self.program, factory, self.iomap, scenario, self.names)
-            generated = scenario.name.endswith("_perturbed") or scenario.name.startswith("nc_jobs_")
+            result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled)
+            generated = scenario.name in self.generated
             if result.equivalent:
                 kept.append(scenario)
             elif generated and result.divergence is None and result.cycles_run > 0:
@@ -286,7 +291,7 @@ class Harness:
         except Exception as exc:  # noqa: BLE001 - a build failure of the mutant is a detection by the compiler
             return Verdict(mutant, True, f"rejected: {type(exc).__name__}", time.perf_counter() - start)
         for scenario in self.scenarios:
-            result = cosimulate(self.program, factory, self.iomap, scenario, self.names)
+            result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled)
             if not result.equivalent:
                 how = (f"{result.divergence.name} at cycle {result.divergence.cycle}" if result.divergence
                        else (result.error or "error"))

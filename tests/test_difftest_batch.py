@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import os
 
-from tests.difftest.check import OK
+from tests.difftest.check import OK, available_backends
 from tests.difftest.run import Job, print_summary, program_seed, run_batch
-from tests.difftest.check import available_backends
 
 BATCH = 200
 CYCLES = 200

@@ -6,6 +6,7 @@ import dataclasses
 import time
 from typing import Callable, Iterable, Protocol
 
+from .interp import CompiledProgram
 from .interp.machine import Machine
 from .presets import load_presets
 from .diagnostics import Diagnostics
@@ -45,6 +46,7 @@ class CosimResult:
     divergence: Divergence | None
     compared: int                       # operands compared each cycle
     error: str | None = None            # runtime fault or harness problem (not a divergence)
+    error_side: str | None = None       # "original" (reference interpreter) or "translated": where `error` arose
     seconds: float = 0.0
     machine: Machine | None = None
 
@@ -130,11 +132,13 @@ def set_presets(side: StSide, iomap: IoMap, program: Program, mp: dict, cycle_ti
 def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
                stimulus: Stimulus | None = None, *, cycles: int | None = None, coverage: bool = False,
                progress: Callable[[int, int], None] | None = None,
-               record: Callable[[int, list, list], None] | None = None) -> CosimResult:
-    """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`."""
+               record: Callable[[int, list, list], None] | None = None,
+               compiled: CompiledProgram | None = None) -> CosimResult:
+    """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`. Callers that
+    co-simulate one program many times pass it `compiled` once (see build_machine)."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
-    machine = build_machine(program, scenario, diags, coverage=coverage)
+    machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled)
     mp, _ = machine_parameters(scenario, diags)
     side = make_side()
     cycle_time = machine.cycle_time_ms
@@ -155,15 +159,17 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         report = machine.run_cycle(cycle, writes, actions)
         if report.faults:
             fault = report.faults[0]
-            result.error = f"{fault.code} in cycle {cycle}: {fault.message}"
+            result.error, result.error_side = f"{fault.code} in cycle {cycle}: {fault.message}", "original"
             break
         try:
             driver.cycle(cycle, writes, actions)
         except HandshakeTimeout as exc:
             result.error = f"E-SIM-HANDSHAKE-TIMEOUT on the translated side in cycle {exc.cycle}"
+            result.error_side = "translated"
             break
         except Exception as exc:  # noqa: BLE001 - an executor fault is a result, reported with its message
             result.error = f"translated program failed in cycle {cycle}: {type(exc).__name__}: {exc}"
+            result.error_side = "translated"
             break
         result.cycles_run = cycle + 1
         a_values = original()

@@ -15,6 +15,7 @@ from .cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_
 from .atomic import write_files_atomically
 from .cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from .diagnostics import CompileFailed, Diagnostics, NO_SPAN
+from .interp import CompiledProgram, compile_program
 from .iomap import IoMap
 from .ir import Program
 from .pipeline import compile_project
@@ -48,7 +49,7 @@ def random_scenario(program: Program, names: NameTable, cycles: int, seed: int,
 
 
 def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
-           first: CosimResult) -> tuple[Scenario, int]:
+           first: CosimResult, compiled: CompiledProgram | None = None) -> tuple[Scenario, int]:
     """The shortest stimulus found that still diverges: fewer cycles, then fewer events (ddmin over single writes)."""
     base = materialize_random(scenario, names)
     cycle = first.divergence.cycle
@@ -69,7 +70,7 @@ def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scen
     def diverges(events: list[Event], cycles: int) -> CosimResult | None:
         nonlocal runs
         runs += 1
-        res = cosimulate(program, make_side, iomap, make(events, cycles), names)
+        res = cosimulate(program, make_side, iomap, make(events, cycles), names, compiled=compiled)
         return res if res.divergence is not None else None
 
     best_cycles = cycle + 1
@@ -98,7 +99,7 @@ def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scen
         trial_initial = {k: v for k, v in shrunk.initial.items() if k != name}
         trial = bind(shrunk.model_copy(update={"initial": trial_initial}), names)
         runs += 1
-        if cosimulate(program, make_side, iomap, trial, names).divergence is not None:
+        if cosimulate(program, make_side, iomap, trial, names, compiled=compiled).divergence is not None:
             shrunk = trial
     return shrunk, runs
 
@@ -186,15 +187,17 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     outcomes: list[Outcome] = []
     coverage_sets: list = []
+    reference = compile_program(program, coverage=True)
     try:
         for scenario in scenarios:
             traces: list = []
             record = (lambda c, a, b: traces.append((c, a, b))) if args.vcd else None
             res = cosimulate(program, factory, iomap, scenario, names, coverage=True,
-                             progress=_progress_printer(scenario.name), record=record)
+                             progress=_progress_printer(scenario.name), record=record, compiled=reference)
             outcome = Outcome(res)
             if res.divergence is not None and not args.no_shrink:
-                outcome.shrunk, outcome.shrink_runs = shrink(program, factory, iomap, scenario, names, res)
+                outcome.shrunk, outcome.shrink_runs = shrink(program, factory, iomap, scenario, names, res,
+                                                             compile_program(program))
             outcomes.append(outcome)
             if res.machine is not None and res.machine.coverage_enabled:
                 coverage_sets.append(res.machine.coverage)

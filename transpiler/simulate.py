@@ -14,7 +14,7 @@ import yaml
 
 from .cli import UsageError, options_from_args
 from .diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
-from .interp import Machine, MachineConfigError, RuntimeFault
+from .interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from .ir import Program
 from .parse import MpParser
 from .pipeline import compile_project
@@ -127,14 +127,16 @@ class SimulationResult:
     fault_span: Span | None = None          # where to point for a fault without a program location
 
 
-def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, coverage: bool = False) -> Machine:
-    """A machine set up from the scenario (MPs, cycle time, module results); raises CompileFailed on bad input."""
+def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, coverage: bool = False,
+                  compiled: CompiledProgram | None = None) -> Machine:
+    """A machine set up from the scenario (MPs, cycle time, module results); raises CompileFailed on bad input.
+    `compiled` (the program compiled once by the caller) saves compiling it again for every scenario."""
     mp, spans = machine_parameters(scenario, diags)
     diags.raise_if_errors()
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:
         return Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
-                       mp_spans=spans)
+                       mp_spans=spans, compiled=compiled)
     except MachineConfigError:
         raise
     except (UnknownModule, ValueError) as exc:

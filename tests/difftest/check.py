@@ -11,13 +11,14 @@ from transpiler.cosim import CosimResult, builtin_side_factory, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.equiv import random_scenario
 from transpiler.frontend import ProjectOptions
+from transpiler.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.iomap import IoMap
 from transpiler.pipeline import compile_project
 from transpiler.scenario import NameTable, Scenario
 from transpiler.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names
-from transpiler.stimulus import build_stimulus
+from transpiler.simulate import run_scenario as simulate
 from transpiler.st_check import find_iec2c
 from transpiler.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
 
@@ -47,6 +48,7 @@ class Prepared:
     names: NameTable
     iomap: IoMap
     mp_path: Path | None
+    compiled: CompiledProgram           # the reference side, compiled once for every run of this project
 
 
 def prepare(main: Path, cfg: Path | None, mp_path: Path | None) -> Prepared | Verdict:
@@ -62,10 +64,10 @@ def prepare(main: Path, cfg: Path | None, mp_path: Path | None) -> Prepared | Ve
     except Exception as exc:  # noqa: BLE001 - a crash of the backend is the finding
         return Verdict(ERROR, "translator", f"ST backend crashed: {type(exc).__name__}: {exc}")
     if transpiled.result.untranslated:
-        span, what = transpiled.result.untranslated[0]
+        _, what = transpiled.result.untranslated[0]
         return Verdict(ERROR, "translator", f"not translated: {what}")
     return Prepared(result.program, transpiled, project_names(result.program), io_map_of(transpiled.result),
-                    mp_path)
+                    mp_path, compile_program(result.program))
 
 
 def side_factories(prepared: Prepared, backends: tuple[str, ...]) -> dict[str, Callable] | Verdict:
@@ -89,13 +91,9 @@ def side_factories(prepared: Prepared, backends: tuple[str, ...]) -> dict[str, C
 
 def reference_fault(prepared: Prepared, scenario: Scenario) -> str | None:
     """The first runtime fault of the reference interpreter alone under the scenario (None: well defined)."""
-    stimulus = build_stimulus(scenario, prepared.names)
-    machine = build_machine(prepared.program, scenario, Diagnostics())
-    for cycle in range(stimulus.cycles):
-        report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
-        if report.faults:
-            return f"{report.faults[0].code} in cycle {cycle}: {report.faults[0].message}"
-    return None
+    fault = simulate(prepared.program, scenario, prepared.names, machine=build_machine(
+        prepared.program, scenario, Diagnostics(), compiled=prepared.compiled)).fault
+    return None if fault is None else f"{fault.code} in cycle {fault.cycle}: {fault.message}"
 
 
 def available_backends() -> tuple[str, ...]:
@@ -106,7 +104,8 @@ def run_scenario(prepared: Prepared, factories: dict[str, Callable], scenario: S
     """Co-simulate on every executor and decide who is to blame from how the executors agree."""
     results: dict[str, CosimResult] = {}
     for backend, factory in factories.items():
-        results[backend] = cosimulate(prepared.program, factory, prepared.iomap, scenario, prepared.names)
+        results[backend] = cosimulate(prepared.program, factory, prepared.iomap, scenario, prepared.names,
+                                      compiled=prepared.compiled)
     return judge(results)
 
 
@@ -114,7 +113,7 @@ def judge(results: dict[str, CosimResult]) -> Verdict:
     cycles = min(r.cycles_run for r in results.values())
     for r in results.values():
         # A fault of the reference interpreter happens before the ST side runs that cycle: the program is ill-defined.
-        if r.error and not r.error.startswith(("translated program failed", "E-SIM-HANDSHAKE-TIMEOUT on the transl")):
+        if r.error_side == "original":
             return Verdict(INVALID, "generator", f"reference interpreter: {r.error}", cycles)
     bad = {b: r for b, r in results.items() if not r.equivalent}
     if not bad:

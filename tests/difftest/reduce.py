@@ -80,7 +80,7 @@ class Reducer:
                 trial = units[:i] + units[i + chunk:]
                 files = dict(self.case.files)
                 files[name] = "".join(line + "\n" for unit in trial for line in unit)
-                if trial != units and self._try(files):
+                if self._try(files):
                     units = trial
                     removed = True
                 else:
@@ -116,10 +116,11 @@ def write_regression(case: Case, verdict: Verdict, backends: tuple[str, ...], fo
             factories = side_factories(prepared, backends)
             if not isinstance(factories, Verdict):
                 for backend, factory in factories.items():
-                    first = cosimulate(prepared.program, factory, prepared.iomap, scenario, prepared.names)
+                    first = cosimulate(prepared.program, factory, prepared.iomap, scenario, prepared.names,
+                                       compiled=prepared.compiled)
                     if first.divergence is not None:
                         scenario, _ = shrink(prepared.program, factory, prepared.iomap, scenario, prepared.names,
-                                             first)
+                                             first, prepared.compiled)
                         break
             named = scenario.model_copy(update={
                 "name": folder.name,

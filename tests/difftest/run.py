@@ -56,15 +56,11 @@ def run_job(job: Job) -> tuple[Job, Verdict, float]:
 
 def jobs_for(args: argparse.Namespace) -> list[Job]:
     found = available_backends()
-    if args.backends == "builtin" or "matiec" not in found:
-        pick = lambda i: ("builtin",)  # noqa: E731
-    elif args.backends == "both":
-        pick = lambda i: found  # noqa: E731
-    else:
-        # matiec compiles every program (seconds each): by default it takes part in every K-th program only.
-        pick = lambda i: found if i % args.matiec_every == 0 else ("builtin",)  # noqa: E731
+    # matiec compiles every program (seconds each): with --backends auto it takes part in every K-th program only.
+    every = {"builtin": 0, "both": 1, "auto": args.matiec_every}[args.backends] if "matiec" in found else 0
     seeds = [args.only] if args.only is not None else [program_seed(args.seed, i) for i in range(args.count)]
-    return [Job(s, args.size, args.cycles, pick(n)) for n, s in enumerate(seeds)]
+    return [Job(s, args.size, args.cycles, found if every and n % every == 0 else ("builtin",))
+            for n, s in enumerate(seeds)]
 
 
 def main(argv: list[str] | None = None) -> int:
