@@ -82,12 +82,15 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
 class _StDriver:
     """Applies stimulus, NC model writes and the input latch to an ST side through the io map."""
 
-    def __init__(self, side: StSide, iomap: IoMap, program: Program, cycle_time_ms: int):
+    def __init__(self, side: StSide, iomap: IoMap, program: Program, cycle_time_ms: int,
+                 inputs: Iterable[OperandRef]):
         self.side = side
         self.iomap = iomap
         self.program = program
         self.nc = NcModel(cycle_time_ms, program.semantics.profile.name)
-        self.process_inputs: dict[str, int] = {}
+        # The input latch rewrites every input the program reads, every cycle, as the interpreter's phase 2 does:
+        # a program write to an input is lost (A-33), also for inputs the stimulus never drives.
+        self.process_inputs: dict[str, int] = {str(ref): 0 for ref in inputs}
         sem = program.semantics
         self.first_cycle_itf = sem.profile.interface.first_cycle
         self.first_cycle_marker = int(sem["first_cycle_marker"])
@@ -149,7 +152,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     bulk_reader = getattr(side, "bulk_reader", None)
     translated = (bulk_reader([acc.place for acc in accessors]) if bulk_reader is not None
                   else lambda: [acc.read(side) for acc in accessors])
-    driver = _StDriver(side, iomap, program, cycle_time)
+    driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     start = time.perf_counter()
     result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine)
