@@ -20,7 +20,8 @@ KFIELD table (in its own block).
 Features (names in FEATURES) can be switched off one by one, so that a construct that makes the translator
 diverge can be set aside while the rest is tested:  generate(seed, disable={"stack_mixed"}).
 
-Command line:  python -m tests.difftest.generator --seed N [--size K] [--faults] [--disable F,G] --out DIR
+Command line:  python -m tests.difftest.generator --seed N [--size K] [--faults] [--enable F,G] [--disable F,G]
+               --out DIR    (or --list-features)
 """
 
 from __future__ import annotations
@@ -30,12 +31,13 @@ import dataclasses
 import random
 import sys
 from pathlib import Path
-from typing import Callable, Iterable
+from types import MappingProxyType
+from typing import Callable, Iterable, Mapping
 
 # ---------------------------------------------------------------------------------------------------------
 # features
 
-FEATURES: dict[str, str] = {
+FEATURES: Mapping[str, str] = MappingProxyType({
     "logic": "logic chains L/LN/A/AN/O/ON/XO/XON and =/S/R/SN/RN on I/M/O/T/C, gates at chain start (5.4, 6.1-6.3)",
     "word": "word loads/stores B/W/D/K, L-/LN, overlapping B/W/D, word gating, + - x / MOD with overflow and "
             "division by zero, error markers M4200-M4202, per-cycle accumulation (5.2, 6.1, 6.2, 6.4, 6.5)",
@@ -76,25 +78,22 @@ FEATURES: dict[str, str] = {
     "reg_flow": "WA/LA live across conditional jumps, IFT/ELSE and loops (saved with PSW/PLW), merged afterwards",
     "write_input": "writes to input operands (allowed, overwritten by the next input latch, A-33)",
     "case_mix": "mnemonics in lower case and blanks between operand letter and number (2.3, 2.5)",
-}
-
-# Features that are switched off unless asked for explicitly (features=... or enable=...).
-DEFAULT_OFF: frozenset[str] = frozenset()
+})
 
 # Features disabled by default because they make the current translator diverge (see the report of the
 # generator's author); re-enable with generate(..., enable={"name"}) to check whether a fix works.
-KNOWN_DIVERGENT: dict[str, str] = {
+KNOWN_DIVERGENT: Mapping[str, str] = MappingProxyType({
     "strings_long": "strings are declared as plain STRING (126 characters in the ST executors) instead of "
                     "STRING[128]: a result of 127 or 128 characters is cut at 126",
     "write_input": "the co-simulation latches only inputs the stimulus has already set: a program write to an "
                    "input survives into the next cycle on the ST side, the interpreter overwrites it (A-33)",
     "index_wide": "an indexed W/D store after '= X': only the first byte uses the new X, the other bytes the stale "
                   "HH_X (the '= X' itself is not stored)",
-}
+})
 
 
 def default_features() -> frozenset[str]:
-    return frozenset(FEATURES) - DEFAULT_OFF - frozenset(KNOWN_DIVERGENT)
+    return frozenset(FEATURES) - frozenset(KNOWN_DIVERGENT)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -121,8 +120,9 @@ class GeneratedProject:
 # memory map (itnc530 profile).  General pools are shared by all blocks so that values flow between them;
 # the reserved areas belong to one block or one subprogram each.
 
+BYTES_PER_OPERAND: Mapping[str, int] = MappingProxyType({"B": 1, "W": 2, "D": 4})
 GEN_BYTES = 128          # B0..B127: general B/W/D pool (hot part: the first 64 bytes)
-IDX_BYTE_MAX = 100       # base of an indexed byte/word/double table: 0..100 (+ at most 15)
+IDX_BYTE_MAX = 100       # base of an indexed byte/word/double table: below 100 (+ at most 15)
 M_GEN = 128              # M0..M127 general markers
 O_GEN = 48               # O0..O47 general outputs (O48..O63 indexed output tables)
 N_INPUTS = 32            # I0..I31
@@ -131,19 +131,31 @@ LOOP_WORDS = 2000        # W2000, W2002, ...: loop counters and bounds (one per 
 SUB_DOUBLES = 4000       # D4000, D4004, ...: parameters and results of stack subprograms
 M_EDGE = 1000            # M1000...: edge memories and edge results (one per edge)
 M_SUBPAR = 3000          # M3000...: bit parameters of stack subprograms
-N_TIMERS = 24
-N_COUNTERS = 16
+N_TIMERS = 24           # timer starts T0..T23
+TIMER_RUNNING = 48      # T48+n: timer n is running
+TIMER_PRESETS = ("0.02", "0.04", "0.05", "0.06", "0.1", "0.125", "0.2", "0.3", "0", "0.01", "0.5")  # MP4110, s
+N_COUNTERS = 16         # counter starts C0..C15
+COUNTER_RUNNING = 48    # C48+n: counter n is running
+COUNTER_RELEASE = 96    # C96+n: counter n counts while this is 1
+COUNTER_PRESETS = (0, 1, 2, 3, 4, 5, 7, 10, 20)                                                    # MP4120, cycles
 N_STRINGS = 10
 
 GATES = ("A", "AN", "O", "ON", "XO", "XON")
 ARITH = ("+", "-", "x", "/", "MOD")
 COMPARES = ("==", "<>", "<", ">", "<=", ">=")
 ASSIGNS = ("=", "S", "R", "SN", "RN")
-ASSIGN_W = (6, 2, 2, 1, 1)
+ASSIGN_WEIGHTS = (6, 2, 2, 1, 1)
 
 IF_READ_BITS = (4172, 4173, 4174, 4200, 4201, 4202, 4203, 4070, 4071, 4072, 4073, 4074, 4075, 4520, 4521, 4522, 4523)
 IF_READ_WORDS = ("W272", "W260", "W262", "W264", "W256", "D280", "D284", "D356", "W1022")
+ARITH_ERROR_MARKERS = (4200, 4201, 4202)   # x overflow, / by zero, MOD not executed (13)
 ACKS = ((4070, 4090), (4071, 4091), (4072, 4092), (4073, 4093), (4074, 4094), (4075, 4095))
+# overflow, sign of / and MOD, shifts into and out of the sign bit, division by zero (6.5, 6.7)
+ARITH_EDGE_CASES = (("K-2147483648", "/", "K-1"), ("K-2147483648", "MOD", "K-1"), ("K65536", "x", "K65536"),
+                    ("K-2147483648", "x", "K-1"), ("K2147483647", "+", "K1"), ("K-2147483648", "-", "K1"),
+                    ("K-7", "/", "K2"), ("K-7", "MOD", "K2"), ("K7", "MOD", "K-2"), ("K-1", ">>", "K31"),
+                    ("K1", "<<", "K31"), ("K46341", "x", "K46341"), ("K-2147483648", "/", "K0"),
+                    ("K-32768", "x", "K-65536"))
 EDGE_CONSTS = (0, 1, -1, 2, 3, 7, 8, 15, 16, 31, 32, 100, 127, 128, 255, 256, -128, -129, 32767, 32768, -32768,
                -32769, 65535, 65536, 2147483647, -2147483647, -2147483648)
 
@@ -168,7 +180,7 @@ class _Unit:
         self.name = name
         self.is_main = is_main
         self.stem = stem
-        self.counter = 0
+        self.names_made = 0         # numbers the labels and tables of this file
         self.subs: list[_Sub] = []
         self.kfields: list[tuple[str, list[str]]] = []
         self.uses: list[_Unit] = []
@@ -176,8 +188,8 @@ class _Unit:
         self.local_def_lines: list[str] = []
 
     def fresh(self, stem: str) -> str:
-        self.counter += 1
-        return f"{stem}{self.counter}"
+        self.names_made += 1
+        return f"{stem}{self.names_made}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -187,12 +199,23 @@ class _Ctx:
     depth: int = 0             # structural nesting (jump bodies, IFT, loops, #if)
     loops: int = 0             # enclosing loops
     mult: int = 1              # worst-case repetitions of this code per call (product of loop bounds)
-    x_locked: bool = False     # X is a loop counter here: no statement may change it
-    sub: _Sub | None = None
     top: bool = False          # top level of the main program
+
+    @property
+    def may_nest(self) -> bool:
+        return self.depth < 3
+
+    @property
+    def may_loop(self) -> bool:
+        """Another loop fits: bounded nesting and a bounded instruction count per cycle."""
+        return self.loops < 2 and self.may_nest and self.mult <= 8
 
     def deeper(self, **kw) -> "_Ctx":
         return dataclasses.replace(self, depth=self.depth + 1, top=False, **kw)
+
+    def loop_body(self, times: int) -> "_Ctx":
+        """The context of a loop body that runs at most `times` times per pass (0 counts as once)."""
+        return self.deeper(loops=self.loops + 1, mult=self.mult * max(times, 1))
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -204,7 +227,7 @@ class _Gen:
         self.seed = seed
         self.rng = random.Random(seed)
         self.size = max(1, size)
-        self.f = features
+        self.features = features
         self.faults = faults
         self.lines: list[str] = []
         self.cost = 0
@@ -220,7 +243,7 @@ class _Gen:
         self.reserved_doubles = 0
         self.reserved_edges = 0
         self.reserved_subbits = 0
-        self.defines: list[tuple[str, str]] = []
+        self.defines: list[tuple[str, str]] = []           # of OEM.cfg, made first when "cfg" is on
         self.strings_used: set[int] = set()
         self.dyn_words: list[str] = []
         self.all_subs: list[_Sub] = []
@@ -228,7 +251,7 @@ class _Gen:
     # ---------------------------------------------------------------- emission
 
     def has(self, feature: str) -> bool:
-        return feature in self.f
+        return feature in self.features
 
     def chance(self, p: float) -> bool:
         return self.rng.random() < p
@@ -270,22 +293,19 @@ class _Gen:
         return self.name("O", self.rng.randrange(O_GEN))
 
     def timer_no(self) -> int:
-        used = sorted(self.timers)
-        if used and self.chance(0.6):
-            return self.rng.choice(used)
-        n = self.rng.randrange(N_TIMERS)
-        if n not in self.timers:
-            self.timers[n] = self.rng.choice(("0.02", "0.04", "0.05", "0.06", "0.1", "0.125", "0.2", "0.3", "0",
-                                              "0.01", "0.5"))
-        return n
+        return self.reuse_or_add(self.timers, N_TIMERS, TIMER_PRESETS)
 
     def counter_no(self) -> int:
-        used = sorted(self.counters)
+        return self.reuse_or_add(self.counters, N_COUNTERS, COUNTER_PRESETS)
+
+    def reuse_or_add(self, presets: dict, count: int, choices: tuple) -> int:
+        """A timer or counter number, often one already used; a new one gets a preset (written to timers.mp)."""
+        used = sorted(presets)
         if used and self.chance(0.6):
             return self.rng.choice(used)
-        n = self.rng.randrange(N_COUNTERS)
-        if n not in self.counters:
-            self.counters[n] = self.rng.choice((0, 1, 2, 3, 4, 5, 7, 10, 20))
+        n = self.rng.randrange(count)
+        if n not in presets:
+            presets[n] = self.rng.choice(choices)
         return n
 
     def bit_r(self) -> str:
@@ -297,9 +317,9 @@ class _Gen:
         if r < 0.76:
             return self.obit()
         if r < 0.81 and self.has("timers"):
-            return self.name("T", 48 + self.timer_no())
+            return self.name("T", TIMER_RUNNING + self.timer_no())
         if r < 0.85 and self.has("counters"):
-            return self.name("C", 48 + self.counter_no())
+            return self.name("C", COUNTER_RUNNING + self.counter_no())
         if r < 0.90 and self.has("nc"):
             return f"M{self.rng.choice(IF_READ_BITS)}"
         if r < 0.94 and self.auto_bits:
@@ -317,7 +337,7 @@ class _Gen:
     def mem(self, kind: str | None = None, hot: bool = True) -> str:
         kind = kind or self.rng.choice("BWWDD")
         top = 64 if hot and self.chance(0.75) else GEN_BYTES
-        size = {"B": 1, "W": 2, "D": 4}[kind]
+        size = BYTES_PER_OPERAND[kind]
         addr = self.rng.randrange(top // size) * size
         return self.name(kind, addr)
 
@@ -391,7 +411,7 @@ class _Gen:
 
     def assigns(self, lo: int = 1, hi: int = 2) -> None:
         for _ in range(self.rng.randint(lo, hi)):
-            self.op(self.rng.choices(ASSIGNS, ASSIGN_W)[0], self.bit_w())
+            self.op(self.rng.choices(ASSIGNS, ASSIGN_WEIGHTS)[0], self.bit_w())
 
     def chain_start(self) -> None:
         r = self.rng.random()
@@ -467,6 +487,11 @@ class _Gen:
         else:
             self.op("+", operand)
 
+    def copy_error_marker(self) -> None:
+        """Reads an arithmetic error marker, so that a wrong overflow or division-by-zero flag shows."""
+        self.op("L", f"M{self.rng.choice(ARITH_ERROR_MARKERS)}")
+        self.op("=", self.bit_w())
+
     def word_load(self) -> None:
         r = self.rng.random()
         if r < 0.8:
@@ -525,8 +550,7 @@ class _Gen:
 
     def stmt_kinds(self, ctx: _Ctx) -> list[tuple[Callable[[_Ctx], None], float]]:
         f = self.has
-        nest_ok = ctx.depth < 3
-        loop_ok = ctx.loops < 2 and ctx.depth < 3 and ctx.mult <= 8
+        nest_ok, loop_ok = ctx.may_nest, ctx.may_loop
         kinds: list[tuple[Callable[[_Ctx], None], float, bool]] = [
             (self.s_logic, 14, f("logic")),
             (self.s_word, 11, f("word")),
@@ -542,10 +566,10 @@ class _Gen:
             (self.s_ift, 5, f("struct") and nest_ok),
             (self.s_while, 2, f("while") and loop_ok),
             (self.s_repeat, 2, f("repeat") and loop_ok),
-            (self.s_call, 7, f("calls") and not ctx.x_locked and bool(self.callable(ctx))),
-            (self.s_case, 2, f("case") and not ctx.x_locked and bool(self.callable(ctx, case=True))),
-            (self.s_index, 4, f("index") and not ctx.x_locked),
-            (self.s_kfield, 2, f("kfield") and not ctx.x_locked),
+            (self.s_call, 7, f("calls") and bool(self.callable_subs(ctx))),
+            (self.s_case, 2, f("case") and bool(self.callable_subs(ctx, case=True))),
+            (self.s_index, 4, f("index")),
+            (self.s_kfield, 2, f("kfield")),
             (self.s_timer, 4, f("timers")),
             (self.s_counter, 3, f("counters")),
             (self.s_edge, 3, f("edges")),
@@ -599,17 +623,12 @@ class _Gen:
 
     def s_word(self, ctx: _Ctx) -> None:
         if self.chance(0.08):
-            a, mnemonic, b = self.rng.choice((("K-2147483648", "/", "K-1"), ("K-2147483648", "MOD", "K-1"),
-                                              ("K65536", "x", "K65536"), ("K-2147483648", "x", "K-1"),
-                                              ("K2147483647", "+", "K1"), ("K-2147483648", "-", "K1"),
-                                              ("K-7", "/", "K2"), ("K-7", "MOD", "K2"), ("K7", "MOD", "K-2"),
-                                              ("K-1", ">>", "K31"), ("K1", "<<", "K31"), ("K46341", "x", "K46341"),
-                                              ("K-2147483648", "/", "K0"), ("K-32768", "x", "K-65536")))
+            a, mnemonic, b = self.rng.choice(ARITH_EDGE_CASES)
+            # L- of the most negative value would overflow before the operation under test
             self.op(self.rng.choice(("L", "L-")) if a != "K-2147483648" else "L", a)
             self.op(mnemonic, b)
             self.op("=", self.val_w())
-            self.op("L", f"M{self.rng.choice((4200, 4201, 4202))}")
-            self.op("=", self.bit_w())
+            self.copy_error_marker()
             return
         self.word_load()
         for _ in range(self.rng.randint(1, 4)):
@@ -619,9 +638,8 @@ class _Gen:
         self.op("=", self.val_w())
         if self.chance(0.2):
             self.op("=", self.val_w())
-        if self.chance(0.25):                   # the arithmetic error markers
-            self.op("L", f"M{self.rng.choice((4200, 4201, 4202))}")
-            self.op("=", self.bit_w())
+        if self.chance(0.25):
+            self.copy_error_marker()
 
     def s_accumulate(self, ctx: _Ctx) -> None:
         """Words that change from cycle to cycle: packed inputs, sums, counts of input cycles."""
@@ -726,13 +744,12 @@ class _Gen:
                 self.word_op()
             self.op("=", self.val_w())
             if self.chance(0.2):
-                self.op("L", f"M{self.rng.choice((4200, 4201, 4202))}")
-                self.op("=", self.bit_w())
+                self.copy_error_marker()
 
     # stack ------------------------------------------------------------------------------------------
 
     def s_stack(self, ctx: _Ctx) -> None:
-        x_ok = not ctx.x_locked and self.has("index")
+        x_ok = self.has("index")
         pushed: list[str] = []              # "bit" (one word) or "val" (two words), in push order
         for _ in range(self.rng.randint(1, 4)):
             r = self.rng.random()
@@ -777,11 +794,7 @@ class _Gen:
         for p in pops:
             r = self.rng.random()
             if p == "bit":
-                if r < 0.6:
-                    self.op("PL", self.bit_w())
-                else:
-                    self.op("PLL")
-                    self.assigns(1, 1)
+                self.pull_bit(to_operand=r < 0.6)
             else:
                 if r < 0.55:
                     self.op("PL", self.val_w())
@@ -795,10 +808,17 @@ class _Gen:
                     self.op("L", "X")
                     self.op("=", self.val_w())
 
+    def pull_bit(self, to_operand: bool) -> None:
+        """Pulls one bit off the data stack: into a bit operand, or into LA and then assigned."""
+        if to_operand:
+            self.op("PL", self.bit_w())
+        else:
+            self.op("PLL")
+            self.assigns(1, 1)
+
     def barrier(self, ctx: _Ctx) -> None:
         """A point where control flow meets, leaving WA and LA alone: a label, a call, a CASE table."""
-        subs = self.callable(ctx, case=True) if self.has("calls") and not ctx.x_locked else []
-        subs = [s for s in subs if s.kind == "plain"]
+        subs = self.plain_subs(ctx)
         r = self.rng.random()
         if subs and r < 0.35 and self.has("case"):
             self.op("CASE", self.mem("B"))
@@ -881,17 +901,16 @@ class _Gen:
     def s_loop(self, ctx: _Ctx) -> None:
         unit = self.cur
         r = self.rng.random()
-        if r < 0.2 and self.has("index") and not ctx.x_locked:
+        if r < 0.2 and self.has("index"):
             self.x_loop(ctx)
             return
         cnt = self.reserve_word()
         bound, n = self.loop_bound()
         top = unit.fresh("Lp")
-        inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1))
+        inner = ctx.loop_body(n)
         if r < 0.55:                          # test at the end
             exit_label = unit.fresh("Lp") if self.chance(0.3) else None
-            self.op("L", "K0")
-            self.op("=", cnt)
+            self.set_zero(cnt)
             self.label(top)
             start = self.cost
             self.body(inner, 1, 2)
@@ -899,9 +918,7 @@ class _Gen:
                 self.cond()
                 self.op(self.rng.choice(("JPT", "JPF")), exit_label)
                 self.body(inner, 0, 1)
-            self.op("L", cnt)
-            self.op("+", "K1")
-            self.op("=", cnt)
+            self.increment(cnt)
             if self.chance(0.5):
                 self.op("<", bound)
                 self.op("JPT", top)
@@ -929,7 +946,7 @@ class _Gen:
             self.op("=", cnt)
             self.op("JP", top)
             self.label(end)
-        self.cost += (self.cost - start) * max(n, 1)
+        self.charge_repeats(start, n)
 
     def x_loop(self, ctx: _Ctx) -> None:
         """A loop with X as the counter over indexed tables; its body never changes X."""
@@ -938,8 +955,7 @@ class _Gen:
         n = self.rng.randint(1, 8)
         src = self.rng.randrange(IDX_BYTE_MAX)
         dst = self.rng.randrange(IDX_BYTE_MAX)
-        self.op("L", "K0")
-        self.op("=", "X")
+        self.set_zero("X")
         self.label(top)
         start = self.cost
         self.op("L", f"B{src}[X]")
@@ -952,14 +968,26 @@ class _Gen:
         if self.has("extended") and self.chance(0.6):
             self.op("INCX")
         else:
-            self.op("L", "X")
-            self.op("+", "K1")
-            self.op("=", "X")
+            self.increment("X")
         self.op("L", "X")
         self.op("<", f"K{n}")
         self.op("JPT", top)
-        self.cost += (self.cost - start) * n
+        self.charge_repeats(start, n)
         self.touch_bytes(dst, 8)
+
+    def set_zero(self, word: str) -> None:
+        self.op("L", "K0")
+        self.op("=", word)
+
+    def increment(self, word: str) -> None:
+        """word + 1 without INC/INCW/INCX, which are optional instructions (feature "extended", A-23)."""
+        self.op("L", word)
+        self.op("+", "K1")
+        self.op("=", word)
+
+    def charge_repeats(self, start: int, times: int) -> None:
+        """The code emitted since cost `start` was counted once but runs up to `times` times (0 counts once)."""
+        self.cost += (self.cost - start) * max(times, 1)
 
     def touch_bytes(self, base: int, length: int) -> None:
         """Re-store the bytes of an indexed table in place so that the co-simulation compares them."""
@@ -969,28 +997,25 @@ class _Gen:
             self.op("=", f"D{a}")
 
     def s_ift(self, ctx: _Ctx) -> None:
-        if self.has("goto_mix") and self.has("loops") and ctx.loops < 2 and ctx.mult <= 8 and self.chance(0.15):
+        if self.has("goto_mix") and self.has("loops") and ctx.may_loop and self.chance(0.15):
             # a loop whose backward jump sits inside an IFT: LBL top ... IFT ... JPT top ... ENDI
             cnt = self.reserve_word()
             n = self.rng.randint(1, 5)
             top = self.cur.fresh("Lp")
-            inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * n)
-            self.op("L", "K0")
-            self.op("=", cnt)
+            inner = ctx.loop_body(n)
+            self.set_zero(cnt)
             self.label(top)
             start = self.cost
             self.body(inner, 1, 2)
             self.cond()
             self.op(self.rng.choice(("IFT", "IFF")))
             self.body(inner, 0, 1)
-            self.op("L", cnt)
-            self.op("+", "K1")
-            self.op("=", cnt)
+            self.increment(cnt)
             self.op("<", f"K{n}")
             self.op("JPT", top)
             self.body(inner, 0, 1)
             self.op("ENDI")
-            self.cost += (self.cost - start) * n
+            self.charge_repeats(start, n)
             return
         out = self.cur.fresh("Lb") if self.has("jumps") and self.chance(0.12) else None
         self.cond()
@@ -1015,8 +1040,7 @@ class _Gen:
         cnt = self.reserve_word()
         bound, n = self.loop_bound()
         true_form = self.chance(0.6)
-        self.op("L", "K0")
-        self.op("=", cnt)
+        self.set_zero(cnt)
 
         def test() -> None:
             self.op("L", cnt)
@@ -1025,15 +1049,13 @@ class _Gen:
         test()
         self.op("WHILET" if true_form else "WHILEF")
         start = self.cost
-        inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1))
+        inner = ctx.loop_body(n)
         self.body(inner, 1, 2)
         out = self.break_out(inner)
-        self.op("L", cnt)
-        self.op("+", "K1")
-        self.op("=", cnt)
+        self.increment(cnt)
         test()
         self.op("ENDW")
-        self.cost += (self.cost - start) * max(n, 1)
+        self.charge_repeats(start, n)
         if out:
             self.label(out)
 
@@ -1050,29 +1072,27 @@ class _Gen:
     def s_repeat(self, ctx: _Ctx) -> None:
         cnt = self.reserve_word()
         bound, n = self.loop_bound()
-        self.op("L", "K0")
-        self.op("=", cnt)
+        self.set_zero(cnt)
         self.op("REPEAT")
         start = self.cost
-        inner = ctx.deeper(loops=ctx.loops + 1, mult=ctx.mult * max(n, 1))
+        inner = ctx.loop_body(n)
         self.body(inner, 1, 2)
         out = self.break_out(inner)
-        self.op("L", cnt)
-        self.op("+", "K1")
-        self.op("=", cnt)
+        self.increment(cnt)
         if self.chance(0.5):
             self.op(">=", bound)
             self.op("UNTILT")
         else:
             self.op("<", bound)
             self.op("UNTILF")
-        self.cost += (self.cost - start) * max(n, 1)
+        self.charge_repeats(start, n)
         if out:
             self.label(out)
 
     # calls ------------------------------------------------------------------------------------------
 
-    def callable(self, ctx: _Ctx, case: bool = False) -> list[_Sub]:
+    def callable_subs(self, ctx: _Ctx, case: bool = False) -> list[_Sub]:
+        """Subprograms of a lower rank, small enough for the loops around ctx; case: none from the data stack."""
         unit = ctx.unit
         limit = 800 // ctx.mult
         found = []
@@ -1085,6 +1105,12 @@ class _Gen:
                 found.append(s)
         return found
 
+    def plain_subs(self, ctx: _Ctx) -> list[_Sub]:
+        """Callable subprograms that leave WA, LA and the data stack alone."""
+        if not self.has("calls"):
+            return []
+        return [s for s in self.callable_subs(ctx) if s.kind == "plain"]
+
     def pick_sub(self, subs: list[_Sub]) -> _Sub:
         """Subprograms not called yet are preferred, so that few of them stay dead."""
         s = self.rng.choices(subs, [1 if s.calls else 4 for s in subs])[0]
@@ -1092,7 +1118,7 @@ class _Gen:
         return s
 
     def s_call(self, ctx: _Ctx) -> None:
-        self.call_sub(ctx, self.pick_sub(self.callable(ctx)))
+        self.call_sub(ctx, self.pick_sub(self.callable_subs(ctx)))
 
     def call_sub(self, ctx: _Ctx, s: _Sub) -> None:
         if s.kind == "plain":
@@ -1131,15 +1157,11 @@ class _Gen:
             for _ in range(s.params):
                 self.op("PS", self.bit_r())
             self.op("CM", s.name)
-            if self.chance(0.6):
-                self.op("PL", self.bit_w())
-            else:
-                self.op("PLL")
-                self.assigns(1, 1)
+            self.pull_bit(to_operand=self.chance(0.6))
         self.cost += s.cost
 
     def s_case(self, ctx: _Ctx) -> None:
-        subs = self.callable(ctx, case=True)
+        subs = self.callable_subs(ctx, case=True)
         if self.chance(0.7):
             sel = self.mem("B")
             self.op("L", self.dyn_val())
@@ -1158,7 +1180,7 @@ class _Gen:
         for i in range(n):
             s = self.pick_sub(subs)
             worst = max(worst, s.cost)
-            if i != plain and self.has("cfg") and self.defines and self.chance(0.2):
+            if i != plain and self.has("cfg") and self.chance(0.2):
                 self.put(self.pp_cond())
                 self.op("CM", s.name)
                 self.put("#endif")
@@ -1220,13 +1242,14 @@ class _Gen:
                 self.op("LB", base)
                 self.op("B=", base)
             else:
-                self.op("L", f"{dst}")
+                self.op("L", dst)
                 self.op("=", self.bit_w())
         else:                                                     # X as a word operand
             self.set_x(self.rng.choice((7, 15, 255)))
             self.op("L", self.rng.choice(("X", self.val_r())))
-            self.op(self.rng.choice(("+", "-", "x", "<<", ">>", "A", "O", "BS", "==")), "X")
-            if self.lines[-1].startswith("=="):
+            mnemonic = self.rng.choice(("+", "-", "x", "<<", ">>", "A", "O", "BS", "=="))
+            self.op(mnemonic, "X")
+            if mnemonic == "==":
                 self.assigns(1, 1)
             else:
                 self.op("=", self.val_w())
@@ -1274,7 +1297,7 @@ class _Gen:
 
     def s_timer(self, ctx: _Ctx) -> None:
         n = self.timer_no()
-        start, run = self.name("T", n), self.name("T", 48 + n)
+        start, run = self.name("T", n), self.name("T", TIMER_RUNNING + n)
         r = self.rng.random()
         if r < 0.35:
             self.cond()
@@ -1317,7 +1340,6 @@ class _Gen:
             self.op(self.rng.choice(("=", "S", "R")), run)
             self.op("L", run)
             self.assigns(1, 1)
-        self.timers.setdefault(n, "0.1")
 
     def s_counter(self, ctx: _Ctx) -> None:
         n = self.counter_no()
@@ -1327,9 +1349,9 @@ class _Gen:
             self.op(self.rng.choice(("=", "S")), self.name("C", n))
         elif r < 0.6:
             self.cond()
-            self.op(self.rng.choice(("=", "=", "S", "R")), self.name("C", 96 + n))
+            self.op(self.rng.choice(("=", "=", "S", "R")), self.name("C", COUNTER_RELEASE + n))
         elif r < 0.85:
-            self.op("L", self.name("C", 48 + n))
+            self.op("L", self.name("C", COUNTER_RUNNING + n))
             if self.has("logic"):
                 self.gates(0, 1)
             self.assigns(1, 1)
@@ -1338,12 +1360,12 @@ class _Gen:
             i = self.inp()
             self.op("L", i)
             self.op("AN", mem)
-            self.op("=", self.name("C", 96 + n))
+            self.op("=", self.name("C", COUNTER_RELEASE + n))
             self.op("L", i)
             self.op("=", mem)
             self.op("L", self.inp())
             self.op("=", self.name("C", n))
-            self.op("L", self.name("C", 48 + n))
+            self.op("L", self.name("C", COUNTER_RUNNING + n))
             self.assigns(1, 1)
 
     def s_edge(self, ctx: _Ctx) -> None:
@@ -1367,9 +1389,7 @@ class _Gen:
             if self.has("extended") and self.chance(0.5):
                 self.op("INC", acc)
             else:
-                self.op("L", acc)
-                self.op("+", "K1")
-                self.op("=", acc)
+                self.increment(acc)
             self.op("ENDI")
         elif r < 0.7:
             self.op("L", rise)
@@ -1378,7 +1398,7 @@ class _Gen:
 
     def s_nc(self, ctx: _Ctx) -> None:
         r = self.rng.random()
-        plain = [s for s in self.callable(ctx) if s.kind == "plain"] if self.has("calls") and not ctx.x_locked else []
+        plain = self.plain_subs(ctx)
         if r < 0.25:
             self.op("L", "M4172")
             if plain and self.chance(0.5):
@@ -1436,9 +1456,6 @@ class _Gen:
         return f"#if {name} {self.rng.choice(('=', '=', '<>'))} {test}"
 
     def s_cfg(self, ctx: _Ctx) -> None:
-        if not self.defines:
-            self.s_logic(ctx)
-            return
         if self.chance(0.3) and self.has("logic"):
             self.chain_start()
             self.put(self.pp_cond())
@@ -1610,13 +1627,12 @@ class _Gen:
             self.op("ENDI")
             self.op("=", self.val_w())
             self.assigns(1, 1)
-        elif self.has("loops") and self.has("stack") and ctx.loops < 2 and ctx.mult <= 8:
+        elif self.has("loops") and self.has("stack") and ctx.may_loop:
             # WA accumulates across the iterations of a loop; the counter test saves it on the stack
             cnt = self.reserve_word()
             n = self.rng.randint(1, 6)
             top = unit.fresh("Lp")
-            self.op("L", "K0")
-            self.op("=", cnt)
+            self.set_zero(cnt)
             self.word_load()
             self.label(top)
             start = self.cost
@@ -1627,13 +1643,11 @@ class _Gen:
                 self.op("INC", cnt)
                 self.op("L", cnt)
             else:
-                self.op("L", cnt)
-                self.op("+", "K1")
-                self.op("=", cnt)
+                self.increment(cnt)
             self.op("<", f"K{n}")
             self.op("PLW")
             self.op("JPT", top)
-            self.cost += (self.cost - start) * n
+            self.charge_repeats(start, n)
             self.op("=", self.val_w())
             if self.chance(0.5):
                 self.assigns(1, 1)                     # LA of the last counter test
@@ -1692,7 +1706,7 @@ class _Gen:
         self.cur = unit
         self.lines = []
         self.cost = 0
-        ctx = _Ctx(unit, rank=sub.rank, sub=sub)
+        ctx = _Ctx(unit, rank=sub.rank)
         if sub.exported:
             self.put(f"GLOBAL {sub.name}")
         self.label(sub.name)
@@ -1737,11 +1751,7 @@ class _Gen:
                 self.gates(0, 2)
         elif sub.kind == "stack":
             params = [self.reserve_double() for _ in range(sub.params)]
-            for p in reversed(params):
-                self.op("PL", p)
-            self.op("L", params[0])
-            for p in params[1:]:
-                self.op(self.rng.choice(ARITH + ("A", "O", "XO")), p)
+            self.combine_params(params, ARITH + ("A", "O", "XO"))
             for _ in range(self.rng.randint(0, 2)):
                 self.word_op()
             if self.chance(0.3):
@@ -1755,11 +1765,7 @@ class _Gen:
         else:                                       # bitstack
             params = [f"M{M_SUBPAR + self.reserved_subbits + i}" for i in range(sub.params)]
             self.reserved_subbits += sub.params
-            for p in reversed(params):
-                self.op("PL", p)
-            self.op("L", params[0])
-            for p in params[1:]:
-                self.op(self.rng.choice(GATES), p)
+            self.combine_params(params, GATES)
             self.gates(0, 1)
             if self.chance(0.5):
                 self.op("=", self.bit_w())
@@ -1767,6 +1773,14 @@ class _Gen:
         self.op("EM")
         sub.cost = max(1, self.cost)
         sub.lines = self.lines
+
+    def combine_params(self, params: list[str], mnemonics: tuple[str, ...]) -> None:
+        """Pulls the caller's parameters off the data stack (last pushed first) and combines them in order."""
+        for p in reversed(params):
+            self.op("PL", p)
+        self.op("L", params[0])
+        for p in params[1:]:
+            self.op(self.rng.choice(mnemonics), p)
 
     def sub_kind(self) -> str:
         kinds = [("plain", 10.0)]
@@ -1814,24 +1828,24 @@ class _Gen:
         add("M", mt, f"MG_table{mt}")
         for kind in "BWD":
             for _ in range(self.rng.randint(0, 2)):
-                size = {"B": 1, "W": 2, "D": 4}[kind]
+                size = BYTES_PER_OPERAND[kind]
                 a = self.rng.randrange(64 // size) * size
                 add(kind, a, f"{kind}G_v{a}")
         if self.has("timers"):
             for _ in range(self.rng.randint(0, 2)):
                 n = self.timer_no()
                 add("T", n, f"TS_t{n}")
-                add("T", 48 + n, f"TR_t{n}")
+                add("T", TIMER_RUNNING + n, f"TR_t{n}")
         if self.has("counters") and self.chance(0.5):
             n = self.counter_no()
             add("C", n, f"CS_c{n}")
-            add("C", 96 + n, f"CD_c{n}")
-            add("C", 48 + n, f"CR_c{n}")
+            add("C", COUNTER_RELEASE + n, f"CD_c{n}")
+            add("C", COUNTER_RUNNING + n, f"CR_c{n}")
         for k in range(self.rng.randint(1, 3)):
             name = f"KG_c{k}"
             lines.append(f"{name:<18} K {self.const_lit()[1:]}")
             self.const_syms.append(name)
-        if self.has("cfg") and self.defines and self.chance(0.6):
+        if self.has("cfg") and self.chance(0.6):
             lines.append(self.pp_cond())
             lines.append(f"{'KG_cfg':<18} K {self.rng.randint(-50, 50)}")
             lines.append("#else")
@@ -1852,7 +1866,6 @@ class _Gen:
         self.def_lines = lines
 
     def generate(self) -> GeneratedProject:
-        rng = self.rng
         files: dict[str, str] = {}
         cfg_name = None
         if self.has("cfg"):
@@ -1862,27 +1875,27 @@ class _Gen:
             self.make_defs()
         main = _Unit("main.src", True, "Sub_")
         mods: list[_Unit] = []
-        if self.has("modules") and self.has("calls") and rng.random() < 0.6:
-            for k in range(rng.randint(1, 2)):
+        if self.has("modules") and self.has("calls") and self.chance(0.6):
+            for k in range(self.rng.randint(1, 2)):
                 mods.append(_Unit(f"mod{k + 1}.src", False, f"M{k + 1}_"))
-            if len(mods) == 2 and rng.random() < 0.7:
+            if len(mods) == 2 and self.chance(0.7):
                 mods[1].uses.append(mods[0])
             main.uses.extend(mods)
         # file-local symbols of the modules (#define without /g)
         for m in mods:
-            if self.has("defs") and rng.random() < 0.5:
+            if self.has("defs") and self.chance(0.5):
                 a = self.rng.randrange(32)
                 if ("M", a) not in self.sym:
                     m.local_syms[("M", a)] = f"ML_{m.stem}m{a}"
                     m.local_def_lines = [f"* local symbols of {m.name}", f"ML_{m.stem}m{a:<10} M {a}"]
         # subprograms: modules first, then main; a subprogram may call only lower ranks
         rank = 0
-        n_main_subs = (rng.randint(1, 2) + self.size // 7) if self.has("calls") else 0
+        n_main_subs = (self.rng.randint(1, 2) + self.size // 7) if self.has("calls") else 0
         plan: list[_Sub] = []
         for m in mods:
-            for k in range(rng.randint(1, 3)):
+            for k in range(self.rng.randint(1, 3)):
                 plan.append(_Sub(f"{m.stem}Fn{k}", m, self.sub_kind(), 0, exported=True))
-            for k in range(rng.randint(0, 2)):
+            for k in range(self.rng.randint(0, 2)):
                 plan.append(_Sub(f"Priv{k}", m, "plain", 0))
         for k in range(n_main_subs):
             plan.append(_Sub(f"Sub_{k}", main, self.sub_kind(), 0))
@@ -1890,7 +1903,7 @@ class _Gen:
             s.rank = rank
             rank += 1
             if s.kind in ("stack", "bitstack"):
-                s.params = rng.randint(1, 3)
+                s.params = self.rng.randint(1, 3)
             self.gen_sub(s)
             s.unit.subs.append(s)
             self.all_subs.append(s)
@@ -1899,12 +1912,12 @@ class _Gen:
         blocks: list[list[str]] = []
         ctx = _Ctx(main, rank=10 ** 6, top=True)
         n_blocks = self.size
-        fault_at = rng.randrange(n_blocks) if self.faults else -1
+        fault_at = self.rng.randrange(n_blocks) if self.faults else -1
         seeds = min(max(2, n_blocks // 10), n_blocks) if self.has("word") else 0
         for b in range(n_blocks):
             self.lines = []
             self.cost = 0
-            if b == 0 and self.has("acc_carry") and rng.random() < 0.15:
+            if b == 0 and self.has("acc_carry") and self.chance(0.15):
                 self.s_carry(ctx)                     # WA/LA as the previous cycle left them (8.1 phase 4)
             elif b < seeds:
                 self.s_accumulate(ctx)
@@ -1914,7 +1927,7 @@ class _Gen:
                 self.fault_block(main)
             blocks.append(self.lines)
         if self.has("calls"):                         # one more block for each subprogram nobody calls yet
-            for s in self.callable(ctx):
+            for s in self.callable_subs(ctx):
                 if s.calls == 0:
                     self.lines = []
                     s.calls += 1
@@ -1927,9 +1940,7 @@ class _Gen:
         for m in mods:
             out.append(f"USES {m.name}")
         for m in mods:
-            for s in m.subs:
-                if s.exported:
-                    out.append(f"EXTERN {s.name}")
+            out.extend(self.externs(m))
         for b in blocks:
             out.append("; @block")
             out.extend(b)
@@ -1943,9 +1954,7 @@ class _Gen:
                 files[f"{m.stem.lower()}local.def"] = "\n".join(m.local_def_lines) + "\n"
             for u in m.uses:
                 mo.append(f"USES {u.name}")
-                for s in u.subs:
-                    if s.exported:
-                        mo.append(f"EXTERN {s.name}")
+                mo.extend(self.externs(u))
             mo.extend(self.tail(m))
             files[m.name] = "\n".join(mo) + "\n"
         if self.def_lines:
@@ -1961,6 +1970,9 @@ class _Gen:
             mp_name = "timers.mp"
         files["scenario.yaml"] = self.scenario(mp_name)
         return GeneratedProject(self.seed, files, "main.src", cfg_name, mp_name)
+
+    def externs(self, used: _Unit) -> list[str]:
+        return [f"EXTERN {s.name}" for s in used.subs if s.exported]
 
     def tail(self, unit: _Unit) -> list[str]:
         out: list[str] = []
@@ -2014,9 +2026,13 @@ def generate(seed: int, *, size: int = 40, faults: bool = False, features: Itera
     return _Gen(seed, size, chosen, faults).generate()
 
 
+def _feature_list(text: str) -> list[str]:
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m tests.difftest.generator", description=__doc__.split("\n")[0])
-    p.add_argument("--seed", type=int, required=True)
+    p.add_argument("--seed", type=int)
     p.add_argument("--size", type=int, default=40)
     p.add_argument("--faults", action="store_true", help="inject exactly one runtime fault")
     p.add_argument("--disable", default="", help="comma-separated features to switch off")
@@ -2026,14 +2042,13 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.list_features:
         for name, text in FEATURES.items():
-            flag = " (off: known divergence)" if name in KNOWN_DIVERGENT else " (off)" if name in DEFAULT_OFF else ""
+            flag = " (off: known divergence)" if name in KNOWN_DIVERGENT else ""
             print(f"{name:<15} {text}{flag}")
         return 0
-    if args.out is None:
-        p.error("--out DIR is required")
-    split = lambda s: [x.strip() for x in s.split(",") if x.strip()]  # noqa: E731
-    project = generate(args.seed, size=args.size, faults=args.faults, enable=split(args.enable),
-                       disable=split(args.disable))
+    if args.seed is None or args.out is None:
+        p.error("--seed N and --out DIR are required")
+    project = generate(args.seed, size=args.size, faults=args.faults, enable=_feature_list(args.enable),
+                       disable=_feature_list(args.disable))
     path = project.write(args.out)
     extra = f" --cfg {args.out / project.cfg}" if project.cfg else ""
     print(f"{path}{extra}")
