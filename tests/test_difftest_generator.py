@@ -55,7 +55,6 @@ NOT_GENERATED = {"SUBM", "RPLY", "CAN", "=N"}
 # What each known-divergent feature writes, and nothing else does.
 DIVERGENT_CONSTRUCTS = {
     "strings_long": r'S"[A-H]{60,}"',
-    "write_input": r"^=\s+I\s?\d+\s*$",
     "index_wide": r"^=\s+[WD]\d+\[X\]",
 }
 
