@@ -122,6 +122,20 @@ void hh_sys_free(hh_sys *sys)
     free(sys);
 }
 
+/* `items` with room for element n (doubling, `first` elements at first), or NULL when memory is
+ * exhausted (`items` is then unchanged). */
+static void *reserve(void *items, size_t n, size_t *cap, size_t first, size_t size)
+{
+    size_t grown;
+    if (n < *cap)
+        return items;
+    grown = *cap ? *cap * 2 : first;
+    items = realloc(items, grown * size);
+    if (items != NULL)
+        *cap = grown;
+    return items;
+}
+
 static mp_entry *find_mp(const hh_sys *sys, int32_t number, int32_t index)
 {
     size_t i;
@@ -138,14 +152,10 @@ int hh_sys_set_mp(hh_sys *sys, int32_t number, int32_t index, int64_t mantissa, 
         return -1;
     e = find_mp(sys, number, index);
     if (e == NULL) {
-        if (sys->n_mps == sys->cap_mps) {
-            size_t cap = sys->cap_mps ? sys->cap_mps * 2 : 32;
-            mp_entry *p = (mp_entry *)realloc(sys->mps, cap * sizeof *p);
-            if (p == NULL)
-                return -1;
-            sys->mps = p;
-            sys->cap_mps = cap;
-        }
+        mp_entry *p = (mp_entry *)reserve(sys->mps, sys->n_mps, &sys->cap_mps, 32, sizeof *p);
+        if (p == NULL)
+            return -1;
+        sys->mps = p;
         e = &sys->mps[sys->n_mps++];
         e->number = number;
         e->index = index;
@@ -190,6 +200,7 @@ int hh_sys_set_status(hh_sys *sys, int32_t number, int32_t value)
 int hh_sys_set_module_result(hh_sys *sys, int32_t number, int32_t index, int32_t value)
 {
     const module_entry *m = find_module(number);
+    override_entry *p;
     size_t i;
     if (m == NULL || index < 0 || index >= m->nresults)
         return -1;
@@ -199,14 +210,10 @@ int hh_sys_set_module_result(hh_sys *sys, int32_t number, int32_t index, int32_t
             return 0;
         }
     }
-    if (sys->n_overrides == sys->cap_overrides) {
-        size_t cap = sys->cap_overrides ? sys->cap_overrides * 2 : 8;
-        override_entry *p = (override_entry *)realloc(sys->overrides, cap * sizeof *p);
-        if (p == NULL)
-            return -1;
-        sys->overrides = p;
-        sys->cap_overrides = cap;
-    }
+    p = (override_entry *)reserve(sys->overrides, sys->n_overrides, &sys->cap_overrides, 8, sizeof *p);
+    if (p == NULL)
+        return -1;
+    sys->overrides = p;
     sys->overrides[sys->n_overrides].number = number;
     sys->overrides[sys->n_overrides].index = index;
     sys->overrides[sys->n_overrides].value = value;

@@ -47,6 +47,7 @@ struct hh_nc {
     int stage;              /* 0: main strobe; 1: TOOL CALL second strobe (M4520) */
     int64_t started;        /* cycle the current strobe was set */
     int32_t mode;           /* last W272 value the NC wrote */
+    int32_t first_cycle;    /* the first-cycle marker, M4172 unless set */
     int pulse_program;      /* M4173 was set in the previous phase: reset it now */
     int pulse_mp;
     int64_t last_cycle;     /* -1 before the first phase */
@@ -97,8 +98,17 @@ hh_nc *hh_nc_new(int32_t cycle_time_ms, int32_t profile)
     nc->profile = profile;
     nc->state = HH_NC_IDLE;
     nc->mode = DEFAULT_MODE;
+    nc->first_cycle = M_FIRST_CYCLE;
     nc->last_cycle = -1;
     return nc;
+}
+
+int hh_nc_set_first_cycle_marker(hh_nc *nc, int32_t marker)
+{
+    if (marker < 0)
+        return HH_NC_ERANGE;
+    nc->first_cycle = marker;
+    return HH_NC_OK;
 }
 
 void hh_nc_free(hh_nc *nc)
@@ -327,7 +337,7 @@ int hh_nc_phase(hh_nc *nc, int64_t cycle, hh_read_bit read_bit, void *ctx, hh_wr
     ws.n = 0;
     ws.overflow = 0;
     if (nc->profile == HH_NC_PROFILE_ITNC && cycle <= 1) {
-        emit(&ws, 'M', M_FIRST_CYCLE, cycle == 0);
+        emit(&ws, 'M', nc->first_cycle, cycle == 0);
         if (cycle == 0)
             emit(&ws, 'W', W_MODE, nc->mode);
     }

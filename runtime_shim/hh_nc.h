@@ -15,7 +15,8 @@
  * Which writes a phase produces (every write of a phase names a distinct operand; when two
  * steps of one phase write the same operand, the later value replaces the earlier):
  *  - cycle 0 (ITNC profile): M4172 = 1 and W272 = current operating mode (default 1);
- *    cycle 1: M4172 = 0.  W272 is otherwise written only when a `mode` action plays (17b.9).
+ *    cycle 1: M4172 = 0 (M4172 or the marker given to hh_nc_set_first_cycle_marker, A-38).
+ *    W272 is otherwise written only when a `mode` action plays (17b.9).
  *  - when an action starts: its code words, its additional markers (TOOL CALL: M4521-M4523,
  *    exactly one set) and its strobe = 1.  Code words and the TOOL CALL markers are written
  *    only then and are never re-asserted: they keep their value until the next action that
@@ -73,6 +74,9 @@ enum { HH_NC_RESTART_PROGRAM = 0, HH_NC_RESTART_MACHINE_PARAMETERS = 1 };
 /* NULL when cycle_time_ms <= 0, the profile is unknown or memory is exhausted. */
 hh_nc *hh_nc_new(int32_t cycle_time_ms, int32_t profile);
 void hh_nc_free(hh_nc *nc);
+/* ASSUMPTION A-38 first_cycle_marker: the marker the ITNC profile pulses in cycles 0/1 instead
+ * of M4172 (the TNC 407 writes none).  HH_NC_OK, or HH_NC_ERANGE for a negative marker. */
+int hh_nc_set_first_cycle_marker(hh_nc *nc, int32_t marker);
 
 /* Enqueue one scenario action; HH_NC_OK or a negative HH_NC_E... code (nothing queued then). */
 int hh_nc_m_function(hh_nc *nc, int32_t code);            /* W260; M4072/M4092 (tnc407: M2045/M2482) */

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from tests.test_interp import compile_text, cycles, fault_of, machine, values, with_setting
+from tests.test_interp import compile_text, cycles, fault_of, machine, ref, values, with_setting
 from transpiler.interp import Machine, MachineConfigError
 from transpiler.semantics import make_semantics
 
@@ -14,11 +15,18 @@ from transpiler.semantics import make_semantics
 def _trace(m: Machine, count: int, names: tuple[str, ...], inputs: dict[str, list] | None = None) -> dict[str, list]:
     trace: dict[str, list] = {n: [] for n in names}
     for c in range(count):
-        writes = [(n[0], int(n[1:]), v[c]) for n, v in (inputs or {}).items()]
+        writes = [(*ref(n), v[c]) for n, v in (inputs or {}).items()]
         assert not m.run_cycle(c, writes).faults
         for n in names:
-            trace[n].append(m.read(n[0], int(n[1:])))
+            trace[n].append(m.read(*ref(n)))
     return trace
+
+
+def _after_one_cycle(folder: Path, program: str, names: tuple[str, ...], **kwargs: Any) -> dict[str, Any]:
+    """Values of `names` after cycle 0 of `program` on a machine built with `kwargs` (see test_interp.machine)."""
+    m = machine(folder, program, **kwargs)
+    cycles(m, 1)
+    return values(m, *names)
 
 
 TIMER_SET_ONCE = """
@@ -110,12 +118,10 @@ def test_store_saturation(tmp_path: Path) -> None:
         =   B4
         EM
     """
-    m = machine(tmp_path / "truncate", program)
-    cycles(m, 1)
-    assert values(m, "B0", "W2", "B4") == {"B0": 44, "W2": 25536, "B4": 56}
-    m = machine(tmp_path / "saturate", program, overrides={"store_truncation": "saturate"})
-    cycles(m, 1)
-    assert values(m, "B0", "W2", "B4") == {"B0": 127, "W2": -32768, "B4": -128}
+    names = ("B0", "W2", "B4")
+    assert _after_one_cycle(tmp_path / "truncate", program, names) == {"B0": 44, "W2": 25536, "B4": 56}
+    assert _after_one_cycle(tmp_path / "saturate", program, names, overrides={"store_truncation": "saturate"}) == {
+        "B0": 127, "W2": -32768, "B4": -128}
 
 
 def test_bracket_width(tmp_path: Path) -> None:
@@ -132,15 +138,13 @@ def test_bracket_width(tmp_path: Path) -> None:
         =   D4
         EM
     """
-    m = machine(tmp_path / "32", program, given={"B0": 0xFF})
-    cycles(m, 1)
-    assert values(m, "M1", "D4") == {"M1": 0, "D4": -1}
+    names = ("M1", "D4")
+    assert _after_one_cycle(tmp_path / "32", program, names, given={"B0": 0xFF}) == {"M1": 0, "D4": -1}
     # make_semantics rejects 'operand' for this integer-typed key, so the setting is placed directly
     sem = make_semantics("tv")
     sem = type(sem)(sem.profile, {**sem.values, "bracket_width": "operand"})
-    m = machine(tmp_path / "operand", program, semantics=sem, given={"B0": 0xFF})
-    cycles(m, 1)
-    assert values(m, "M1", "D4") == {"M1": 1, "D4": 0x12FF}
+    assert _after_one_cycle(tmp_path / "operand", program, names, semantics=sem, given={"B0": 0xFF}) == {
+        "M1": 1, "D4": 0x12FF}
 
 
 def test_index_register_width(tmp_path: Path) -> None:
@@ -155,12 +159,12 @@ def test_index_register_width(tmp_path: Path) -> None:
         =   D4
         EM
     """
-    m = machine(tmp_path / "32", program)
-    cycles(m, 1)
-    assert values(m, "D0", "D4") == {"D0": 0x12345, "D4": 0x18000}
+    assert _after_one_cycle(tmp_path / "32", program, ("D0", "D4")) == {"D0": 0x12345, "D4": 0x18000}
     m = machine(tmp_path / "16", program, overrides={"index_register_width": 16})
     cycles(m, 1)
     assert values(m, "D0", "D4") == {"D0": 0x2345, "D4": -32768}
+    m.write("X", 0, 0x18001)             # a write from outside wraps like one by the program
+    assert m.read("X") == -32767
 
 
 def test_psx_width(tmp_path: Path) -> None:
@@ -194,12 +198,10 @@ def test_div_min_by_minus_one(tmp_path: Path) -> None:
         =   M2
         EM
     """
-    m = machine(tmp_path / "no_flag", program)
-    cycles(m, 1)
-    assert values(m, "D0", "M1", "D4", "M2") == {"D0": -2147483648, "M1": 0, "D4": 0, "M2": 0}
-    m = machine(tmp_path / "flag", program, overrides={"div_min_by_minus_one": "flag"})
-    cycles(m, 1)
-    assert values(m, "D0", "M1", "D4", "M2") == {"D0": -2147483648, "M1": 1, "D4": 0, "M2": 1}
+    names = ("D0", "M1", "D4", "M2")
+    assert _after_one_cycle(tmp_path / "no_flag", program, names) == {"D0": -2147483648, "M1": 0, "D4": 0, "M2": 0}
+    assert _after_one_cycle(tmp_path / "flag", program, names, overrides={"div_min_by_minus_one": "flag"}) == {
+        "D0": -2147483648, "M1": 1, "D4": 0, "M2": 1}
 
 
 @pytest.mark.parametrize("line, program", [
@@ -226,12 +228,10 @@ def test_add_overflow_flag_only_on_overflow(tmp_path: Path) -> None:
         =   D4
         EM
     """
-    m = machine(tmp_path / "wrap", program)
-    cycles(m, 1)
-    assert values(m, "D0", "M1", "M4200") == {"D0": 2147483647, "M1": 0, "M4200": 0}
-    m = machine(tmp_path / "flag", program, overrides={"add_overflow": "flag"})
-    cycles(m, 1)
-    assert values(m, "D0", "M1", "D4", "M4200") == {"D0": 2147483647, "M1": 1, "D4": 6, "M4200": 1}
+    assert _after_one_cycle(tmp_path / "wrap", program, ("D0", "M1", "M4200")) == {
+        "D0": 2147483647, "M1": 0, "M4200": 0}
+    assert _after_one_cycle(tmp_path / "flag", program, ("D0", "M1", "D4", "M4200"),
+                            overrides={"add_overflow": "flag"}) == {"D0": 2147483647, "M1": 1, "D4": 6, "M4200": 1}
 
 
 def test_case_out_of_range_fault(tmp_path: Path) -> None:

@@ -118,6 +118,15 @@ def test_first_cycle_marker_and_mode_word(nc: shim.NcModel) -> None:
     assert plc.nc_phase(nc, 2) == []
 
 
+def test_first_cycle_marker_setting_moves_the_pulse() -> None:
+    plc = Plc()
+    with shim.NcModel(20, "itnc530", first_cycle_marker=4171) as model:
+        assert sorted(plc.nc_phase(model, 0)) == [("M", 4171, 1), ("W", 272, 1)]
+        assert plc.nc_phase(model, 1) == [("M", 4171, 0)]
+    with pytest.raises(ValueError, match="first_cycle_marker"):
+        shim.NcModel(20, "itnc530", first_cycle_marker=-1)
+
+
 def test_tnc407_has_no_first_cycle_marker_and_its_own_m_strobe() -> None:
     plc = Plc()
     with shim.NcModel(20, "tnc407") as model:

@@ -87,13 +87,11 @@ class _StDriver:
         self.side = side
         self.iomap = iomap
         self.program = program
-        self.nc = NcModel(cycle_time_ms, program.semantics.profile.name)
+        self.nc = NcModel(cycle_time_ms, program.semantics.profile.name,
+                          first_cycle_marker=int(program.semantics["first_cycle_marker"]))
         # The input latch rewrites every input the program reads, every cycle, as the interpreter's phase 2 does:
         # a program write to an input is lost, also for inputs the stimulus never drives.
         self.process_inputs: dict[str, int] = {str(ref): 0 for ref in inputs}
-        sem = program.semantics
-        self.first_cycle_itf = sem.profile.interface.first_cycle
-        self.first_cycle_marker = int(sem["first_cycle_marker"])
 
     def write(self, operand: str, value) -> None:
         acc = self.iomap.accessor(operand)
@@ -114,8 +112,6 @@ class _StDriver:
         for action in actions:
             self.nc.enqueue(action)
         for kind, addr, value in self.nc.phase(cycle, lambda m: int(self.read(f"M{m}") or 0)):
-            if kind == "M" and addr == self.first_cycle_itf:
-                addr = self.first_cycle_marker
             self.write(f"{kind}{addr}", value)
         for operand, value in self.process_inputs.items():
             self.write(operand, value)

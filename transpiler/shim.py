@@ -9,7 +9,7 @@ import functools
 import subprocess
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence, TypeVar
 
 SHIM_DIR = Path(__file__).resolve().parent.parent / "runtime_shim"
 LIB_NAME = "libhhshim.so"
@@ -139,6 +139,7 @@ def _declare(lib: ctypes.CDLL) -> None:
     prototypes: dict[str, tuple[Any, list[Any]]] = {
         "hh_nc_new": (p, [i32, i32]),
         "hh_nc_free": (None, [p]),
+        "hh_nc_set_first_cycle_marker": (c_int, [p, i32]),
         "hh_nc_m_function": (c_int, [p, i32]),
         "hh_nc_spindle_speed": (c_int, [p, i32]),
         "hh_nc_gear": (c_int, [p, i32]),
@@ -190,6 +191,37 @@ def _int32(value: Any, what: str, error: type[Exception] = ValueError) -> int:
 
 def _writes(buf: ctypes.Array, n: int) -> list[Write]:
     return [(w.kind.decode("ascii"), w.addr, w.value) for w in buf[:n]]
+
+
+def _check_cycle_time(cycle_time_ms: Any) -> None:
+    _int32(cycle_time_ms, "cycle_time_ms")
+    if cycle_time_ms <= 0:
+        raise ValueError(f"cycle_time_ms must be positive, not {cycle_time_ms}")
+
+
+_O = TypeVar("_O", bound="_Owned")
+
+
+class _Owned:
+    """Owner of one C object of the shim, freed by close(), by a with block or when garbage-collected."""
+
+    _handle: Any = None
+    _lib: ctypes.CDLL
+    _FREE: str                      # name of the C function that frees the object
+
+    def close(self) -> None:
+        if self._handle:
+            getattr(self._lib, self._FREE)(self._handle)
+            self._handle = None
+
+    def __del__(self) -> None:
+        self.close()
+
+    def __enter__(self: _O) -> _O:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -267,18 +299,25 @@ def _nc_args(action: str, value: Any) -> tuple[int, ...]:
                         "tool_def, fn19, mode, restart)")
 
 
-class NcModel:
-    """The NC side of the strobe/acknowledge interface (spec 12.3), played from scenario nc actions."""
+class NcModel(_Owned):
+    """The NC side of the strobe/acknowledge interface (spec 12.3), played from scenario nc actions.
 
-    def __init__(self, cycle_time_ms: int = 20, profile: int | str = 0, *, lib: ctypes.CDLL | None = None):
+    `first_cycle_marker` (A-38) is the marker pulsed in cycles 0 and 1 instead of M4172 (ITNC profile).
+    """
+
+    _FREE = "hh_nc_free"
+
+    def __init__(self, cycle_time_ms: int = 20, profile: int | str = 0, *, first_cycle_marker: int | None = None,
+                 lib: ctypes.CDLL | None = None):
         self._lib = lib if lib is not None else load_shim()
         self._profile = _profile_number(profile)
-        _int32(cycle_time_ms, "cycle_time_ms")
-        if cycle_time_ms <= 0:
-            raise ValueError(f"cycle_time_ms must be positive, not {cycle_time_ms}")
+        _check_cycle_time(cycle_time_ms)
         self._handle = self._lib.hh_nc_new(cycle_time_ms, self._profile)
         if not self._handle:
             raise MemoryError("hh_nc_new failed")
+        if first_cycle_marker is not None and self._lib.hh_nc_set_first_cycle_marker(
+                self._handle, _int32(first_cycle_marker, "first_cycle_marker")) != 0:
+            raise ValueError(f"first_cycle_marker must not be negative, not {first_cycle_marker}")
         self._out = (_Write * NC_MAX_WRITES)()
         self._slot = _ReadSlot()
         self._callback = _READ_BIT(self._slot)
@@ -347,20 +386,6 @@ class NcModel:
         self._lib.hh_nc_error_detail(self._handle, ctypes.byref(started), ctypes.byref(strobe), ctypes.byref(ack))
         return HandshakeTimeout(cycle.value, name.decode(), started.value, strobe.value, ack.value)
 
-    def close(self) -> None:
-        if getattr(self, "_handle", None):
-            self._lib.hh_nc_free(self._handle)
-            self._handle = None
-
-    def __del__(self) -> None:
-        self.close()
-
-    def __enter__(self) -> NcModel:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
 
 # ---------------------------------------------------------------------------------------------
 # PLC modules and the simulated system context
@@ -422,15 +447,15 @@ def _fixed_point(value: Any) -> tuple[int, int]:
     return mantissa, -exponent  # type: ignore[operator]
 
 
-class SysModules:
+class SysModules(_Owned):
     """The simulated system context of the PLC modules: clock, MPs, status table, T96-T999 (module 9006)."""
+
+    _FREE = "hh_sys_free"
 
     def __init__(self, cycle_time_ms: int = 20, *, number_mp4111: int = 0, timer_unit: str = "seconds",
                  timer_restart: bool = True, lib: ctypes.CDLL | None = None):
         self._lib = lib if lib is not None else load_shim()
-        _int32(cycle_time_ms, "cycle_time_ms")
-        if cycle_time_ms <= 0:
-            raise ValueError(f"cycle_time_ms must be positive, not {cycle_time_ms}")
+        _check_cycle_time(cycle_time_ms)
         if timer_unit not in ("seconds", "cycles"):
             raise ValueError(f"timer_unit must be seconds or cycles, not {timer_unit!r}")
         self._handle = self._lib.hh_sys_new(cycle_time_ms)
@@ -530,17 +555,3 @@ class SysModules:
 
     def clear_module_results(self, number: int) -> None:
         self._lib.hh_sys_clear_module_results(self._handle, _int32(number, "module number"))
-
-    def close(self) -> None:
-        if getattr(self, "_handle", None):
-            self._lib.hh_sys_free(self._handle)
-            self._handle = None
-
-    def __del__(self) -> None:
-        self.close()
-
-    def __enter__(self) -> SysModules:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

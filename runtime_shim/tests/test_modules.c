@@ -107,19 +107,27 @@ static void timer_9006_counts_like_9_2(void)
     hh_sys_free(sys);
 }
 
+/* Runs `cycles` timer services (results not reported); how many of them found T96 running. */
+static int32_t cycles_running_t96(hh_sys *sys, int cycles)
+{
+    int32_t count = 0;
+    while (cycles-- > 0) {
+        hh_sys_service(sys, NULL, 0);
+        count += hh_sys_timer_running(sys, 96);
+    }
+    return count;
+}
+
 static int32_t run_length(int32_t cycle_time, int64_t mantissa, int32_t decimals, int cycles_unit)
 {
     hh_sys *sys = hh_sys_new(cycle_time);
-    int32_t c, count = 0;
+    int32_t count;
     hh_sys_set_number_mp4111(sys, 1);
     hh_sys_set_timer_unit(sys, cycles_unit);
     if (mantissa >= 0)
         hh_sys_set_mp(sys, 4111, 96, mantissa, decimals);
     call(sys, 9006, 96, 0, 0);
-    for (c = 0; c < 200; c++) {
-        hh_sys_service(sys, NULL, 0);
-        count += hh_sys_timer_running(sys, 96);
-    }
+    count = cycles_running_t96(sys, 200);
     hh_sys_free(sys);
     return count;
 }
@@ -186,16 +194,11 @@ static void machine_parameters_9031_9032(void)
 static void run_time_mp_changes_timer_preset(void)
 {
     hh_sys *sys = hh_sys_new(20);
-    int c, count = 0;
     hh_sys_set_number_mp4111(sys, 1);
     hh_sys_set_mp(sys, 4111, 96, 1, 1);
     CHECK_EQ(call(sys, 9031, 4111, 96, 3), 0); /* 0.3 s -> 15 cycles */
     call(sys, 9006, 96, 0, 0);
-    for (c = 0; c < 40; c++) {
-        hh_sys_service(sys, NULL, 0);
-        count += hh_sys_timer_running(sys, 96);
-    }
-    CHECK_EQ(count, 15);
+    CHECK_EQ(cycles_running_t96(sys, 40), 15);
     hh_sys_free(sys);
 }
 

@@ -235,6 +235,18 @@ static void first_cycle_marker_and_mode_word(void)
     CHECK_EQ(phase(nc, 2), 0);
     hh_nc_free(nc);
 
+    nc = hh_nc_new(20, HH_NC_PROFILE_ITNC); /* another first-cycle marker replaces M4172 */
+    CHECK_EQ(hh_nc_set_first_cycle_marker(nc, -1), HH_NC_ERANGE);
+    CHECK_EQ(hh_nc_set_first_cycle_marker(nc, 4171), HH_NC_OK);
+    CHECK_EQ(phase(nc, 0), 2);
+    CHECK_EQ(written('M', 4172, NULL), 0);
+    CHECK_EQ(written('M', 4171, &v), 1);
+    CHECK_EQ(v, 1);
+    CHECK_EQ(phase(nc, 1), 1);
+    CHECK_EQ(written('M', 4171, &v), 1);
+    CHECK_EQ(v, 0);
+    hh_nc_free(nc);
+
     nc = hh_nc_new(20, HH_NC_PROFILE_TNC407); /* first-cycle marker unknown, no W272 */
     CHECK_EQ(phase(nc, 0), 0);
     CHECK_EQ(phase(nc, 1), 0);

@@ -55,8 +55,6 @@ class CompiledProgram:
     code: types.CodeType
     line_ops: tuple[int, ...]                       # generated line number - 1 -> op id, or -1
     op_index: tuple[tuple[int, int], ...]           # op id -> (file index, op index)
-    op_base: tuple[int, ...]                        # file index -> op id of its first op
-    segments: tuple[dict[int, int], ...]            # file index -> {op index of a block start: block id}
     exact: bool
     coverage: bool
 
@@ -77,8 +75,7 @@ def compile_program(program: Program, *, exact: bool = False, coverage: bool = F
     gen = _Generator(program, exact=exact or coverage, coverage=coverage, native=native)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
-    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), tuple(gen.op_base),
-                           tuple(gen.segments), exact or coverage, coverage)
+    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact or coverage, coverage)
 
 
 def _entries(program: Program) -> list[set[int]]:
@@ -113,8 +110,8 @@ class _Generator:
         self.lines: list[str] = []
         self.line_ops: list[int] = []
         self.op_index: list[tuple[int, int]] = []
-        self.op_base: list[int] = []
-        self.segments: list[dict[int, int]] = []
+        self.op_base: list[int] = []                # file index -> op id of its first op
+        self.seg_maps: list[dict[int, int]] = []    # file index -> {op index of a block start: block id}
         self.kf_tables: dict[tuple[int, ...], str] = {}
         self.case_tables: list[str] = []
         self.brackets: list[tuple[Op, str, int]] = []
@@ -172,7 +169,6 @@ class _Generator:
     # ------------------------------------------------------------------ files and blocks
 
     def _file(self, f: int, code: FileCode, starts: list[int]) -> None:
-        self.segments.append(self.seg_maps[f])
         self.out(1, f"def F{f}(b):")
         self.out(2, "nonlocal LA, WA, X, SA, n, d, _em")
         if not starts:
@@ -197,7 +193,7 @@ class _Generator:
     def _segment(self, f: int, code: FileCode, starts: list[int], k: int, indent: int) -> None:
         first = starts[k]
         end = starts[k + 1] if k + 1 < len(starts) else len(code.ops)
-        seg_of = self.segments[f]
+        seg_of = self.seg_maps[f]
         base = self.op_base[f]
         self.brackets = []
         ops = code.ops[first:end]
@@ -244,10 +240,8 @@ class _Generator:
         else:
             self.out(indent, f"LA = {expr}", opid)
 
-    def x_value(self) -> str:
-        return "(((X + 32768) & 65535) - 32768)" if self.x16 else "X"
-
     def x_store(self, expr: str) -> str:
+        # Every write of X wraps to its width here (Machine.write too), so reads use X as it is.
         return f"X = (((({expr}) + 32768) & 65535) - 32768)" if self.x16 else f"X = {_norm(expr)}"
 
     # ------------------------------------------------------------------ operands
@@ -286,7 +280,7 @@ class _Generator:
         if k == "KF":
             return f"_kf({self._kf_name(o.kfield)}, X, {o.text!r})"
         if k == "X":
-            return "(X & 65535)" if (ext in ("zero", "mask") and self.x16) else self.x_value()
+            return "(X & 65535)" if (ext in ("zero", "mask") and self.x16) else "X"
         signed = ext == "sign" or k == "D"
         if o.indexed:
             slow = f"_rx({k!r}, {o.addr}, X, {signed})"
@@ -664,14 +658,15 @@ class _Generator:
         if call.is_module:
             self.out(ind, f"_module({call.module}, {opid})", opid)
             return
-        seg = self.segments_for(call.file)[call.index]
+        self._nested(ind, opid, f"F{call.file}({self.seg_maps[call.file][call.index]})")
+
+    def _nested(self, ind: int, opid: int, *call: str) -> None:
+        """A call one level deeper (CM and CASE), checked against call_depth (A-29)."""
         self.out(ind, "d += 1", opid)
         self.out(ind, f"if d > {self.depth_limit}: _depth_fault(d)", opid)
-        self.out(ind, f"F{call.file}({seg})", opid)
+        for line in call:
+            self.out(ind, line, opid)
         self.out(ind, "d -= 1", opid)
-
-    def segments_for(self, file: int) -> dict[int, int]:
-        return self.seg_maps[file]
 
     def _op_CALL(self, op: Op, opid: int, ind: int, *_: object) -> None:
         self._call(op, opid, ind)
@@ -707,18 +702,14 @@ class _Generator:
             if t is None or t.file < 0:
                 targets.append("None")
             else:
-                targets.append(f"(F{t.file}, {self.segments_for(t.file)[t.index]})")
+                targets.append(f"(F{t.file}, {self.seg_maps[t.file][t.index]})")
         table = f"_CT{opid}"
         self.case_tables.append(f"{table} = ({', '.join(targets)}{',' if targets else ''})")
         count = len(targets)
         self.out(ind, f"_s = {self.value(op.operand)}", opid)
         self.out(ind, f"if 0 <= _s < {count}:", opid)
         self._cover(ind + 1, opid, "_s")
-        self.out(ind + 1, "d += 1", opid)
-        self.out(ind + 1, f"if d > {self.depth_limit}: _depth_fault(d)", opid)
-        self.out(ind + 1, f"_f, _g = {table}[_s]", opid)
-        self.out(ind + 1, "_f(_g)", opid)
-        self.out(ind + 1, "d -= 1", opid)
+        self._nested(ind + 1, opid, f"_f, _g = {table}[_s]", "_f(_g)")
         if self.coverage or self.sem["case_out_of_range"] == "fault":
             self.out(ind, "else:", opid)
             self._cover(ind + 1, opid, "-1")
@@ -746,7 +737,7 @@ class _Generator:
         if call is None or call.file < 0:
             self.out(ind, "_falloff()", opid)
             return
-        seg = self.segments_for(call.file)[call.index]
+        seg = self.seg_maps[call.file][call.index]
         self.out(ind, f"WA = _subm(F{call.file}, {seg}, {call.label!r})", opid)
 
     def _op_RPLY(self, op: Op, opid: int, ind: int, *_: object) -> None:

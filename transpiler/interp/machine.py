@@ -92,7 +92,7 @@ class Machine:
         for number, values in (module_results or {}).items():
             self.sys.set_module_results(number, list(values))
         self.timers = TimerService(sem, timer_presets, counter_presets)
-        self.nc = NcModel(self.cycle_time_ms, self.profile.name)
+        self.nc = NcModel(self.cycle_time_ms, self.profile.name, first_cycle_marker=int(sem["first_cycle_marker"]))
         self.jobs = SubmitQueue(sem["submit_model"])
         self.runtime = Runtime(self.state, sem, self.sys, self.jobs, self._warn)
         self.coverage_enabled = coverage
@@ -109,8 +109,7 @@ class Machine:
         self.instructions = 0
         self.error_messages: dict[int, int] = {}     # PLC error-message marker -> first cycle it was set
         self._report = CycleReport(-1)
-        self._first_cycle_itf = self.profile.interface.first_cycle
-        self._first_cycle_marker = int(sem["first_cycle_marker"])
+        self._x_bits = int(sem["index_register_width"])
 
     # ------------------------------------------------------------------ operand access
 
@@ -128,7 +127,12 @@ class Machine:
         if kind in PSEUDO:
             regs = list(self._get())
             index = PSEUDO.index(kind)
-            regs[index] = str(value) if kind == "SA" else (1 if value else 0) if kind == "LA" else sext(int(value), 32)
+            if kind == "SA":
+                regs[index] = str(value)
+            elif kind == "LA":
+                regs[index] = 1 if value else 0
+            else:
+                regs[index] = sext(int(value), self._x_bits if kind == "X" else 32)
             self._set(*regs)
             return
         self.state.write(kind, addr, value)
@@ -205,13 +209,9 @@ class Machine:
         for action in actions:
             self.nc.enqueue(action)
         writes = self.nc.phase(cycle, self._read_marker)
-        applied = []
         for kind, addr, value in writes:
-            if kind == "M" and addr == self._first_cycle_itf:
-                addr = self._first_cycle_marker      # A-38 first_cycle_marker
             self.state.write(kind, addr, value)
-            applied.append((kind, addr, value))
-        return applied
+        return writes
 
     def _read_marker(self, marker: int) -> int:
         return self.state.M[marker] if 0 <= marker < len(self.state.M) else 0
@@ -288,15 +288,7 @@ class Machine:
         set_(la, wa, x, sa, 0, 0, -1)
         rt.stack.clear()
         rt.in_job = False
-        try:
-            funcs[0](0)
-        except Fault as exc:
-            self._fault(report, compiled, exc, cycle, None)
-        except BudgetExceeded:
-            raise
-        except Exception as exc:  # noqa: BLE001 - a bug in the interpreter must not become a traceback
-            self._fault(report, compiled, Fault("E-TOOL", f"internal interpreter error: {exc!r}"), cycle, None, exc)
-        else:
+        if self._execute(compiled, funcs[0], 0, report, cycle, None):
             if rt.stack:
                 self._warn("E-RT-STACK-LEFTOVER", f"{len(rt.stack)} word(s) left on the data stack at the end of "
                            "the main program (A-19)", get()[6])
@@ -326,16 +318,9 @@ class Machine:
             rt.in_job = True
             self.jobs.running = job
             try:
-                job.func(job.block)
+                self._execute(compiled, job.func, job.block, report, cycle, job.label)
             except JobCancelled:
                 pass
-            except Fault as exc:
-                self._fault(report, compiled, exc, cycle, job.label)
-            except BudgetExceeded:
-                raise
-            except Exception as exc:  # noqa: BLE001
-                self._fault(report, compiled, Fault("E-TOOL", f"internal interpreter error: {exc!r}"), cycle,
-                            job.label, exc)
             finally:
                 self.jobs.running = None
                 rt.in_job = False
@@ -344,6 +329,22 @@ class Machine:
                 if word is not None:
                     self.state.mem[word:word + 2] = saved[1]
                 set_(*main_regs[:4], get()[4], 0, main_regs[6])
+
+    def _execute(self, compiled: CompiledProgram, func: Callable[[int], None], block: int, report: CycleReport,
+                 cycle: int, job: str | None) -> bool:
+        """Run generated code from `block`; False after a fault (recorded, the machine halts). BudgetExceeded and
+        JobCancelled pass through to the caller that handles them."""
+        try:
+            func(block)
+        except Fault as exc:
+            self._fault(report, compiled, exc, cycle, job)
+        except (BudgetExceeded, JobCancelled):
+            raise
+        except Exception as exc:  # noqa: BLE001 - a bug in the interpreter must not become a traceback
+            self._fault(report, compiled, Fault("E-TOOL", f"internal interpreter error: {exc!r}"), cycle, job, exc)
+        else:
+            return True
+        return False
 
     # ------------------------------------------------------------------ faults and warnings
 

@@ -10,7 +10,7 @@ from ..semantics import Profile, Semantics
 
 BIT_SPACES = "MIOTC"
 MEM_WIDTH = {"B": 1, "W": 2, "D": 4}
-INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+INT32_MIN = -(1 << 31)
 
 
 def sext(value: int, bits: int) -> int:
@@ -54,7 +54,7 @@ def _valid_table(profile: Profile, kind: str, size: int) -> bytes:
     for lo, hi in getattr(profile.ranges, kind):
         table[lo:hi + 1] = b"\x01" * (min(hi, size - 1) - lo + 1)
     for addr in range(size):
-        if not table[addr] and profile.is_interface(kind if kind != "B" else "B", addr):
+        if not table[addr] and profile.is_interface(kind, addr):
             table[addr] = 1
     return bytes(table)
 

@@ -8,12 +8,11 @@ from typing import Callable
 from ..semantics import Semantics
 from ..shim import SysModules
 from .faults import BudgetExceeded, Fault, JobCancelled
-from .state import MEM_WIDTH, MachineState, sext
+from .state import INT32_MIN, MEM_WIDTH, MachineState, sext
 from .submit import SubmitQueue
 
 _TO_CHARS = bytes.maketrans(b"\x00\x01", b"01")
 _FROM_CHARS = bytes.maketrans(b"01", b"\x00\x01")
-INT32_MIN = -(1 << 31)
 
 Warn = Callable[[str, str, int], None]        # code, message, op id
 

@@ -65,12 +65,3 @@ class TimerService:
         self.prev_release[:] = release
         run = first + self.c_run
         C[run:run + n] = bytes(1 if c > 0 else 0 for c in cnt)
-
-    def state(self) -> tuple:
-        return (tuple(self.rem), tuple(self.cnt), bytes(self.prev_release))
-
-    def restore(self, state: tuple) -> None:
-        rem, cnt, prev = state
-        self.rem[:] = rem
-        self.cnt[:] = cnt
-        self.prev_release[:] = prev
