@@ -100,16 +100,13 @@ def generate_project(folder: Path, target_lines: int = 100_000, module_lines: in
     main = [";*** generated benchmark project", "#define /g GLOBALS.DEF"]
     main += [f"USES mod{m:03d}.src" for m in range(modules)]
     main += [f"EXTERN m{m:03d}_entry" for m in range(modules)]
+    main += [f"CM    m{m:03d}_entry" for m in range(modules)]     # the cycle: one call per module
     main += ["L     MG_first", "CMT   Init_all", "EM", "LBL Init_all", "L     K0", "=     WG_count", "EM"]
-    # the main file's calls: one per module, in blocks of the cycle
-    cycle = [f"CM    m{m:03d}_entry" for m in range(modules)]
-    main[len(main) - 7:len(main) - 7] = cycle
     (folder / "GLOBALS.DEF").write_text("\n".join([
         "* global definitions", "MG_first  M 4172", "WG_count  W 9000", "KG_one    K 1",
         "#if CFG_variant = \"big\"", "KG_size K 200", "#else", "KG_size K 100", "#endif"]) + "\n", encoding="latin-1")
     (folder / "OEM.cfg").write_text('DEFINE CFG_variant = "big"\nDEFINE ACTIVE = 1\n', encoding="latin-1")
     (folder / "main.src").write_text("\n".join(main) + "\n", encoding="latin-1")
-    total = len(main) + 9 + 2
     for m in range(modules):
         defs = _module_defs(m, base_marker=100 + m * 16, base_byte=m * 16)
         (folder / f"mod{m:03d}.def").write_text("\n".join(defs) + "\n", encoding="latin-1")
@@ -122,9 +119,7 @@ def generate_project(folder: Path, target_lines: int = 100_000, module_lines: in
         body += [f"CM    m{m:03d}_b{k}" for k in range(b)]
         body += ["#if CFG_variant = \"small\"", "CM    never_called", "#endif", "EM"]
         body += blocks
-        text = body
-        (folder / f"mod{m:03d}.src").write_text("\n".join(text) + "\n", encoding="latin-1")
-        total += len(text) + len(defs)
+        (folder / f"mod{m:03d}.src").write_text("\n".join(body) + "\n", encoding="latin-1")
     return folder / "main.src"
 
 

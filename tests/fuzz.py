@@ -36,7 +36,7 @@ if str(ROOT) not in sys.path:
 from transpiler.cli import summary  # noqa: E402
 from transpiler.diagnostics import CODES  # noqa: E402
 from transpiler.frontend import Parsers, ProjectOptions  # noqa: E402
-from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.pipeline import CompileResult, compile_project  # noqa: E402
 from transpiler.semantics import make_semantics  # noqa: E402
 
 SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp")
@@ -279,10 +279,16 @@ def check_project(folder: Path, files: dict[str, bytes], main: str, profile: str
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+    check_result(result, data)
+
+
+def check_result(result: CompileResult, data: dict | None = None) -> None:
+    """The front end answered with diagnostics only: registered codes, real positions, a consistent summary."""
     for d in result.diagnostics.items:
         assert d.code in CODES, d.code
         assert d.span.line >= 1 and d.span.col >= 1, d.render()
         assert d.render().count(f"[{d.code}]") >= 1
+    data = summary(result) if data is None else data
     assert data["errors"] == len(result.diagnostics.errors)
     assert result.ok == (result.program is not None and not result.diagnostics.errors)
 
@@ -316,7 +322,9 @@ def worker(seed: int, start: int, count: int, limit: float, with_vectors: bool) 
             # Line caches are shared between inputs of one profile, but renewed now and then to bound memory.
             if index % 500 == 0:
                 parsers.clear()
-            shared = parsers.setdefault(project.profile, Parsers.for_semantics(make_semantics(project.profile)))
+            if project.profile not in parsers:
+                parsers[project.profile] = Parsers.for_semantics(make_semantics(project.profile))
+            shared = parsers[project.profile]
             status, detail = "ok", ""
             started = time.perf_counter()
             try:
@@ -365,20 +373,25 @@ def run(args) -> int:
     next_report = 1000
     # A worker that says nothing for this long is stuck in something the interval timer cannot interrupt.
     silence_limit = args.limit * 3 + 30
+
+    def lost(w: _Worker, status: str, what: str, detail: str) -> None:
+        """A finished worker is dropped; one gone in the middle of an input fails that input, and the rest of
+        its range goes to a new worker."""
+        workers.remove(w)
+        if w.current is not None:
+            results[w.current] = {"index": w.current, "status": status, "what": what, "detail": detail}
+            if w.current + 1 < w.end:
+                workers.append(_spawn(args, w.current + 1, w.end))
+
     while workers:
         ready, _, _ = select.select([w.proc.stdout for w in workers], [], [], 1.0)
         now = time.monotonic()
         for w in list(workers):
             if w.proc.stdout in ready:
                 chunk = os.read(w.proc.stdout.fileno(), 1 << 16)
-                if not chunk:
+                if not chunk:                        # it ended: done, or killed mid-input (by the OS, say)
                     w.proc.wait()
-                    workers.remove(w)
-                    if w.current is not None:        # died in the middle of an input (e.g. killed by the OS)
-                        results[w.current] = {"index": w.current, "status": "crash", "what": "worker died",
-                                              "detail": f"worker exit status {w.proc.returncode}"}
-                        if w.current + 1 < w.end:
-                            workers.append(_spawn(args, w.current + 1, w.end))
+                    lost(w, "crash", "worker died", f"worker exit status {w.proc.returncode}")
                     continue
                 w.buffer += chunk
                 w.last_output = now
@@ -393,12 +406,7 @@ def run(args) -> int:
             elif now - w.last_output > silence_limit:
                 w.proc.kill()
                 w.proc.wait()
-                workers.remove(w)
-                if w.current is not None:
-                    results[w.current] = {"index": w.current, "status": "hang", "what": "worker stuck",
-                                          "detail": f"no answer for {silence_limit:.0f} s"}
-                    if w.current + 1 < w.end:
-                        workers.append(_spawn(args, w.current + 1, w.end))
+                lost(w, "hang", "worker stuck", f"no answer for {silence_limit:.0f} s")
         if len(results) >= next_report:
             print(f"fuzz: {len(results)} / {args.mutations} inputs checked ({time.monotonic() - started:.0f} s)", flush=True)
             next_report += 1000
@@ -417,10 +425,8 @@ def _report(args, seeds: list[Seed], results: dict[int, dict], elapsed: float) -
     print(f"fuzz: crashes: {len(crashes)}, hangs: {len(hangs)}" + (f", not run: {missing}" if missing else ""))
     if crashes or hangs:
         print(f"fuzz: failing mutations: {', '.join(str(r['index']) for r in (crashes + hangs)[:50])}")
-    first = (crashes + hangs)[:1]
-    for r in first:
-        seeds_now = _seeds(args.with_vectors)
-        project, files, description = _mutant(seeds_now, args.seed, r["index"])
+    for r in (crashes + hangs)[:1]:
+        project, files, description = _mutant(seeds, args.seed, r["index"])
         print(f"\nfirst failing input: mutation {r['index']} ({description}); replay with "
               f"`python -m tests.fuzz --seed {args.seed} --replay {r['index']}`")
         target = description.split(": ")[1]

@@ -7,11 +7,10 @@ import os
 import pytest
 from test_frontend_support import Found, compile_files, errors, warnings
 
-from transpiler.diagnostics import CODES, Severity
+from transpiler.diagnostics import CODES, Diagnostics, Severity
 from transpiler.parse import MpParser
-from transpiler.diagnostics import Diagnostics
 
-# (id, files, profile, expected errors as (code, file, line, col)); the list is the complete error list,
+# (id, files, expected errors as (code, file, line, col)); the list is the complete error list,
 # so every case also checks that one fault gives one error (no cascade).
 ERROR_CASES = [
     # preprocessor (spec 3.2, 17b.11: an unclosed #if is reported at the line that opened it)
@@ -186,14 +185,9 @@ def _expected(rows) -> list[Found]:
     return [Found(*row) for row in rows]
 
 
-@pytest.mark.parametrize("files, expected", [pytest.param(f, e, id=i) for i, f, e in ERROR_CASES])
-def test_error_code_line_and_column(tmp_path, files, expected):
-    result = compile_files(tmp_path, files)
-    assert errors(result) == _expected(expected), [d.render() for d in result.diagnostics.items]
-
-
-@pytest.mark.parametrize("files, profile, expected", [pytest.param(f, p, e, id=i) for i, f, p, e in PROFILE_CASES])
-def test_profile_dependent_errors(tmp_path, files, profile, expected):
+@pytest.mark.parametrize("files, profile, expected", [pytest.param(f, "itnc530", e, id=i) for i, f, e in ERROR_CASES]
+                         + [pytest.param(f, p, e, id=i) for i, f, p, e in PROFILE_CASES])
+def test_error_code_line_and_column(tmp_path, files, profile, expected):
     result = compile_files(tmp_path, files, profile=profile)
     assert errors(result) == _expected(expected), [d.render() for d in result.diagnostics.items]
 

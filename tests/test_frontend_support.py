@@ -6,7 +6,7 @@ import dataclasses
 from pathlib import Path
 from typing import Mapping
 
-from transpiler.diagnostics import Diagnostic, Severity
+from transpiler.diagnostics import Diagnostic
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import CompileResult, compile_project
 from transpiler.semantics import make_semantics
@@ -44,11 +44,7 @@ def errors(result: CompileResult) -> list[Found]:
 
 
 def warnings(result: CompileResult) -> list[Found]:
-    return found([d for d in result.diagnostics.items if d.severity is Severity.WARNING])
-
-
-def error_codes(result: CompileResult) -> list[str]:
-    return [d.code for d in result.diagnostics.errors]
+    return found(result.diagnostics.warnings)
 
 
 def program_ops(result: CompileResult, file: int = 0):

@@ -15,9 +15,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_frontend_support import compile_files, errors
 
-from transpiler.diagnostics import CODES
-from transpiler.frontend import Parsers
+from transpiler.frontend import Parsers, ProjectOptions
 from transpiler.mnemonics import MNEMONICS
+from transpiler.pipeline import compile_project
 from transpiler.semantics import make_semantics
 
 LIMIT = 10.0                     # seconds allowed per input (the machine may be shared and slow)
@@ -34,30 +34,22 @@ def _only_diagnostics(tmp_path: Path, files: dict[str, bytes | str], bound: floa
     result = compile_files(tmp_path, files, **options)
     elapsed = time.perf_counter() - started
     assert elapsed < bound, f"took {elapsed:.1f} s"
-    for d in result.diagnostics.items:
-        assert d.code in CODES and d.span.line >= 1 and d.span.col >= 1
-        d.render()
+    fuzz.check_result(result)
     return result
 
 
 # ------------------------------------------------------------------------------------ mutation properties
 
 
-
-
-@pytest.mark.skipif(not SAMPLE_SEEDS, reason="no sample projects to mutate")
+@pytest.mark.parametrize("seeds", [
+    pytest.param(SAMPLE_SEEDS, id="samples", marks=pytest.mark.skipif(not SAMPLE_SEEDS, reason="no sample projects to mutate")),
+    pytest.param(VECTOR_SEEDS, id="vectors",
+                 marks=pytest.mark.skipif(not VECTOR_SEEDS, reason="the spec (and its vectors) is not available")),
+])
 @HYPOTHESIS
 @given(index=st.integers(min_value=0, max_value=2 ** 40))
-def test_mutated_sample_projects_give_only_diagnostics(tmp_path, index):
-    project, files, _ = fuzz._mutant(SAMPLE_SEEDS, 7, index)
-    fuzz.check_project(tmp_path / "p", files, project.main, project.profile, LIMIT)
-
-
-@pytest.mark.skipif(not VECTOR_SEEDS, reason="the spec (and its vectors) is not available")
-@HYPOTHESIS
-@given(index=st.integers(min_value=0, max_value=2 ** 40))
-def test_mutated_vector_programs_give_only_diagnostics(tmp_path, index):
-    project, files, _ = fuzz._mutant(VECTOR_SEEDS, 7, index)
+def test_mutated_seed_projects_give_only_diagnostics(tmp_path, seeds, index):
+    project, files, _ = fuzz._mutant(seeds, 7, index)
     fuzz.check_project(tmp_path / "p", files, project.main, project.profile, LIMIT)
 
 
@@ -227,16 +219,13 @@ def test_shared_parsers_give_the_same_diagnostics_as_fresh_ones(tmp_path):
     """The fuzzer shares line caches between inputs; that must not change any result."""
     if not SEEDS:
         pytest.skip("no seed projects")
-    from test_frontend_support import compile_files as compile_fresh
     shared = Parsers.for_semantics(make_semantics("itnc530"))
     for index in range(15):
         project, files, _ = fuzz._mutant(SEEDS, 9, index)
         if project.profile != "itnc530" or project.main not in files:
             continue
-        fresh = compile_fresh(tmp_path / f"a{index}", files, main=project.main)
+        fresh = compile_files(tmp_path / f"a{index}", files, main=project.main)
         fuzz.write_files(tmp_path / f"b{index}", files)
-        from transpiler.frontend import ProjectOptions
-        from transpiler.pipeline import compile_project
         warm = compile_project(ProjectOptions(main=tmp_path / f"b{index}" / project.main), make_semantics("itnc530"),
                                parsers=shared)
         assert [d.render() for d in fresh.diagnostics.items] == [d.render() for d in warm.diagnostics.items]

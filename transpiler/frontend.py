@@ -68,10 +68,7 @@ class _Loader:
         self.diags = diags
         self.folders = ProjectFolders(options.main.parent, list(options.include_dirs))
         self.defines: Defines = initial_defines(options.defines)
-        parsers = parsers or Parsers.for_semantics(semantics)
-        self.pp_parser = parsers.pp
-        self.src_parser = parsers.src
-        self.def_parser = parsers.defs
+        self.parsers = parsers or Parsers.for_semantics(semantics)
         self.inactive: list[InactiveRegion] = []
         self.files_read: list[str] = []
         self.line_count = 0
@@ -87,7 +84,7 @@ class _Loader:
         return text
 
     def _preprocess(self, text: SourceText) -> list:
-        pre = Preprocessor(self.defines, self.diags, self.pp_parser)
+        pre = Preprocessor(self.defines, self.diags, self.parsers.pp)
 
         def include(name: str, at: Span):
             path = self.folders.find(name, at, self.diags, text.path.parent)
@@ -110,7 +107,7 @@ class _Loader:
             # path is relative to the main folder when it lies inside it, as for every other file.
             cfg_text = self._read(cfg, NO_SPAN)
             if cfg_text is not None:
-                read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.pp_parser)
+                read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.parsers.pp)
         if not opts.main.is_file():
             self.diags.error("E-FILE-NOT-FOUND", NO_SPAN, f"main program {opts.main} not found")
             return self._empty()
@@ -164,7 +161,7 @@ class _Loader:
             if text is None:
                 self.labels_incomplete = True
                 return
-            parsed = self.src_parser.parse_file(text.display, self._preprocess(text), len(text.lines), self.diags)
+            parsed = self.parsers.src.parse_file(text.display, self._preprocess(text), len(text.lines), self.diags)
             out.append(parsed)
             stack.append((path, parsed.path, iter(parsed.statements)))
 
@@ -201,7 +198,7 @@ class _Loader:
             return []
         active.add(path)
         lines = self._preprocess(text)
-        parsed = self.def_parser.parse_file(text.display, lines, len(text.lines), self.diags)
+        parsed = self.parsers.defs.parse_file(text.display, lines, len(text.lines), self.diags)
         result: list[ast.DefFile] = []
         for inc in parsed.includes:
             target = self.folders.find(inc.file, inc.span, self.diags, path.parent)

@@ -14,9 +14,7 @@ class ModuleSignature:
     purpose: str
 
 
-def _sig(number: int, params: int, results: int, modelled: bool, purpose: str) -> ModuleSignature:
-    return ModuleSignature(number, params, results, modelled, purpose)
-
+_sig = ModuleSignature          # (short name for the rows below)
 
 # The C runtime shim (runtime_shim/hh_modules.c) implements the effects; tests/test_shim.py checks that
 # its table agrees with this one for every number 9000-9999.

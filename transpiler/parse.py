@@ -5,10 +5,10 @@ from __future__ import annotations
 import dataclasses
 import re
 from decimal import Decimal
-from typing import Any, Iterable
+from typing import Iterable, Iterator
 
 from lark import LarkError, Token, Transformer
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, VisitError
+from lark.exceptions import UnexpectedInput, VisitError
 
 from . import ast
 from .diagnostics import Diagnostics, Span
@@ -16,7 +16,7 @@ from .grammars import lalr_parser
 from .mnemonics import MNEMONICS, canonical
 from .preprocess import Line, split_comment
 
-INT32_MIN = -(2 ** 31)
+INT32_MIN, INT32_MAX = -(2 ** 31), 2 ** 31 - 1
 UINT32_MAX = 2 ** 32 - 1
 
 
@@ -29,11 +29,11 @@ def parse_constant(text: str, documented: bool = False) -> int | None:
     text = text.replace(" ", "").replace("\t", "")
     if text.startswith(("$", "%")):
         value = int(text[1:], 16 if text[0] == "$" else 2)
-        if documented and value > 2 ** 31 - 1:
+        if documented and value > INT32_MAX:
             return None
         return _pattern(value)
     value = int(text)
-    if (INT32_MIN + (1 if documented else 0)) <= value <= 2 ** 31 - 1:
+    if (INT32_MIN + (1 if documented else 0)) <= value <= INT32_MAX:
         return value
     return None
 
@@ -41,7 +41,7 @@ def parse_constant(text: str, documented: bool = False) -> int | None:
 def _pattern(value: int) -> int | None:
     if value > UINT32_MAX:
         return None
-    return value - 2 ** 32 if value >= 2 ** 31 else value
+    return value - 2 ** 32 if value > INT32_MAX else value
 
 
 class _ConstRange(Exception):
@@ -139,6 +139,20 @@ def _const_value(token: Token, documented: bool = False) -> int:
     return value
 
 
+def _code_lines(lines: Iterable[Line], pending: list[str]) -> Iterator[tuple[str, Span, tuple[str, ...]]]:
+    """(stripped code, span, comments) of every line with code; the comments of comment-only lines go to the next
+    line with code, and those after the last one are left in `pending` (a file's trailing comments)."""
+    for line in lines:
+        code = line.code.strip()
+        if not code:
+            if line.comment is not None:
+                pending.append(line.comment.strip())
+            continue
+        comments = tuple(pending) + ((line.comment.strip(),) if line.comment is not None else ())
+        pending.clear()
+        yield code, line.span, comments
+
+
 @dataclasses.dataclass
 class _PendingKField:
     name: str
@@ -169,7 +183,61 @@ def _with_name(result: tuple, name: str) -> tuple:
     return tuple(out)
 
 
-class SrcParser:
+class _CachedLineParser:
+    """A lark line parser whose results are cached by line text and, through the placeholder template, by shape.
+
+    Subclasses say where a line's one replaceable name is (`_name_slot`) and how to put the real name into the
+    template's result (`_renamed`)."""
+
+    def __init__(self, grammar: str, transformer: Transformer) -> None:
+        self._lark = lalr_parser(grammar)
+        self._transformer = transformer
+        self._cache: dict[str, tuple] = {}
+
+    def parse_line(self, code: str) -> tuple:
+        """('ok', tuple) | ('range', literal) | ('syntax', column) for one line without its comment."""
+        key = code.strip()
+        cached = self._cache.get(key)
+        if cached is not None:
+            return cached
+        slot = self._name_slot(key) if _PLACEHOLDER not in key else None
+        if slot is not None:
+            template, name = slot
+            shape = self._cache.get(template)
+            if shape is None:
+                shape = self._cache[template] = self.parse_uncached(template)
+            renamed = self._renamed(shape, name)
+            if renamed is not None:
+                self._cache[key] = renamed
+                return renamed
+        cached = self._cache[key] = self.parse_uncached(key)
+        return cached
+
+    def parse_uncached(self, key: str) -> tuple:
+        """The lark parse of one stripped line, without any cache."""
+        try:
+            return ("ok", self._transformer.transform(self._lark.parse(key)))
+        except VisitError as exc:
+            # A transformer callback raised (lark wraps it): the only expected case is a constant outside 32 bits,
+            # which is E-LIT-RANGE, not E-SYNTAX.
+            if isinstance(exc.orig_exc, _ConstRange):
+                return ("range", str(exc.orig_exc))
+            return ("syntax", 1)
+        except UnexpectedInput as exc:
+            return ("syntax", getattr(exc, "column", 1))
+        except (LarkError, RecursionError):
+            return ("syntax", 1)
+
+    def _name_slot(self, key: str) -> tuple[str, str] | None:
+        """(template line, real name) when the line's result does not depend on that name, else None."""
+        raise NotImplementedError
+
+    def _renamed(self, shape: tuple, name: str) -> tuple | None:
+        """The template's result with the real name, or None when the line must be parsed as it is."""
+        raise NotImplementedError
+
+
+class SrcParser(_CachedLineParser):
     """Parses the active lines of a .src file; identical line texts are parsed once per run.
 
     lenient_brackets (A-02b) accepts a blank between a bracket mnemonic and '['; documented_literals is
@@ -177,59 +245,24 @@ class SrcParser:
     """
 
     def __init__(self, lenient_brackets: bool = True, documented_literals: bool = False) -> None:
-        self._lark = lalr_parser("src.lark")
-        self._transformer = _SrcTransformer(documented_literals)
-        self._cache: dict[str, Any] = {}
+        super().__init__("src.lark", _SrcTransformer(documented_literals))
         self.lenient_brackets = lenient_brackets
 
-    def parse_line(self, code: str) -> Any:
-        """('ok', tuple) | ('range', literal) | ('syntax', column) for one line without its comment."""
-        key = code.strip()
-        cached = self._cache.get(key)
-        if cached is not None:
-            return cached
+    def _name_slot(self, key: str) -> tuple[str, str] | None:
         last = _LAST_NAME.search(key)
-        if last is not None and _PLACEHOLDER not in key and not _OPERAND_LIKE.fullmatch(last.group(1)):
-            template = key[:last.start(1)] + _PLACEHOLDER + key[last.end(1):]
-            shape = self._cache.get(template)
-            if shape is None:
-                shape = self._cache[template] = self.parse_uncached(template)
-            if shape[0] == "ok":
-                cached = self._cache[key] = ("ok", _with_name(shape[1], last.group(1)))
-                return cached
-        cached = self._cache[key] = self.parse_uncached(key)
-        return cached
+        if last is None or _OPERAND_LIKE.fullmatch(last.group(1)):
+            return None
+        return key[:last.start(1)] + _PLACEHOLDER + key[last.end(1):], last.group(1)
 
-    def parse_uncached(self, key: str) -> Any:
-        """The lark parse of one stripped line, without any cache."""
-        try:
-            return ("ok", self._transformer.transform(self._lark.parse(key)))
-        except VisitError as exc:
-            # A transformer callback raised: the only expected case is a constant outside 32 bits.
-            if isinstance(exc.orig_exc, _ConstRange):
-                return ("range", str(exc.orig_exc))
-            return ("syntax", 1)
-        except _ConstRange as exc:
-            return ("range", str(exc))
-        except UnexpectedInput as exc:
-            return ("syntax", exc.column if isinstance(exc, UnexpectedCharacters) else getattr(exc, "column", 1))
-        except (LarkError, RecursionError):
-            return ("syntax", 1)
+    def _renamed(self, shape: tuple, name: str) -> tuple | None:
+        return ("ok", _with_name(shape[1], name)) if shape[0] == "ok" else None
 
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.SourceFile:
         statements: list[ast.Statement] = []
-        pending_comments: list[str] = []
+        trailing_comments: list[str] = []
         kfield: _PendingKField | None = None
         broken_labels: list[str] = []
-        for line in lines:
-            code = line.code.strip()
-            if not code:
-                if line.comment is not None:
-                    pending_comments.append(line.comment.strip())
-                continue
-            span = line.span
-            comments = tuple(pending_comments) + ((line.comment.strip(),) if line.comment is not None else ())
-            pending_comments = []
+        for code, span, comments in _code_lines(lines, trailing_comments):
             status, result = self.parse_line(code)
             if status == "range":
                 diags.error("E-LIT-RANGE", span, f"literal {result} does not fit in 32 bits")
@@ -274,10 +307,10 @@ class SrcParser:
                     statements.append(instr)
         if kfield is not None:
             diags.error("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
-        return ast.SourceFile(display, tuple(statements), tuple(pending_comments), line_count, tuple(broken_labels))
+        return ast.SourceFile(display, tuple(statements), tuple(trailing_comments), line_count, tuple(broken_labels))
 
     def _instruction(self, mnemonic: str, operand: ast.OperandSyntax | None, span: Span,
-                     comments: tuple[str, ...], diags: Diagnostics, code: str = "") -> ast.Instr | None:
+                     comments: tuple[str, ...], diags: Diagnostics, code: str) -> ast.Instr | None:
         info = MNEMONICS.get(mnemonic)
         if info is None:
             diags.error("E-SYNTAX", span, f"unknown mnemonic '{mnemonic}'")
@@ -365,58 +398,29 @@ _DEF_NAME = re.compile(r"^\s*(?:/c\s+)?([A-Za-z_][A-Za-z0-9_]*)", re.IGNORECASE)
 _DEF_LEADING_NAME = re.compile(r"^((?:/[cC][ \t]+)?)([A-Za-z_][A-Za-z0-9_]*)(?=[ \t])")
 
 
-class DefParser:
+class DefParser(_CachedLineParser):
     """Parses the active lines of a .def file; line results are cached like SrcParser's (by text and by shape)."""
 
     def __init__(self, documented_literals: bool = False) -> None:
-        self._lark = lalr_parser("def.lark")
-        self._transformer = _DefTransformer(documented_literals)
-        self._cache: dict[str, tuple] = {}
+        super().__init__("def.lark", _DefTransformer(documented_literals))
 
-    def parse_line(self, code: str) -> tuple:
-        """('ok', tuple) | ('range', literal) | ('syntax',) for one stripped definition line."""
-        cached = self._cache.get(code)
-        if cached is not None:
-            return cached
-        lead = _DEF_LEADING_NAME.match(code)
-        if lead is not None and _PLACEHOLDER not in code:
-            template = lead.group(1) + _PLACEHOLDER + code[lead.end():]
-            shape = self._cache.get(template)
-            if shape is None:
-                shape = self._cache[template] = self.parse_uncached(template)
-            if shape[0] == "ok" and shape[1][0] == "symbol":
-                result = shape[1]
-                cached = self._cache[code] = ("ok", result[:2] + (lead.group(2),) + result[3:])
-                return cached
-        cached = self._cache[code] = self.parse_uncached(code)
-        return cached
+    def _name_slot(self, key: str) -> tuple[str, str] | None:
+        lead = _DEF_LEADING_NAME.match(key)
+        if lead is None:
+            return None
+        return lead.group(1) + _PLACEHOLDER + key[lead.end():], lead.group(2)
 
-    def parse_uncached(self, code: str) -> tuple:
-        try:
-            return ("ok", self._transformer.transform(self._lark.parse(code)))
-        except VisitError as exc:
-            # Transformer errors arrive wrapped; a constant outside 32 bits is E-LIT-RANGE, not E-SYNTAX.
-            if isinstance(exc.orig_exc, _ConstRange):
-                return ("range", str(exc.orig_exc))
-            return ("syntax",)
-        except (LarkError, RecursionError):
-            return ("syntax",)
+    def _renamed(self, shape: tuple, name: str) -> tuple | None:
+        if shape[0] != "ok" or shape[1][0] != "symbol":
+            return None
+        return ("ok", shape[1][:2] + (name,) + shape[1][3:])
 
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.DefFile:
         symbols: list[ast.SymbolDef] = []
         includes: list[ast.DefineFile] = []
         section: str | None = None
-        pending: list[str] = []
         broken: list[str] = []
-        for line in lines:
-            code = line.code.strip()
-            if not code:
-                if line.comment is not None:
-                    pending.append(line.comment.strip())
-                continue
-            span = line.span
-            comments = tuple(pending) + ((line.comment.strip(),) if line.comment is not None else ())
-            pending = []
+        for code, span, comments in _code_lines(lines, []):
             parsed = self.parse_line(code)
             if parsed[0] != "ok":
                 if parsed[0] == "range":

@@ -127,11 +127,11 @@ class PPParser:
 
 def resolve_value(raw: tuple, defines: Defines, span: Span, diags: Diagnostics) -> DefineValue:
     kind, value = raw
-    if kind == "ref":
-        if value in defines.values:
-            return defines.values[value]
-        diags.warning("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
+    if kind != "ref":
         return value
+    if value in defines.values:
+        return defines.values[value]
+    diags.warning("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
     return value
 
 
@@ -191,10 +191,9 @@ class Preprocessor:
                 parsed = self.pp.parse(code)
                 keyword = directive.group(1).lower()
                 if parsed is None:
-                    if active or keyword != "define":
+                    if active or keyword != "define":       # (a DEFINE in inactive code is not looked at)
                         code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
-                        if active or keyword in ("#if", "#ifdef", "#ifndef", "#else", "#endif"):
-                            self.diags.error(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
+                        self.diags.error(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
                     if keyword in ("#if", "#ifdef", "#ifndef"):
                         stack.append(_Frame(active, False, False, span, code.strip(), None))
                         active = False
@@ -235,8 +234,7 @@ class Preprocessor:
                         self.diags.error("E-PP-NEST", span, "#endif without a matching #if")
                         continue
                     frame = stack.pop()
-                    if frame.region_start is not None:
-                        self._close_region(display, frame, lineno - 1)
+                    self._close_region(display, frame, lineno - 1)
                     active = frame.active_before
                     continue
             if not active:
@@ -267,11 +265,11 @@ class Preprocessor:
             out.append(Line(code, comment, span))
         for frame in stack:
             self.diags.error("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
-            if frame.region_start is not None:
-                self._close_region(display, frame, len(lines))
+            self._close_region(display, frame, len(lines))
         return out
 
     def _close_region(self, display: str, frame: _Frame, last: int) -> None:
+        """Record the frame's open inactive region (if any) as ending at line `last`."""
         if frame.region_start is not None and last >= frame.region_start:
             self.inactive.append(InactiveRegion(display, frame.region_start, last, frame.condition))
         frame.region_start = None

@@ -9,7 +9,7 @@ from .diagnostics import Diagnostics, Span
 from .semantics import Semantics
 
 MpKey = tuple[int, int]
-TIMER_MP, EXTRA_TIMER_MP, COUNTER_MP = 4110, 4111, 4120
+TIMER_MP, COUNTER_MP = 4110, 4120
 
 
 def preset_cycles(value: Decimal, unit: str, cycle_time_ms: int) -> int | None:

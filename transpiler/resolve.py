@@ -23,6 +23,7 @@ COMPARES = ("==", "<", ">", "<=", ">=", "<>")
 STRUCT_OPEN = {"IFT", "IFF", "WHILET", "WHILEF", "REPEAT"}
 STRUCT_ALL = STRUCT_OPEN | {"ELSE", "ENDI", "ENDW", "UNTILT", "UNTILF"}
 CONTROL = {"JP", "JPT", "JPF", "CM", "CMT", "CMF", "EM", "EMT", "EMF", "CASE", "ENDC", "SUBM"} | STRUCT_ALL
+BIT_GROUPS = {"LB": 8, "LW": 16, "LD": 32, "B=": 8, "W=": 16, "D=": 32}   # bits read/written from the operand on
 MAX_NESTING = 16
 
 
@@ -104,7 +105,7 @@ def _explicit_addresses(project: ParsedProject) -> tuple[dict[str, set[int]], se
             if isinstance(stmt, ast.Instr) and stmt.operand is not None:
                 op = stmt.operand
                 if op.kind in BIT_KINDS or op.kind == "S":
-                    count = {"LB": 8, "LW": 16, "LD": 32, "B=": 8, "W=": 16, "D=": 32}.get(stmt.mnemonic, 1)
+                    count = BIT_GROUPS.get(stmt.mnemonic, 1)
                     bits.setdefault(op.kind, set()).update(range(int(op.value), int(op.value) + count))
                 elif op.kind in MEM_KINDS:
                     mem.update(range(int(op.value), int(op.value) + BYTES[op.kind]))
@@ -207,13 +208,16 @@ def _add(table: dict[str, Symbol], sym: Symbol, diags: Diagnostics) -> None:
     table[sym.name] = sym
 
 
-def _folded(table: dict, name: str):
-    """The entry whose key equals name ignoring case (the first in sorted order, for determinism)."""
+def _folded_key(table: dict, name: str) -> str | None:
+    """The key that equals name ignoring case (the first in sorted order, for determinism)."""
     lower = name.lower()
-    for key in sorted(table):
-        if key.lower() == lower:
-            return table[key]
-    return None
+    return next((key for key in sorted(table) if key.lower() == lower), None)
+
+
+def _folded(table: dict, name: str):
+    """The entry whose key equals name ignoring case."""
+    key = _folded_key(table, name)
+    return None if key is None else table[key]
 
 
 def _check_case_clashes(symbols: Iterable[Symbol], diags: Diagnostics) -> None:
@@ -462,11 +466,10 @@ class _FileLowering:
             self.diags.error("E-SYNTAX", span, f"'{value}' is not an operand")
             return None
         addr = int(value)
-        count = {"LB": 8, "LW": 16, "LD": 32, "B=": 8, "W=": 16, "D=": 32}.get(instr.mnemonic, 1)
+        count = BIT_GROUPS.get(instr.mnemonic, 1)
+        # (an indexed operand's effective address, alignment included, is checked at run time)
         if not syn.indexed and not _check_range(kind, addr, self.semantics, span, self.diags, symbol or f"{kind}{addr}", count):
             return None
-        if syn.indexed and kind in MEM_KINDS and addr % BYTES[kind] and self.semantics["index_scaling"] == "bytes":
-            pass   # the effective address is checked at run time
         return Operand(kind, addr, indexed=syn.indexed, symbol=symbol)
 
     def _kind_ok(self, instr: ast.Instr, operand: Operand) -> bool:
@@ -500,7 +503,7 @@ class _FileLowering:
         if m == "L-":
             return Op("WNEG", **base), chain_open, "WORD"
         if m in ("LB", "LW", "LD"):
-            return Op("LDBITS", nbits={"LB": 8, "LW": 16, "LD": 32}[m], **base), chain_open, "WORD"
+            return Op("LDBITS", nbits=BIT_GROUPS[m], **base), chain_open, "WORD"
         if m in ("=", "=N", "S", "R", "SN", "RN"):
             if is_bit:
                 code = {"=": "ST", "=N": "STN", "S": "SET", "R": "RES", "SN": "SETN", "RN": "RESN"}[m]
@@ -509,7 +512,7 @@ class _FileLowering:
                 return Op("SST", **base), False, "STRING"
             return Op("WST", **base), False, "WORD"
         if m in ("B=", "W=", "D="):
-            return Op("STBITS", nbits={"B=": 8, "W=": 16, "D=": 32}[m], **base), False, "WORD"
+            return Op("STBITS", nbits=BIT_GROUPS[m], **base), False, "WORD"
         if m in LOGIC_GATES:
             if is_bit:
                 if chain_open or self.semantics["chain_model"] == "dynamic":
@@ -698,8 +701,9 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) ->
     for low in lowerings:
         _link(low, lowerings, exports, diags, project.labels_incomplete)
     files = tuple(FileCode(low.src.path, tuple(low.ops), dict(low.labels), low.src.line_count) for low in lowerings)
+    lost_lines = {d.span.file for d in diags.errors if d.code in _LOST_LINE_CODES}
     for i, (f, low) in enumerate(zip(files, lowerings)):
-        if _flow_is_complete(low, diags):
+        if _flow_is_complete(low, lost_lines):
             _check_flow(i, f, diags)
     for i, low in enumerate(lowerings[1:], start=1):
         if low.src.broken_labels:            # the first LBL may be the line that was rejected
@@ -737,10 +741,7 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
           labels_incomplete: bool = False) -> None:
     if low.semantics["symbol_case"] == "insensitive":       # A-01: labels are looked up ignoring case too
         def spelled(name: str, table: dict) -> str:
-            if name in table:
-                return name
-            lower = name.lower()
-            return next((key for key in sorted(table) if key.lower() == lower), name)
+            return name if name in table else _folded_key(table, name) or name
     else:
         def spelled(name: str, table: dict) -> str:
             return name
@@ -793,11 +794,11 @@ _LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-
 _FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
 
 
-def _flow_is_complete(low: _FileLowering, diags: Diagnostics) -> bool:
-    """False when an earlier error removed a line or a control statement of the file: a path that then
-    seems to run off the end is a consequence of that error, not a second fault."""
+def _flow_is_complete(low: _FileLowering, lost_lines: set[str]) -> bool:
+    """False when an earlier error removed a line (in one of `lost_lines`' files) or a control statement of the
+    file: a path that then seems to run off the end is a consequence of that error, not a second fault."""
     files = {low.src.path} | {stmt.span.file for stmt in low.src.statements}
-    if any(d.code in _LOST_LINE_CODES and d.span.file in files for d in diags.errors):
+    if not lost_lines.isdisjoint(files):
         return False
     lowered = {op.span for op in low.ops}
     return all(stmt.span in lowered for stmt in low.src.statements
@@ -822,8 +823,6 @@ def _check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
     entries += list(f.labels.values())
     seen: set[int] = set()
     stack = [e for e in entries if e < len(ops)]
-    if file_index == 0 and not ops:
-        stack = []
     falls_off = file_index == 0 and not ops
     while stack:
         i = stack.pop()
@@ -892,15 +891,18 @@ def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagno
     low: dict[tuple[int, int], int] = {}
     on_stack: set[tuple[int, int]] = set()
     stack: list[tuple[int, int]] = []
-    counter = [0]
     sccs: list[list[tuple[int, int]]] = []
 
     def strong(v: tuple[int, int]) -> None:
-        work = [(v, 0)]
-        index_of[v] = low[v] = counter[0]
-        counter[0] += 1
-        stack.append(v)
-        on_stack.add(v)
+        work: list[tuple[tuple[int, int], int]] = []
+
+        def enter(w: tuple[int, int]) -> None:
+            index_of[w] = low[w] = len(index_of)      # visit order: nodes are numbered as they are entered
+            stack.append(w)
+            on_stack.add(w)
+            work.append((w, 0))
+
+        enter(v)
         while work:
             node, pos = work[-1]
             succ = edges.get(node, [])
@@ -908,11 +910,7 @@ def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagno
                 work[-1] = (node, pos + 1)
                 w = succ[pos][0].key
                 if w not in index_of:
-                    index_of[w] = low[w] = counter[0]
-                    counter[0] += 1
-                    stack.append(w)
-                    on_stack.add(w)
-                    work.append((w, 0))
+                    enter(w)
                 elif w in on_stack:
                     low[node] = min(low[node], index_of[w])
                 continue
