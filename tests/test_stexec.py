@@ -694,6 +694,29 @@ def test_external_overrides_function_and_function_block():
     assert (rt.get("inst.r"), rt.get("inst.b"), rt.get("inst.sv")) == (12, True, 70000 - 65536)
 
 
+def test_external_function_results_are_completed_and_checked():
+    before = """
+    FUNCTION Step : INT
+      VAR_INPUT k : INT; END_VAR
+      VAR_IN_OUT acc : INT; END_VAR
+      VAR_OUTPUT flag : BOOL; END_VAR
+      Step := k; acc := acc + k; flag := TRUE;
+    END_FUNCTION
+    """
+    body = "r := Step(k := 2, acc := n, flag => f);"
+    text = source(body, "r : INT; n : INT := 5; f : BOOL := TRUE;", before=before)
+    # a bare result: wrapped to INT; the missing in-out stays unchanged, the missing output gets its default
+    rt = load_st(text, "t.st").instantiate({"step": lambda k, acc: 70000})
+    rt.run_cycle()
+    assert (rt.get("inst.r"), rt.get("inst.n"), rt.get("inst.f")) == (70000 - 65536, 5, False)
+    # an output value that does not fit its type is a runtime error at the call
+    rt = load_st(text, "t.st").instantiate({"step": lambda k, acc: (1, {"FLAG": 7})})
+    with pytest.raises(StRuntimeError) as info:
+        rt.run_cycle()
+    assert "Step.flag: BOOL needs True/False, got 7" in info.value.message
+    assert info.value.span is not None and info.value.span.line == line_of(text, body)
+
+
 def test_set_wraps_and_validates():
     rt = run("x := x;", "x : INT; b : BOOL; w : WORD; s : STRING; a : ARRAY[0..1] OF INT;")
     rt.set("inst.x", 40000)

@@ -9,7 +9,9 @@ from typing import Any, Callable, Optional
 from transpiler.diagnostics import Span
 from transpiler.stexec import nodes as n
 from transpiler.stexec import typesys as T
+from transpiler.stexec.errors import Trap
 from transpiler.stexec.model import PouInfo, VarInfo
+from transpiler.stexec.rtlib import f32, idiv, imod, wrap_int
 
 # Python operator precedence levels, used to parenthesise only where needed (deep parentheses nesting
 # makes CPython's parser fail on long AND/OR chains).
@@ -68,10 +70,7 @@ def const_ex(value: Any, ty: T.Type) -> Ex:
 
 def wrap_value(value: int, ty: T.Type) -> int:
     b = T.base(ty)
-    value &= b.mask
-    if b.signed and value >> (b.bits - 1):
-        value -= 1 << b.bits
-    return value
+    return wrap_int(value, b.bits, b.signed)
 
 
 _TIME_PART = re.compile(r"(\d+(?:\.\d+)?)(ms|us|ns|d|h|m|s)", re.I)
@@ -142,10 +141,25 @@ class Context:
         self.use_address: Optional[Callable[[str, Span], Optional[tuple[T.Type, str]]]] = None
 
 
+_ADDR = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$", re.I)
+
+
+def normalise_address(text: str) -> Optional[str]:
+    """%IX0.1 / %ix0.1 / %I0.1 -> '%IX0.1' (the size prefix X is the default); None if not a full address."""
+    m = _ADDR.match(text)
+    if not m:
+        return None
+    size = (m.group(2) or "X").upper()
+    return f"%{m.group(1).upper()}{size}{m.group(3)}"
+
+
+def location_attr(addr: str) -> str:
+    """Attribute of the globals object that stores a (normalised) address: one cell per address."""
+    return "l_" + addr[1:].lower().replace(".", "_")
+
+
 def storage_attr(v: VarInfo) -> str:
-    if v.location is not None:
-        return "l_" + v.location[1:].lower().replace(".", "_")
-    return "v_" + v.key
+    return location_attr(v.location) if v.location is not None else "v_" + v.key
 
 
 class PouCompiler:
@@ -276,16 +290,13 @@ class PouCompiler:
 
     @staticmethod
     def real_round(value: float, ty: T.Type) -> float:
-        if T.base(ty) is T.REAL:
-            from transpiler.stexec.rtlib import f32
-            return f32(value)
-        return value
+        return f32(value) if T.base(ty) is T.REAL else value
 
     # ================================================================ names and variables
     def var_code(self, v: VarInfo) -> str:
         if v.constant and v.const_value is not None:
             return py_literal(v.const_value)[0]
-        if v.kind in ("global",) or v.location is not None:
+        if v.kind == "global" or v.location is not None:
             return f"G.{storage_attr(v)}"
         if v.kind == "external":
             g = self.ctx.globals.get(v.key)
@@ -303,7 +314,7 @@ class PouCompiler:
         key = node.name.lower()
         v = self.lookup(key)
         if v is not None:
-            return self.var_ex(v, node.span)
+            return self.var_ex(v)
         if key in ("true", "false"):
             return const_ex(key == "true", T.BOOL)
         if self.pou is not None and self.pou.prelude and key == "__current_time":
@@ -319,7 +330,7 @@ class PouCompiler:
                                        "to use it here")
         return self.err(node.span, f"undeclared variable '{node.name}'")
 
-    def var_ex(self, v: VarInfo, span: Span) -> Ex:
+    def var_ex(self, v: VarInfo) -> Ex:
         const = v.const_value if v.constant else None
         code = self.var_code(v)
         prec = P_UNARY if code.startswith("-") else P_ATOM
@@ -328,20 +339,17 @@ class PouCompiler:
             writable, why = False, f"'{v.name}' is a CONSTANT"
         elif isinstance(v.ty, T.FbT):
             writable, why = False, f"'{v.name}' is a function block instance"
-        elif v.kind == "input" and self.is_function:
-            writable = True
         is_global = v.kind == "external"
         return Ex(code, v.ty, prec, True, const, v, writable, why, is_global)
 
     def addr_ex(self, node: n.Addr) -> Ex:
-        from transpiler.stexec.compiler import normalise_address
         addr = normalise_address(node.address)
         if addr is None:
             return self.err(node.span, f"invalid address '{node.address}'")
         if self.pou is not None:
             for v in self.pou.vars.values():
                 if v.location == addr:
-                    return self.var_ex(v, node.span)
+                    return self.var_ex(v)
         if self.pou is None or self.pou.kind != "program" or self.ctx.use_address is None:
             return self.err(node.span, f"directly represented variable {addr} outside a PROGRAM")
         found = self.ctx.use_address(addr, node.span)
@@ -605,7 +613,6 @@ class PouCompiler:
         def refold(t: T.Elem) -> int:
             rv = r.value_in(t)
             if op in ("/", "MOD") and rv == 0:
-                from transpiler.stexec.errors import Trap
                 raise Trap("division by zero")
             return wrap_value(_apply(op, l.value_in(t), rv, False), t)
         return dataclasses.replace(const_ex(value, ty), folded=True, refold=refold)
@@ -918,7 +925,7 @@ class PouCompiler:
         if v is None:
             self.err(s.var_span, f"undeclared FOR control variable '{s.var}'")
             return
-        ctl = self.var_ex(v, s.var_span)
+        ctl = self.var_ex(v)
         if not T.is_int(ctl.ty):
             self.err(s.var_span, f"invalid data type {ctl.ty} for the FOR control variable (needs an integer type)")
             return
@@ -1047,7 +1054,6 @@ def _apply(op: str, a, b, real: bool):
         return a * b
     if real:
         return a / b
-    from transpiler.stexec.rtlib import idiv, imod
     return idiv(a, b) if op == "/" else imod(a, b)
 
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import functools
 import math
-import re
 from typing import Optional
 
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.stexec import nodes as n
 from transpiler.stexec import typesys as T
-from transpiler.stexec.codegen import Context, PouCompiler, default_code, storage_attr
+from transpiler.stexec.codegen import (Context, Ex, PouCompiler, default_code, location_attr, normalise_address,
+                                       storage_attr)
 from transpiler.stexec.errors import ST_CODE, StError
 from transpiler.stexec.model import CompiledProject, PouInfo, ProgramInstance, TaskInfo, VarInfo
 from transpiler.stexec.parser import parse
@@ -18,8 +18,8 @@ from transpiler.stexec.prelude import prelude_text
 from transpiler.stexec.stdlib import is_standard_name
 
 PRELUDE_FILE = "<iec-standard-library>"
-_ADDR = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$", re.I)
-_SIZE_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
+# The type an address's size prefix implies: its width must match a declaration, and it types an undeclared use.
+_SIZE_TYPE = {"X": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
 _KIND_NAMES = {"input": "VAR_INPUT", "output": "VAR_OUTPUT", "inout": "VAR_IN_OUT", "var": "VAR",
                "temp": "VAR_TEMP", "external": "VAR_EXTERNAL", "global": "VAR_GLOBAL"}
 _ALLOWED_KINDS = {
@@ -27,14 +27,6 @@ _ALLOWED_KINDS = {
     "function_block": {"input", "output", "inout", "var", "temp", "external"},
     "program": {"input", "output", "inout", "var", "temp", "external"},
 }
-
-
-def normalise_address(text: str) -> Optional[str]:
-    m = _ADDR.match(text)
-    if not m:
-        return None
-    size = (m.group(2) or "X").upper()
-    return f"%{m.group(1).upper()}{size}{m.group(3)}"
 
 
 @functools.lru_cache(maxsize=1)
@@ -72,8 +64,8 @@ class Compiler:
         prev = self.locations.get(addr)
         if prev is not None:
             return prev[0], prev[1]
-        ty = {"X": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}[addr[2]]
-        attr = "l_" + addr[1:].lower().replace(".", "_")
+        ty = _SIZE_TYPE[addr[2]]
+        attr = location_attr(addr)
         self.locations[addr] = (ty, attr, span)
         return ty, attr
 
@@ -293,7 +285,7 @@ class Compiler:
                                   f"{_KIND_NAMES[block.kind]}")
             return None
         b = T.base(ty)
-        size = _SIZE_BITS[addr[2]]
+        size = _SIZE_TYPE[addr[2]].bits
         if isinstance(b, T.ArrayT):
             if decl.spec.__class__ is n.ArraySpec:
                 self.error(decl.span, "an inline ARRAY cannot be located (matiec: bit size error); use a named "
@@ -480,14 +472,8 @@ class Compiler:
     def emit_structs(self, src: _Source) -> None:
         for st in self.structs:
             pc = PouCompiler(self.ctx, None, self.ctx.types[st.name.lower()][2] + 1)
-            keys = list(st.fields)
-            src.add(0, f"class {st.pyname}:")
-            src.add(1, f"__slots__ = {tuple('v_' + k for k in keys)!r}")
-            src.add(1, "def __init__(self):")
-            for k, f in st.fields.items():
-                src.add(2, f"self.v_{k} = {pc.init_code(f.ty, f.init, st_span(f, self.filename))}")
-            if not keys:
-                src.add(2, "pass")
+            _storage_class(src, st.pyname, [(f"v_{k}", pc.init_code(f.ty, f.init, st_span(f, self.filename)), None)
+                                            for k, f in st.fields.items()])
             src.add(1, "def _copy(self):")
             src.add(2, f"o = {st.pyname}.__new__({st.pyname})")
             for k, f in st.fields.items():
@@ -495,14 +481,13 @@ class Compiler:
             src.add(2, "return o")
             src.add(1, "def _set(self, o):")
             for k, f in st.fields.items():
-                lines = pc.assign_lines(_ex(f"self.v_{k}", f.ty), _ex(f"o.v_{k}", f.ty))
+                lines = pc.assign_lines(Ex(f"self.v_{k}", f.ty), Ex(f"o.v_{k}", f.ty))
                 for line in lines:
                     src.add(2, line)
             src.add(2, "return self")
 
     def emit_pou(self, src: _Source, info: PouInfo) -> None:
         pc = PouCompiler(self.ctx, info, info.ordinal)
-        pc.indent = 1
         header_span = info.node.span
         if info.kind == "function":
             params = ", ".join(f"v_{v.key}" for v in info.pyparams)
@@ -515,19 +500,12 @@ class Compiler:
             src.add(1, f"v_{info.key} = {default_code(info.result) if info.result is not T.ERR else 'None'}",
                     header_span)
             pc.stmts(info.node.body)
-            lines = pc.lines
-            for indent, text, span in lines:
+            for indent, text, span in pc.lines:
                 src.add(indent, text, span)
             src.add(1, pc.return_line(), info.node.end_span)
             return
-        slots = [f"v_{v.key}" for v in info.state_vars]
-        src.add(0, f"class C_{info.key}:", header_span)
-        src.add(1, f"__slots__ = {tuple(slots)!r}")
-        src.add(1, "def __init__(self):")
-        for v in info.state_vars:
-            src.add(2, f"self.v_{v.key} = {pc.init_code(v.ty, v.init, v.span)}", v.span)
-        if not slots:
-            src.add(2, "pass")
+        _storage_class(src, f"C_{info.key}", [(f"v_{v.key}", pc.init_code(v.ty, v.init, v.span), v.span)
+                                              for v in info.state_vars], header_span)
         src.add(0, f"def B_{info.key}(self):", header_span)
         for v in info.vars.values():
             if v.kind == "temp":
@@ -538,15 +516,9 @@ class Compiler:
 
     def emit_globals(self, src: _Source) -> None:
         pc = PouCompiler(self.ctx, None, 1 << 30)
-        src.add(0, "class C__G:")
-        attrs = ["now"] + [f"v_{g.key}" for g in self.ctx.globals.values() if g.location is None] \
-            + [attr for _t, attr, _s in self.locations.values()]
-        src.add(1, f"__slots__ = {tuple(attrs)!r}")
-        src.add(1, "def __init__(self):")
-        src.add(2, "self.now = 0")
-        for g in self.ctx.globals.values():
-            if g.location is None:
-                src.add(2, f"self.v_{g.key} = {pc.init_code(g.ty, g.init, g.span)}", g.span)
+        fields: list[tuple[str, str, Optional[Span]]] = [("now", "0", None)]
+        fields += [(f"v_{g.key}", pc.init_code(g.ty, g.init, g.span), g.span)
+                   for g in self.ctx.globals.values() if g.location is None]
         inits: dict[str, VarInfo] = {}
         for info in self.ctx.pous.values():
             for v in info.vars.values():
@@ -557,13 +529,20 @@ class Compiler:
                 inits[g.location] = g
         for addr, (ty, attr, span) in self.locations.items():
             v = inits.get(addr)
-            code = pc.init_code(ty, v.init, v.span) if v is not None else default_code(ty)
-            src.add(2, f"self.{attr} = {code}", span)
+            fields.append((attr, pc.init_code(ty, v.init, v.span) if v is not None else default_code(ty), span))
+        _storage_class(src, "C__G", fields)
 
 
-def _ex(code: str, ty: T.Type):
-    from transpiler.stexec.codegen import Ex
-    return Ex(code, ty)
+def _storage_class(src: _Source, name: str, fields: list[tuple[str, str, Optional[Span]]],
+                   span: Optional[Span] = None) -> None:
+    """A slotted class whose __init__ gives every field (attribute, initial value code, ST span) its value."""
+    src.add(0, f"class {name}:", span)
+    src.add(1, f"__slots__ = {tuple(attr for attr, _c, _s in fields)!r}")
+    src.add(1, "def __init__(self):")
+    for attr, code, fspan in fields:
+        src.add(2, f"self.{attr} = {code}", fspan)
+    if not fields:
+        src.add(2, "pass")
 
 
 def st_span(field: T.StructField, filename: str) -> Span:

@@ -7,7 +7,7 @@ from typing import Any, Optional
 
 from transpiler.diagnostics import Span
 from transpiler.stexec import nodes as n
-from transpiler.stexec.typesys import FbT, Type
+from transpiler.stexec.typesys import FbT, Type, is_aggregate
 
 
 @dataclasses.dataclass
@@ -56,7 +56,6 @@ class PouInfo:
     @property
     def tuple_outputs(self) -> list[VarInfo]:
         """What a FUNCTION returns after its result: outputs, then scalar in-outs (copied back by the caller)."""
-        from transpiler.stexec.typesys import is_aggregate
         outs = [v for v in self.vars.values() if v.kind == "output"]
         return outs + [v for v in self.vars.values() if v.kind == "inout" and not is_aggregate(v.ty)]
 

@@ -12,7 +12,9 @@ from transpiler.diagnostics import Span
 
 @dataclasses.dataclass
 class Lit:
-    """A literal as written: kind is int, based, real, typed, string or bool; text is the source text."""
+    """A literal as written: kind is int, based, real, typed or string; text is the source text.
+
+    TRUE and FALSE are names (resolved by the code generator), not literals of the grammar."""
 
     kind: str
     text: str

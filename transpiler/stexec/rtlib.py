@@ -15,6 +15,12 @@ _INF = math.inf
 
 # ------------------------------------------------------------------ numbers
 
+def wrap_int(value: int, bits: int, signed: bool) -> int:
+    """The low `bits` bits of value, read as two's complement when signed: how every integer type wraps around."""
+    value &= (1 << bits) - 1
+    return value - (1 << bits) if signed and value >> (bits - 1) else value
+
+
 def f32(x: float) -> float:
     """Round a Python float to IEEE single precision, as a REAL variable would hold it."""
     try:
@@ -82,10 +88,7 @@ def real_to_int(x: float, bits: int, signed: bool) -> int:
     """REAL_TO_<int>: round half to even (measured on matiec), then keep the low bits."""
     if x != x or x in (_INF, -_INF):
         raise Trap(f"REAL value {x} cannot be converted to an integer")
-    v = round(x) & ((1 << bits) - 1)
-    if signed and v >> (bits - 1):
-        v -= 1 << bits
-    return v
+    return wrap_int(round(x), bits, signed)
 
 
 def trunc(x: float) -> int:
@@ -151,8 +154,7 @@ def loop_trap(limit_: int) -> None:
 
 def time_to_secs(ms: int) -> int:
     """TIME_TO_<int> counts whole seconds on matiec (targets.md 1.3), truncated toward zero."""
-    q = abs(ms) // 1000
-    return q if ms >= 0 else -q
+    return idiv(ms, 1000)
 
 
 def real_to_time(x: float) -> int:
@@ -301,9 +303,17 @@ def string_to_time(s: str) -> int:
     return string_to_int(s) * 1000
 
 
-def wrap_signed(v: int, bits: int) -> int:
-    v &= (1 << bits) - 1
-    return v - (1 << bits) if v >> (bits - 1) else v
+def sinit(obj, **fields):
+    """An FB instance or struct with some members set: what an initialiser `(PT := T#1s)` builds."""
+    for k, v in fields.items():
+        setattr(obj, k, v)
+    return obj
+
+
+def aset(dst: list, src: list) -> None:
+    """Array assignment for arrays of structs: copy element by element into the existing objects."""
+    for d, s in zip(dst, src):
+        d._set(s)
 
 
 HELPERS = {
@@ -315,6 +325,6 @@ HELPERS = {
     "_s_insert": s_insert, "_s_delete": s_delete, "_s_replace": s_replace, "_s_find": s_find,
     "_bool_to_string": bool_to_string, "_bits_to_string": bits_to_string, "_real_to_string": real_to_string,
     "_time_to_string": time_to_string, "_string_to_int": string_to_int, "_string_to_real": string_to_real,
-    "_string_to_bool": string_to_bool, "_string_to_time": string_to_time, "_wrap_signed": wrap_signed,
-    "_math": math, "_Trap": Trap,
+    "_string_to_bool": string_to_bool, "_string_to_time": string_to_time, "_sinit": sinit,
+    "_aset": aset, "_math": math,
 }

@@ -2,118 +2,146 @@
 
 from __future__ import annotations
 
+import itertools
 import re
 import traceback
 from typing import Any, Callable, Optional
 
 from transpiler.diagnostics import Span
 from transpiler.stexec import typesys as T
-from transpiler.stexec.compiler import base_tick, normalise_address
+from transpiler.stexec.codegen import normalise_address, storage_attr
+from transpiler.stexec.compiler import base_tick
 from transpiler.stexec.errors import StError, StRuntimeError, Trap, st_diag
 from transpiler.stexec.model import CompiledProject, PouInfo, VarInfo
-from transpiler.stexec.rtlib import HELPERS, f32
+from transpiler.stexec.rtlib import HELPERS, f32, wrap_int
 
 _PATH_TOKEN = re.compile(r"\s*(?:(%[A-Za-z]+[0-9.]*[0-9])|([A-Za-z_][A-Za-z0-9_]*)|\.|\[([^\]]*)\])")
 
 
 # ====================================================================== value conversion at the boundary
+# The converters are chosen from the type once, when a path is first resolved or an external is installed, so
+# that get(), set() and every external call run only the checks that apply to that one type.
 
-def to_st(value: Any, ty: T.Type, what: str) -> Any:
-    """A Python value from outside (set, externals) as the runtime representation of ty; raises ValueError."""
+def to_st_converter(ty: T.Type, what: str) -> Callable[[Any], Any]:
+    """The function that takes a Python value from outside (set, externals) to the runtime representation of ty;
+    it raises ValueError for a value that does not fit."""
     b = T.base(ty)
-    if isinstance(b, T.Elem):
-        if b.cat in ("int", "bit"):
+    if isinstance(b, T.Elem) and b.cat in ("int", "bit"):
+        lo, hi = (ty.lo, ty.hi) if isinstance(ty, T.SubrangeT) else (None, None)
+
+        def integer(value: Any) -> int:
             if isinstance(value, bool) or not isinstance(value, int):
                 raise ValueError(f"{what}: {b.name} needs an int, got {value!r}")
-            if isinstance(ty, T.SubrangeT) and not ty.lo <= value <= ty.hi:
-                raise ValueError(f"{what}: {value} outside the subrange {ty.lo}..{ty.hi}")
-            v = value & b.mask
-            return v - (1 << b.bits) if b.signed and v >> (b.bits - 1) else v
-        if b.cat == "bool":
+            if lo is not None and not lo <= value <= hi:
+                raise ValueError(f"{what}: {value} outside the subrange {lo}..{hi}")
+            return wrap_int(value, b.bits, b.signed)
+        return integer
+    if b is T.BOOL:
+        def boolean(value: Any) -> bool:
             if isinstance(value, bool):
                 return value
             if value in (0, 1) and isinstance(value, int):
                 return bool(value)
             raise ValueError(f"{what}: BOOL needs True/False, got {value!r}")
-        if b.cat == "real":
+        return boolean
+    if isinstance(b, T.Elem) and b.cat == "real":
+        def real(value: Any) -> float:
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise ValueError(f"{what}: {b.name} needs a number, got {value!r}")
             return f32(float(value)) if b is T.REAL else float(value)
-        if b.cat == "time":
+        return real
+    if b is T.TIME:
+        def time(value: Any) -> int:
             if isinstance(value, bool) or not isinstance(value, int):
                 raise ValueError(f"{what}: TIME needs int milliseconds, got {value!r}")
             return value
-        if b.cat == "string":
+        return time
+    if b is T.STRING:
+        def string(value: Any) -> str:
             if not isinstance(value, str):
                 raise ValueError(f"{what}: STRING needs a str, got {value!r}")
             if len(value) > T.STR_MAX:
                 raise ValueError(f"{what}: string of {len(value)} characters, at most {T.STR_MAX}")
             return value
+        return string
     if isinstance(b, T.EnumT):
-        if isinstance(value, str):
-            idx = b.index(value)
-            if idx is None:
-                raise ValueError(f"{what}: '{value}' is not a value of {b.name}")
-            return idx
-        if isinstance(value, int) and not isinstance(value, bool) and 0 <= value < len(b.values):
-            return value
-        raise ValueError(f"{what}: {b.name} needs one of {', '.join(b.values)}")
-    raise ValueError(f"{what}: cannot set a whole {ty}; set its elements or fields")
+        def enum(value: Any) -> int:
+            if isinstance(value, str):
+                idx = b.index(value)
+                if idx is None:
+                    raise ValueError(f"{what}: '{value}' is not a value of {b.name}")
+                return idx
+            if isinstance(value, int) and not isinstance(value, bool) and 0 <= value < len(b.values):
+                return value
+            raise ValueError(f"{what}: {b.name} needs one of {', '.join(b.values)}")
+        return enum
+
+    def aggregate(value: Any) -> Any:
+        raise ValueError(f"{what}: cannot set a whole {ty}; set its elements or fields")
+    return aggregate
 
 
-def from_st(value: Any, ty: T.Type) -> Any:
-    """The runtime representation as a plain Python value (enums by name, arrays as lists, structs as dicts)."""
+def from_st_converter(ty: T.Type) -> Callable[[Any], Any]:
+    """The function that turns ty's runtime representation into the plain Python value get() returns: enums by
+    name, arrays as lists, structs and FB instances as dicts, everything else as it is."""
     b = T.base(ty)
     if isinstance(b, T.EnumT):
-        return b.values[value]
+        return b.values.__getitem__
     if isinstance(b, T.ArrayT):
-        return [from_st(v, b.elem) for v in value]
-    if isinstance(b, T.StructT):
-        return {f.name: from_st(getattr(value, "v_" + k), f.ty) for k, f in b.fields.items()}
-    if isinstance(b, T.FbT):
-        return {v.name: from_st(getattr(value, "v_" + v.key), v.ty) for v in b.pou.state_vars}
+        elem = from_st_converter(b.elem)
+        return lambda value: [elem(v) for v in value]
+    if isinstance(b, (T.StructT, T.FbT)):
+        members = b.fields.values() if isinstance(b, T.StructT) else b.pou.state_vars
+        fields = [(m.name, "v_" + m.name.lower(), from_st_converter(m.ty)) for m in members]
+        return lambda value: {name: convert(getattr(value, attr)) for name, attr, convert in fields}
+    return _identity
+
+
+def _identity(value: Any) -> Any:
     return value
 
 
-def _sinit(obj: Any, **fields: Any) -> Any:
-    for k, v in fields.items():
-        setattr(obj, k, v)
-    return obj
+def _external_converter(ty: T.Type, what: str) -> Callable[[Any], Any]:
+    """What an external hands back, as the runtime stores it: aggregates are the live objects and pass unchanged,
+    scalars are checked like set() and a misfit becomes a Trap (a runtime error of the ST program)."""
+    if T.is_aggregate(ty):
+        return _identity
+    convert = to_st_converter(ty, what)
 
-
-def _aset(dst: list, src: list) -> None:
-    for d, s in zip(dst, src):
-        d._set(s)
+    def checked(value: Any) -> Any:
+        try:
+            return convert(value)
+        except ValueError as exc:
+            raise Trap(str(exc)) from exc
+    return checked
 
 
 # ====================================================================== externals
 
 def _fb_external(fn: Callable, pou: PouInfo) -> Callable:
-    fields = [(v.key, v.ty) for v in pou.state_vars]
+    fields = [(v.key, "v_" + v.key, _external_converter(v.ty, f"{pou.name}.{v.key}")) for v in pou.state_vars]
 
     def body(inst: Any) -> None:
-        state = {k: getattr(inst, "v_" + k) for k, _t in fields}
+        state = {k: getattr(inst, attr) for k, attr, _c in fields}
         try:
             fn(state)
         except (Trap, StRuntimeError):
             raise
         except Exception as exc:  # noqa: BLE001 - reported as a runtime error of the ST program
             raise Trap(f"external implementation of {pou.name} raised {type(exc).__name__}: {exc}") from exc
-        for k, ty in fields:
-            if k not in state:
-                continue
-            value = state[k]
-            if T.is_aggregate(ty):
-                setattr(inst, "v_" + k, value)
-            else:
-                setattr(inst, "v_" + k, _checked(value, ty, f"{pou.name}.{k}"))
+        for k, attr, convert in fields:
+            if k in state:
+                setattr(inst, attr, convert(state[k]))
     return body
 
 
 def _fn_external(fn: Callable, pou: PouInfo) -> Callable:
     params = [v.key for v in pou.pyparams]
-    rest = pou.tuple_outputs
+    result_of = _external_converter(pou.result, f"result of {pou.name}")
     inout_pos = {v.key: i for i, v in enumerate(pou.pyparams)}
+    # what follows the result: (key, converter, position of the in-out's argument or None for an output, type)
+    rest = [(v.key, _external_converter(v.ty, f"{pou.name}.{v.key}"),
+             inout_pos[v.key] if v.kind == "inout" else None, v.ty) for v in pou.tuple_outputs]
 
     def call(*args: Any) -> Any:
         try:
@@ -128,37 +156,34 @@ def _fn_external(fn: Callable, pou: PouInfo) -> Callable:
                 raise Trap(f"external implementation of {pou.name} must return a result or (result, dict)")
             res, outs = res
             outs = {str(k).lower(): v for k, v in outs.items()}
-        result = res if T.is_aggregate(pou.result) else _checked(res, pou.result, f"result of {pou.name}")
+        result = result_of(res)
         if not rest:
             return result
         values = [result]
-        for v in rest:
-            if v.key in outs:
-                values.append(outs[v.key] if T.is_aggregate(v.ty) else _checked(outs[v.key], v.ty, f"{pou.name}.{v.key}"))
-            elif v.kind == "inout":
-                values.append(args[inout_pos[v.key]])
+        for key, convert, pos, ty in rest:
+            if key in outs:
+                values.append(convert(outs[key]))
+            elif pos is not None:
+                values.append(args[pos])
             else:
-                values.append(T.default_value(v.ty))
+                values.append(T.default_value(ty))
         return tuple(values)
     return call
-
-
-def _checked(value: Any, ty: T.Type, what: str) -> Any:
-    try:
-        return to_st(value, ty, what)
-    except ValueError as exc:
-        raise Trap(str(exc)) from exc
 
 
 # ====================================================================== path resolution
 
 class _Ref:
-    """A resolved variable path: a holder object plus attribute name, or a list plus index."""
+    """A resolved variable path: a holder object plus attribute name, or a list plus index.
 
-    __slots__ = ("holder", "attr", "index", "ty", "constant", "what")
+    to_py and to_st are the conversions get() and set() apply; _resolve() fills them in once per path."""
 
-    def __init__(self, holder: Any, attr: Optional[str], index: Optional[int], ty: T.Type, constant: bool, what: str):
-        self.holder, self.attr, self.index, self.ty, self.constant, self.what = holder, attr, index, ty, constant, what
+    __slots__ = ("holder", "attr", "index", "ty", "constant", "to_py", "to_st")
+
+    def __init__(self, holder: Any, attr: Optional[str], index: Optional[int], ty: T.Type, constant: bool):
+        self.holder, self.attr, self.index, self.ty, self.constant = holder, attr, index, ty, constant
+        self.to_py: Callable[[Any], Any] = _identity
+        self.to_st: Callable[[Any], Any] = _identity
 
     def get(self) -> Any:
         if self.attr is not None:
@@ -180,8 +205,7 @@ class Runtime:
         if not project.has_configuration or not project.programs:
             raise StError([st_diag(Span(project.filename, 1, 1),
                                    "the file has no CONFIGURATION with a program instance to run")])
-        ns: dict[str, Any] = dict(HELPERS)
-        ns.update({"_sinit": _sinit, "_aset": _aset, "_LOOP_RANGE": range(project.loop_limit)})
+        ns: dict[str, Any] = dict(HELPERS, _LOOP_RANGE=range(project.loop_limit))
         exec(project.code, ns)   # noqa: S102 - code generated by our own compiler from checked ST
         for name, fn in (externals or {}).items():
             pou = project.pous.get(name.lower())
@@ -256,6 +280,13 @@ class Runtime:
         if ref is not None:
             return ref
         ref = self._resolve_uncached(path)
+        ref.to_py = from_st_converter(ref.ty)
+        if ref.constant:
+            ref.to_st = _refusal(f"'{path}' is a CONSTANT")
+        elif T.is_aggregate(ref.ty):
+            ref.to_st = _refusal(f"'{path}' is a {ref.ty}; set its elements or fields one by one")
+        else:
+            ref.to_st = to_st_converter(ref.ty, path)
         self._refs[path] = ref
         return ref
 
@@ -287,12 +318,12 @@ class Runtime:
             loc = self._project.locations.get(addr) if addr else None
             if loc is None:
                 raise KeyError(f"no variable is located at '{text}'")
-            ref = _Ref(self._g, loc[1], None, loc[0], False, addr)
+            ref = _Ref(self._g, loc[1], None, loc[0], False)
         elif kind == "name":
             key = text.lower()
             g = self._project.globals.get(key)
             if g is not None:
-                ref = self._var_ref(self._g, g, text)
+                ref = self._var_ref(self._g, g)
             elif key in self._instances:
                 inst, pou, name = self._instances[key]
                 if not rest:
@@ -317,19 +348,18 @@ class Runtime:
                 raise KeyError(f"malformed variable path '{path}'")
         return ref
 
-    def _var_ref(self, holder: Any, v: VarInfo, what: str) -> _Ref:
+    def _var_ref(self, holder: Any, v: VarInfo) -> _Ref:
         if v.location is not None:
-            return _Ref(self._g, "l_" + v.location[1:].lower().replace(".", "_"), None, v.ty, v.constant, what)
-        return _Ref(holder, "v_" + v.key, None, v.ty, v.constant, what)
+            holder = self._g        # every located variable is a cell of its address, stored with the globals
+        return _Ref(holder, storage_attr(v), None, v.ty, v.constant)
 
     def _member(self, inst: Any, pou: PouInfo, name: str, path: str) -> _Ref:
         v = pou.vars.get(name.lower())
         if v is None or v.kind in ("temp", "result"):
             raise KeyError(f"'{path}': {pou.name} has no variable '{name}'")
         if v.kind == "external":
-            g = self._project.globals.get(v.key)
-            return self._var_ref(self._g, g, path)
-        return self._var_ref(inst, v, path)
+            return self._var_ref(self._g, self._project.globals[v.key])
+        return self._var_ref(inst, v)
 
     def _field(self, ref: _Ref, name: str, path: str) -> _Ref:
         b = T.base(ref.ty)
@@ -338,7 +368,7 @@ class Runtime:
             f = b.fields.get(name.lower())
             if f is None:
                 raise KeyError(f"'{path}': {b.name} has no field '{name}'")
-            return _Ref(obj, "v_" + name.lower(), None, f.ty, ref.constant, path)
+            return _Ref(obj, "v_" + name.lower(), None, f.ty, ref.constant)
         if isinstance(b, T.FbT):
             return self._member(obj, b.pou, name, path)
         raise KeyError(f"'{path}': {ref.ty} has no fields")
@@ -358,19 +388,15 @@ class Runtime:
             if not lo <= i <= hi:
                 raise KeyError(f"'{path}': index {i} outside {lo}..{hi}")
             flat += (i - lo) * stride
-        return _Ref(ref.get(), None, flat, b.elem, ref.constant, path)
+        return _Ref(ref.get(), None, flat, b.elem, ref.constant)
 
     def get(self, path: str) -> Any:
         ref = self._resolve(path)
-        return from_st(ref.get(), ref.ty)
+        return ref.to_py(ref.get())
 
     def set(self, path: str, value: Any) -> None:
         ref = self._resolve(path)
-        if ref.constant:
-            raise ValueError(f"'{path}' is a CONSTANT")
-        if T.is_aggregate(ref.ty):
-            raise ValueError(f"'{path}' is a {ref.ty}; set its elements or fields one by one")
-        ref.set(to_st(value, ref.ty, path))
+        ref.set(ref.to_st(value))
 
     def names(self) -> list[str]:
         out: list[str] = []
@@ -388,8 +414,7 @@ class Runtime:
     def _leaf_names(self, prefix: str, ty: T.Type, out: list[str]) -> None:
         b = T.base(ty)
         if isinstance(b, T.ArrayT):
-            ranges = [range(lo, hi + 1) for lo, hi in b.dims]
-            for idx in _product(ranges):
+            for idx in itertools.product(*(range(lo, hi + 1) for lo, hi in b.dims)):
                 self._leaf_names(f"{prefix}[{','.join(map(str, idx))}]", b.elem, out)
         elif isinstance(b, T.StructT):
             for f in b.fields.values():
@@ -401,11 +426,8 @@ class Runtime:
             out.append(prefix)
 
 
-def _product(ranges: list[range]):
-    if not ranges:
-        yield ()
-        return
-    for i in ranges[0]:
-        for rest in _product(ranges[1:]):
-            yield (i,) + rest
+def _refusal(message: str) -> Callable[[Any], Any]:
+    def refuse(value: Any) -> Any:
+        raise ValueError(message)
+    return refuse
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Optional
 
 from transpiler.diagnostics import Span
 from transpiler.stexec import nodes as n
@@ -10,6 +10,7 @@ from transpiler.stexec import typesys as T
 from transpiler.stexec.codegen import (ERR_EX, P_ADD, P_ATOM, P_BAND, P_CMP, P_COND, Ex, PouCompiler, const_ex,
                                        paren)
 from transpiler.stexec.model import PouInfo
+from transpiler.stexec.rtlib import real_to_int, time_to_secs
 
 # Standard function name -> formal parameter names (a trailing "..." means more numbered inputs may follow).
 _SIGNATURES: dict[str, tuple[str, ...]] = {
@@ -299,16 +300,11 @@ def _conversion(pc: PouCompiler, key: str, node: n.Call, src: T.Elem, dst: T.Ele
     out = Ex(code[0], dst, code[1], wrapped)
     if x.const is not None and not isinstance(x.const, str) and wrapped and dst.cat in ("int", "bit", "bool"):
         try:
-            value = eval(code[0], {"_real_to_int": _rt("real_to_int"), "_time_to_secs": _rt("time_to_secs")})  # noqa: S307
+            value = eval(code[0], {"_real_to_int": real_to_int, "_time_to_secs": time_to_secs})  # noqa: S307
             return const_ex(value, dst)
         except Exception:   # noqa: BLE001 - a conversion that traps at run time is left to run time
             return out
     return out
-
-
-def _rt(name: str) -> Callable:
-    from transpiler.stexec import rtlib
-    return getattr(rtlib, name)
 
 
 def convert_code(src: T.Elem, dst: T.Elem, x: Ex) -> tuple[tuple[str, int], bool]:
@@ -373,7 +369,7 @@ def convert_code(src: T.Elem, dst: T.Elem, x: Ex) -> tuple[tuple[str, int], bool
 
 # ====================================================================== user functions
 
-def _bind(pc: PouCompiler, pou: PouInfo, args: list[n.Arg], span: Span, is_fb: bool) -> Optional[dict[str, n.Arg]]:
+def _bind(pc: PouCompiler, pou: PouInfo, args: list[n.Arg], span: Span) -> Optional[dict[str, n.Arg]]:
     named = [a.name is not None for a in args]
     if any(named) and not all(named):
         pc.err(span, "positional and named arguments cannot be mixed in one call")
@@ -429,7 +425,7 @@ def _inout_actual(pc: PouCompiler, pou: PouInfo, v, a: Optional[n.Arg], span: Sp
 
 
 def _user_function(pc: PouCompiler, pou: PouInfo, node: n.Call) -> Ex:
-    bound = _bind(pc, pou, node.args, node.span, False)
+    bound = _bind(pc, pou, node.args, node.span)
     if bound is None:
         return ERR_EX
     codes = []
@@ -438,8 +434,7 @@ def _user_function(pc: PouCompiler, pou: PouInfo, node: n.Call) -> Ex:
         a = bound.get(v.key)
         if v.kind == "input":
             if a is None:
-                from transpiler.stexec.codegen import default_code
-                codes.append(pc.init_code(v.ty, v.init, v.span) if v.init is not None else default_code(v.ty))
+                codes.append(pc.init_code(v.ty, v.init, v.span))    # the declared initial value, else the default
                 continue
             ex = pc.expr(a.value)
             ex = pc.coerce(ex, v.ty, a.value.span, f"argument '{v.name}' of {pou.name}")
@@ -519,10 +514,10 @@ def compile_call_stmt(pc: PouCompiler, s: n.CallStmt) -> None:
         pc.err(s.span, f"'{s.name}' is not a function block instance (it is {v.ty})")
         return
     fb = v.ty.pou
-    bound = _bind(pc, fb, s.args, s.span, True)
+    bound = _bind(pc, fb, s.args, s.span)
     if bound is None:
         return
-    inst = pc.var_ex(v, s.span).code
+    inst = pc.var_ex(v).code
     lines: list[str] = []
     after: list[str] = []
     if len(bound) + 1 > 2 and "." in inst:

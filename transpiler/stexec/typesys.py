@@ -169,12 +169,6 @@ def is_bit(t: Type) -> bool:
     return isinstance(b, Elem) and b.cat == "bit"
 
 
-def is_intlike(t: Type) -> bool:
-    """Integer or bit string: stored as a Python int with a fixed width."""
-    b = base(t)
-    return isinstance(b, Elem) and b.cat in ("int", "bit")
-
-
 def is_real(t: Type) -> bool:
     b = base(t)
     return isinstance(b, Elem) and b.cat == "real"
