@@ -7,6 +7,7 @@ import dataclasses
 import os
 import shutil
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 
@@ -40,19 +41,26 @@ def _make_dirs(folders: list[Path], created: list[Path]) -> None:
             created.append(path)
 
 
+@contextlib.contextmanager
+def _removed_on_failure(path: Path) -> Iterator[None]:
+    """Remove `path` if the block fails, so that no half-made temp or backup file is left beside a target."""
+    try:
+        yield
+    except BaseException:
+        with contextlib.suppress(OSError):
+            path.unlink()
+        raise
+
+
 def _write_temp(target: Path, data: bytes, mode: int) -> Path:
     fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
     temp = Path(name)
-    try:
+    with _removed_on_failure(temp):
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
         os.chmod(temp, mode)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            temp.unlink()
-        raise
     return temp
 
 
@@ -63,16 +71,12 @@ def _backup(target: Path) -> Path | None:
     fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".bak")
     os.close(fd)
     backup = Path(name)
-    try:
+    with _removed_on_failure(backup):
         backup.unlink()
         try:
             os.link(target, backup)
         except OSError:
             shutil.copy2(target, backup)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            backup.unlink()
-        raise
     return backup
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from .atomic import write_files_atomically
 from .cli import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
 from .diagnostics import NO_SPAN
-from .transpile import find_mp_file, read_mp_file, transpile_program
+from .transpile import find_mp_file, read_mp_file, transpile_program, user_pous
 
 
 def register(sub, common) -> None:
@@ -49,7 +49,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
             problems = validate_xml(out.files["project.xml"])
             if problems:
                 for p in problems:
-                    print(f"{p}", file=sys.stderr)
+                    print(p, file=sys.stderr)
                 print(f"{NO_SPAN}: error[E-XSD]: project.xml does not validate against the TC6 schema "
                       "(a bug in hh2iec; nothing was written)", file=sys.stderr)
                 return EXIT_BAD_INPUT
@@ -59,9 +59,8 @@ def cmd_transpile(args: argparse.Namespace) -> int:
         print(f"{args.out}:1:1: error[E-TOOL]: cannot write output: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print_diagnostics(diags)
-    pous = len([p for p in out.result.project.pous if not p.name.startswith("HH_")])
     print(f"hh2iec transpile: wrote {', '.join(sorted(out.files))} to {args.out} "
-          f"({pous} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
+          f"({len(user_pous(out.result))} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
           f"{len(out.result.untranslated)} not translated)")
     return EXIT_OK
 

@@ -74,47 +74,19 @@ def _documentation(parent: etree._Element, text: str | None) -> None:
 # --- initial values -------------------------------------------------------------------------
 
 
-def _split_top_level(text: str) -> list[str]:
-    """Split at commas outside brackets, parentheses and string literals."""
-    parts: list[str] = []
+def _top_level_items(text: str) -> list[str] | None:
+    """`text` split at the commas outside brackets, parentheses and string literals; None when those do not balance."""
+    items: list[str] = []
     depth = 0
     quote: str | None = None
-    current: list[str] = []
-    index = 0
-    while index < len(text):
-        char = text[index]
-        current.append(char)
-        if quote:
-            if char == "$" and index + 1 < len(text):
-                current.append(text[index + 1])
-                index += 1
-            elif char == quote:
-                quote = None
-        elif char in "'\"":
-            quote = char
-        elif char in "([":
-            depth += 1
-        elif char in ")]":
-            depth -= 1
-        elif char == "," and depth == 0:
-            current.pop()
-            parts.append("".join(current).strip())
-            current = []
-        index += 1
-    parts.append("".join(current).strip())
-    return parts
-
-
-def _balanced(text: str) -> bool:
-    depth = 0
-    quote: str | None = None
-    skip = False
-    for char in text:
-        if skip:
-            skip = False
+    escaped = False
+    start = 0
+    for index, char in enumerate(text):
+        if escaped:
+            escaped = False
         elif quote:
             if char == "$":
-                skip = True
+                escaped = True
             elif char == quote:
                 quote = None
         elif char in "'\"":
@@ -124,8 +96,14 @@ def _balanced(text: str) -> bool:
         elif char in ")]":
             depth -= 1
             if depth < 0:
-                return False
-    return depth == 0 and quote is None
+                return None
+        elif char == "," and depth == 0:
+            items.append(text[start:index].strip())
+            start = index + 1
+    if depth or quote:
+        return None
+    items.append(text[start:].strip())
+    return items
 
 
 def _assignment(text: str) -> tuple[str, str] | None:
@@ -140,17 +118,19 @@ def _value(parent: etree._Element, tag: str, literal: str, **attributes: str) ->
     """An element of type ppx:value for an ST initial value: arrayValue, structValue or simpleValue."""
     element = _sub(parent, tag, **attributes)
     text = literal.strip()
-    if text.startswith("[") and text.endswith("]") and _balanced(text[1:-1]):
+    items = _top_level_items(text[1:-1]) if text.startswith("[") and text.endswith("]") else None
+    if items is not None:
         array = _sub(element, "arrayValue")
-        for item in _split_top_level(text[1:-1]) if text[1:-1].strip() else []:
+        for item in items if text[1:-1].strip() else []:
             repeated = _REPETITION.match(item)
-            if repeated and _balanced(repeated.group(2)):
+            if repeated and _top_level_items(repeated.group(2)) is not None:
                 _value(array, "value", repeated.group(2), repetitionValue=repeated.group(1))
             else:
                 _value(array, "value", item)
         return
-    if text.startswith("(") and text.endswith(")") and _balanced(text[1:-1]):
-        members = [_assignment(part) for part in _split_top_level(text[1:-1])]
+    parts = _top_level_items(text[1:-1]) if text.startswith("(") and text.endswith(")") else None
+    if parts is not None:
+        members = [_assignment(part) for part in parts]
         if members and all(members):
             struct = _sub(element, "structValue")
             for member, value in members:  # type: ignore[misc]

@@ -20,10 +20,13 @@ from .names import TEMP_PREFIX, NameTable
 from .structure import NotStructured, RoutineInfo, Structurer, state_machine
 from .symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
 
-GROUP_TITLES = [("io_in", "Inputs (process image)"), ("io_out", "Outputs (process image)"),
-                ("nc", "NC interface (NC <-> PLC operands)"), ("marker", "Markers"), ("timer", "Timer and counter operands"),
-                ("memory", "Byte memory: bytes, words, double words"), ("string", "Strings"),
-                ("mp", "Machine parameters (presets in PLC cycles)"), ("kfield", "Constant fields (KFIELD tables)"), ("register", "Accumulators, index register, data stack")]
+GROUP_TITLES = {"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
+                "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
+                "memory": "Byte memory: bytes, words, double words", "string": "Strings",
+                "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
+                "register": "Accumulators, index register, data stack"}
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,15 +62,13 @@ class StBackend:
         self.helpers_used: set[str] = set()
         self.fallbacks: list[Fallback] = []
         self.untranslated: list[tuple[Span, str]] = []
-        self.kfields: dict[str, tuple[str, tuple[int, ...]]] = {}
+        self.kfields: dict[str, str] = {}          # KFIELD key -> name of its constant array
         self.types: list[DataType] = []
 
     # ---- naming
 
-    def _reserve_pou_names(self) -> None:
-        for name in library.helper_pous():
-            self.names.reserve(name, f"lib:{name}")
-        for name in ("HH_TIMER", "HH_COUNTER"):
+    def _reserve_pou_names(self, helpers: Mapping[str, Pou]) -> None:
+        for name in [*helpers, "HH_TIMER", "HH_COUNTER"]:
             self.names.reserve(name, f"lib:{name}")
         self.main_pou = self.names.name("pou:main", self.main_name_wanted)
         self.pou_names: dict[tuple[int, int], str] = {}
@@ -79,11 +80,11 @@ class StBackend:
     # ---- build
 
     def build(self) -> StResult:
-        self._reserve_pou_names()
+        helpers = library.helper_pous()
+        self._reserve_pou_names(helpers)
         layout = Layout(self.program, self.names, self.helpers_used.add)
         self.layout = layout
         self.liveness = Liveness(self.program)
-        self.registers: dict[str, str] = {}
         self.stack: tuple[str, str] | None = None
         others = {r.index: r for r in self.program.routines}
         pous: dict[tuple[int, int], Pou] = {}
@@ -95,19 +96,22 @@ class StBackend:
         main = pous.pop((0, 0))
         main = self._with_services(main, layout)
         user_pous = [self._bit_accessor_pou(kind) for kind in sorted(layout.bit_access)] + self._order(pous)
-        lib = [p for name, p in library.helper_pous().items() if name in self._helper_closure()]
+        lib = [p for name, p in helpers.items() if name in self._helper_closure()]
         fbs = []
         if layout.timers:
             fbs.append(library.timer_fb(self.semantics))
         if layout.counters:
             fbs.append(library.counter_fb(self.semantics))
-        all_pous = tuple(lib + fbs + user_pous + [main])
         types = tuple(self._types(layout))
         config = self._configuration(layout)
-        project = IecProject(self.main_pou, types, all_pous, config,
+        # Only the POUs translated from the program read globals: the library ones use their own variables
+        # (and a FUNCTION may not declare VAR_EXTERNAL).
+        globals_by_upper = {v.name.upper(): v for s in config.globals for v in s.vars}
+        program_pous = [_with_externals(p, globals_by_upper) for p in user_pous + [main]]
+        project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
         return StResult(project, layout, self.names, tuple(self.fallbacks), tuple(self.untranslated),
-                        {k: v for k, v in self.pou_names.items()} | {(0, 0): self.main_pou},
+                        {**self.pou_names, (0, 0): self.main_pou},
                         tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars)
 
     def _header(self) -> str:
@@ -128,10 +132,8 @@ class StBackend:
         return done
 
     def _register(self, reg: str) -> str:
-        if reg not in self.registers:
-            typ, wanted, comment = REG_TYPES[reg]
-            self.registers[reg] = self.layout.add_register(f"reg:{reg}", wanted, typ, comment)
-        return self.registers[reg]
+        typ, wanted, comment = REG_TYPES[reg]
+        return self.layout.add_register(f"reg:{reg}", wanted, typ, comment)
 
     def _stack_names(self) -> tuple[str, str]:
         if self.stack is None:
@@ -151,10 +153,10 @@ class StBackend:
             name = self.names.name(key, f"KF_{o.text}")
             self.types.append(DataType(tname, "array", "DINT", (ArrayDim(0, len(o.kfield) - 1),),
                                        comment=f"constant field {o.text} (KFIELD)"))
-            self.kfields[key] = (name, o.kfield)
+            self.kfields[key] = name
             init = "[" + ", ".join(str(v) for v in o.kfield) + "]"
             self.layout.globals[name] = GlobalVar(name, tname, "kfield", initial=init, comment=f"KFIELD {o.text}")
-        return self.kfields[key][0]
+        return self.kfields[key]
 
     def _module_call(self, number: int) -> str:
         raise Unsupported(f"PLC module {number} (module calls are not translated yet)")
@@ -233,7 +235,7 @@ class StBackend:
         last = file.ops[max(body)].span.line if body else 1
         label = "main program" if is_main else f"LBL {entry.label}"
         comment = f"{label} of {file.path}" + ("" if structured else " (irreducible jumps: state machine)")
-        comments = [c for c in file.ops[entry.index].comments] if body and not is_main else []
+        comments = list(file.ops[entry.index].comments) if body and not is_main else []
         if comments:
             comment += "\n" + "\n".join(comments)
         return Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "\n".join(lines),
@@ -284,7 +286,7 @@ class StBackend:
             local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
             start = layout.timer_var("T", t)
             running = layout.timer_var("T", t - prof.timer_start[0] + prof.timer_running[0])
-            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(4110, t)]});")
+            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(TIMER_MP, t)]});")
             lines.append(f"{running.text} := {inst}.RUNNING;")
         for c in layout.counters:
             inst = self.names.name(f"counter:{c}", f"HH_Counter{c}")
@@ -292,7 +294,7 @@ class StBackend:
             start = layout.timer_var("C", prof.counter_start[0] + c)
             running = layout.timer_var("C", prof.counter_running[0] + c)
             release = layout.timer_var("C", prof.counter_release[0] + c)
-            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(4120, c)]}, RELEASE := {release.text});")
+            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(COUNTER_MP, c)]}, RELEASE := {release.text});")
             lines.append(f"{running.text} := {inst}.RUNNING;")
         if self.stack is not None:
             lines.append(f"{self.stack[1]} := 0; (* the data stack is empty at the start of each cycle (A-19) *)")
@@ -337,11 +339,11 @@ class StBackend:
         for g in layout.globals.values():
             groups.setdefault(g.group, []).append(IecVar(g.name, g.type, g.initial, g.address, g.comment))
         sections = []
-        for key, title in GROUP_TITLES:
+        for key, title in GROUP_TITLES.items():
             if key in groups:
                 sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title))
         for key in groups:
-            if key not in dict(GROUP_TITLES):
+            if key not in GROUP_TITLES:
                 sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=key))
         cycle = int(self.semantics["cycle_time_ms"])
         task = self.names.name("task", "HH_Cycle")
@@ -350,22 +352,12 @@ class StBackend:
                              (Task(task, cycle, 0),), (ProgramInstance(inst, task, self.main_pou),), tuple(sections))
 
 
-def add_externals(project: IecProject) -> IecProject:
-    """Give every POU that reads a global a VAR_EXTERNAL declaration of it (found in its body text)."""
-    globals_by_upper = {v.name.upper(): v for s in project.configuration.globals for v in s.vars}
-    new_pous = []
-    ident = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-    for pou in project.pous:
-        if pou.kind == "FUNCTION" or pou.name.startswith("HH_") and pou.kind == "FUNCTION_BLOCK" and pou.name in ("HH_TIMER", "HH_COUNTER"):
-            new_pous.append(pou)
-            continue
-        body_no_comments = re.sub(r"\(\*.*?\*\)", "", pou.body, flags=re.S)
-        used = {m.group(0).upper() for m in ident.finditer(body_no_comments)}
-        local = {v.name.upper() for s in pou.sections for v in s.vars}
-        ext = [globals_by_upper[u] for u in sorted(used) if u in globals_by_upper and u not in local]
-        ext.sort(key=lambda v: v.name.upper())
-        sections = list(pou.sections)
-        if ext:
-            sections.append(VarSection("VAR_EXTERNAL", tuple(IecVar(v.name, v.type) for v in ext)))
-        new_pous.append(dataclasses.replace(pou, sections=tuple(sections)))
-    return dataclasses.replace(project, pous=tuple(new_pous))
+def _with_externals(pou: Pou, globals_by_upper: Mapping[str, IecVar]) -> Pou:
+    """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count)."""
+    used = {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
+    local = {v.name.upper() for s in pou.sections for v in s.vars}
+    ext = [globals_by_upper[u] for u in sorted(used - local) if u in globals_by_upper]
+    if not ext:
+        return pou
+    externals = VarSection("VAR_EXTERNAL", tuple(IecVar(v.name, v.type) for v in ext))
+    return dataclasses.replace(pou, sections=pou.sections + (externals,))

@@ -60,11 +60,6 @@ def call(fn: str, args: list[Expr], typ: str, lo: int | None = None, hi: int | N
                 rlo if lo is None else lo, rhi if hi is None else hi)
 
 
-def raw(text: str, typ: str, deps: frozenset[str], prec: int = PREC_ATOM, lo: int | None = None, hi: int | None = None) -> Expr:
-    rlo, rhi = RANGES.get(typ, (0, 0))
-    return Expr(text, typ, deps, rlo if lo is None else lo, rhi if hi is None else hi, prec)
-
-
 def to_dint(e: Expr) -> Expr:
     """Widen an integer or boolean expression to DINT (the word accumulator's type)."""
     if e.typ == "DINT":
@@ -92,6 +87,18 @@ def b_not(a: Expr) -> Expr:
             inner = inner[1:-1]
         return Expr(inner, "BOOL", a.deps, 0, 1, PREC_OR if inner != a.text[4:] else PREC_ATOM)
     return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY)
+
+
+def unwiden(e: Expr) -> Expr | None:
+    """`INT_TO_DINT(W0)` -> `W0` (typed INT): the SINT/INT value inside a widening, or None when `e` is no widening."""
+    if e.const is not None:
+        return None
+    for typ in ("SINT", "INT"):
+        prefix = f"{typ}_TO_DINT("
+        if e.text.startswith(prefix) and e.text.endswith(")") and _balanced(e.text[len(prefix):-1]):
+            inner = e.text[len(prefix):-1]
+            return Expr(inner, typ, e.deps, e.lo, e.hi, PREC_ATOM if inner.isidentifier() or inner.endswith(")") else PREC_OR)
+    return None
 
 
 def _balanced(text: str) -> bool:

@@ -255,7 +255,7 @@ class Layout:
 
     # ---- access
 
-    def bit_lvalue(self, op: Operand, x: E.Expr | None, offset: int = 0) -> E.Expr:
+    def bit_lvalue(self, op: Operand, offset: int = 0) -> E.Expr:
         """The BOOL variable of a (non-indexed) bit operand, offset for LB/B= sequences."""
         name = self._declare_bit(op.kind, op.addr + offset)
         return E.Expr(name, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=name)
@@ -268,17 +268,21 @@ class Layout:
         return sorted((addr, name) for (k, addr), name in self._bit_var.items() if k == kind)
 
     def timer_var(self, kind: str, addr: int) -> E.Expr:
-        return self.bit_lvalue(Operand(kind, addr), None)
+        return self.bit_lvalue(Operand(kind, addr))
+
+    def _in_array(self, op: Operand) -> bool:
+        """Whether a B/W/D operand lives in the byte array (indexed, or overlapping with a differently shaped access)."""
+        return op.indexed or (op.kind, op.addr) not in self._mem_var and self.mem_array is not None
 
     def read_value(self, op: Operand, x: E.Expr | None) -> E.Expr:
         """A B/W/D operand as a typed expression (SINT/INT/DINT, i.e. sign-extended by type)."""
-        if op.indexed or (op.kind, op.addr) not in self._mem_var and self.mem_array is not None:
+        if self._in_array(op):
             return self._array_read(op, x)
         return E.var(self._declare_mem(op.kind, op.addr), MEM_TYPE[op.kind])
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         """(lvalue, DINT expression) assignments that store `value` truncated to the operand width."""
-        if op.indexed or (op.kind, op.addr) not in self._mem_var and self.mem_array is not None:
+        if self._in_array(op):
             return self._array_write(op, x, value)
         name = self._declare_mem(op.kind, op.addr)
         typ = MEM_TYPE[op.kind]
@@ -304,14 +308,11 @@ class Layout:
 
     def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         arr = self.mem_array
-        out = []
         if op.kind == "B":
-            return [(f"{arr}[{self._byte_index(op, x, 0)}]", E.Expr(f"DINT_TO_BYTE({value.text})" if value.typ == "DINT" else f"{value.typ}_TO_BYTE({value.text})", "BYTE", value.deps, 0, 255))]
+            return [(f"{arr}[{self._byte_index(op, x, 0)}]", E.Expr(f"{value.typ}_TO_BYTE({value.text})", "BYTE", value.deps, 0, 255))]
         self.helper("HH_BYTEOF")
-        for k in range(BYTES[op.kind]):
-            text = f"HH_BYTEOF({value.text}, {k})"
-            out.append((f"{arr}[{self._byte_index(op, x, k)}]", E.Expr(text, "BYTE", value.deps, 0, 255)))
-        return out
+        return [(f"{arr}[{self._byte_index(op, x, k)}]", E.Expr(f"HH_BYTEOF({value.text}, {k})", "BYTE", value.deps, 0, 255))
+                for k in range(BYTES[op.kind])]
 
     def string_lvalue(self, op: Operand, x: E.Expr | None) -> E.Expr:
         if op.indexed:
@@ -342,10 +343,7 @@ def _narrow(value: E.Expr, typ: str) -> E.Expr:
         v = value.const & ((1 << bits) - 1)
         v = v - (1 << bits) if v >= 1 << (bits - 1) else v
         return E.int_const(v, typ)
-    if E.fits(value, *E.RANGES[typ]) and value.typ in E.RANGES and value.typ != "BOOL":
-        if value.text.startswith(f"{typ}_TO_DINT(") and value.text.endswith(")"):
-            inner = value.text[len(typ) + 9:-1]
-            if E._balanced(inner):
-                return E.Expr(inner, typ, value.deps, value.lo, value.hi)
-    src = value.typ if value.typ != "BOOL" else "BOOL"
-    return E.Expr(f"{src}_TO_{typ}({value.text})", typ, value.deps, *E.RANGES[typ])
+    narrow = E.unwiden(value)
+    if narrow is not None and narrow.typ == typ and value.typ in ("SINT", "INT", "DINT") and E.fits(value, *E.RANGES[typ]):
+        return narrow
+    return E.Expr(f"{value.typ}_TO_{typ}({value.text})", typ, value.deps, *E.RANGES[typ])

@@ -14,8 +14,8 @@ def _fn(name: str, ret: str, inputs: list[tuple[str, str]], body: str, comment: 
     return Pou(name, "FUNCTION", tuple(sections), body.strip("\n"), return_type=ret, comment=comment)
 
 
-def _k() -> str:
-    return "KK := DINT_TO_INT(K MOD 32);\nIF KK < 0 THEN\n    KK := KK + 32;\nEND_IF;\n"
+# The shift and bit helpers take their count modulo 32; MOD keeps the sign of K, so fold it into 0..31.
+_COUNT_MOD_32 = "KK := DINT_TO_INT(K MOD 32);\nIF KK < 0 THEN\n    KK := KK + 32;\nEND_IF;\n"
 
 
 def _gate(name: str, op: str, comment: str) -> Pou:
@@ -72,17 +72,17 @@ def helper_pous() -> dict[str, Pou]:
         _gate("HH_WOR", "OR", "word OR over the operand width W (spec 6.4)"),
         _gate("HH_WXOR", "XOR", "word XOR over the operand width W (spec 6.4)"),
         _fn("HH_SHL", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _k() + "HH_SHL := DWORD_TO_DINT(SHL(DINT_TO_DWORD(A), KK));", "shift left, count mod 32 (A-14)", shift_locals),
+            _COUNT_MOD_32 + "HH_SHL := DWORD_TO_DINT(SHL(DINT_TO_DWORD(A), KK));", "shift left, count mod 32 (A-14)", shift_locals),
         _fn("HH_SHR", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _k() + "IF A >= 0 THEN\n    HH_SHR := DWORD_TO_DINT(SHR(DINT_TO_DWORD(A), KK));\nELSE\n"
+            _COUNT_MOD_32 + "IF A >= 0 THEN\n    HH_SHR := DWORD_TO_DINT(SHR(DINT_TO_DWORD(A), KK));\nELSE\n"
                    "    HH_SHR := DWORD_TO_DINT(NOT SHR(NOT DINT_TO_DWORD(A), KK));\nEND_IF;",
             "arithmetic shift right, count mod 32 (spec 6.7)", shift_locals),
         _fn("HH_BSET", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _k() + "HH_BSET := DWORD_TO_DINT(DINT_TO_DWORD(A) OR SHL(DWORD#1, KK));", "BS (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BSET := DWORD_TO_DINT(DINT_TO_DWORD(A) OR SHL(DWORD#1, KK));", "BS (spec 6.8)", shift_locals),
         _fn("HH_BCLR", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _k() + "HH_BCLR := DWORD_TO_DINT(DINT_TO_DWORD(A) AND NOT SHL(DWORD#1, KK));", "BC (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BCLR := DWORD_TO_DINT(DINT_TO_DWORD(A) AND NOT SHL(DWORD#1, KK));", "BC (spec 6.8)", shift_locals),
         _fn("HH_BTEST", "BOOL", [("A", "DINT"), ("K", "DINT")],
-            _k() + "HH_BTEST := (SHR(DINT_TO_DWORD(A), KK) AND 16#1) <> 0;", "BT (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BTEST := (SHR(DINT_TO_DWORD(A), KK) AND 16#1) <> 0;", "BT (spec 6.8)", shift_locals),
         _fn("HH_BIT", "BOOL", [("A", "DINT"), ("K", "DINT")],
             "HH_BIT := (SHR(DINT_TO_DWORD(A), DINT_TO_INT(K)) AND 16#1) <> 0;", "bit K (0-31) of a word"),
         _fn("HH_LOWORD", "INT", [("V", "DINT")], "HH_LOWORD := WORD_TO_INT(DWORD_TO_WORD(DINT_TO_DWORD(V)));",

@@ -58,7 +58,7 @@ def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
                 d.add("X")
             else:
                 use.add("X")
-    return frozenset(use), frozenset(d - use) | frozenset(d & use)
+    return frozenset(use), frozenset(d)
 
 
 class Liveness:

@@ -38,19 +38,14 @@ class Rename:
 class NameTable:
     """Hands out unique, legal, case-insensitively distinct IEC names; every forced change is recorded."""
 
-    def __init__(self, reserved_extra: set[str] | None = None):
+    def __init__(self) -> None:
         self._taken: dict[str, str] = {}          # upper-case name -> owner key
         self._by_key: dict[str, str] = {}
         self.renames: list[Rename] = []
-        for word in (reserved_extra or set()):
-            self._taken[word.upper()] = f"<reserved {word}>"
 
     def reserve(self, name: str, key: str) -> None:
         self._taken[name.upper()] = key
         self._by_key[key] = name
-
-    def get(self, key: str) -> str | None:
-        return self._by_key.get(key)
 
     def name(self, key: str, wanted: str) -> str:
         """The IEC name for `key` (stable: the same key always gets the same name)."""

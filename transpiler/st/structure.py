@@ -8,6 +8,7 @@ from typing import Callable
 from ..iec_model import st_comment
 from ..ir import CallTarget, FileCode, Op
 from . import exprs as E
+from .liveness import REGS
 from .symbolic import Executor, Unsupported
 
 JUMPS = ("JP", "JPT", "JPF")
@@ -58,10 +59,15 @@ class Structurer:
     def _live(self, i: int) -> frozenset[str]:
         return self.info.live_in(i) if i < len(self.ops) else frozenset()
 
-    def _is_return_at(self, i: int) -> bool:
-        """Control reaching op i returns at once (labels and no-ops, then EM)."""
+    def _past_labels(self, i: int) -> int:
+        """The first op from i on that is not a label or no-op (a label that starts another routine is code: a call)."""
         while i < len(self.ops) and self.ops[i].code in ("LBL", "NOP") and i not in self.info.other_entries:
             i += 1
+        return i
+
+    def _is_return_at(self, i: int) -> bool:
+        """Control reaching op i returns at once (labels and no-ops, then EM)."""
+        i = self._past_labels(i)
         return i < len(self.ops) and self.ops[i].code == "EM"
 
     def _equiv(self, hi: int) -> set[int]:
@@ -69,9 +75,9 @@ class Structurer:
         found = {hi}
         i = hi
         for _ in range(64):
-            while i < len(self.ops) and self.ops[i].code in ("LBL", "NOP") and i not in self.info.other_entries:
-                i += 1
-                found.add(i)
+            end = self._past_labels(i)
+            found.update(range(i + 1, end + 1))
+            i = end
             if i < len(self.ops) and self.ops[i].code == "JP" and self.ops[i].target is not None \
                     and self.ops[i].target > i and self.ops[i].target not in found:
                 i = self.ops[i].target
@@ -97,10 +103,6 @@ class Structurer:
                 return False
         return True
 
-    def _cond(self, op: Op, jump_if_true: bool) -> E.Expr:
-        la = self.ex.s.reg("LA")
-        return la if jump_if_true else E.b_not(la)
-
     def _return(self, live_exit: frozenset[str]) -> None:
         self.ex.flush(live_exit)
         self.out.line("RETURN;")
@@ -123,7 +125,7 @@ class Structurer:
                 other = self.info.other_entries[i]
                 self.ex.flush(self._live(i))
                 self.out.line(f"{self.info.call_name(other)}; (* falls through into LBL {other.label} *)")
-                self.ex.s.regs = {k: None for k in self.ex.s.regs}
+                self.ex.forget()
                 self._return(self.info.exit_live)
                 return
             if i in self.jumps_to and i not in self.loop_heads and any(s >= i for s in self.jumps_to[i]):
@@ -163,7 +165,7 @@ class Structurer:
             last = self.depth == 0 and not any(j > i for j in self.body)
             if not last:
                 self.out.line("RETURN;")
-            self.ex.s.regs = {k: None for k in self.ex.s.regs}
+            self.ex.forget()
             return self._skip_dead(i + 1, hi)
         self._if_return(op.code == "EMT", live_exit)
         return i + 1
@@ -176,9 +178,7 @@ class Structurer:
     def _if_return(self, when_la: bool, live: frozenset[str]) -> None:
         # Registers live at the exit reach their variables before the test, on both paths.
         self.ex.keep_live(live)
-        la = self.ex.s.reg("LA")
-        cond = la if when_la else E.b_not(la)
-        self.out.line(f"IF {cond.text} THEN")
+        self.out.line(f"IF {self.ex.la_is(when_la).text} THEN")
         self.out.indent += 1
         self.out.line("RETURN;")
         self.out.indent -= 1
@@ -195,13 +195,12 @@ class Structurer:
         if op.code == "CALL":
             self.out.line(f"{text}; {self._tag(i)}")
         else:
-            cond = self.ex.s.reg("LA") if op.code == "CALLT" else E.b_not(self.ex.s.reg("LA"))
-            self.out.line(f"IF {cond.text} THEN {self._tag(i)}")
+            self.out.line(f"IF {self.ex.la_is(op.code == 'CALLT').text} THEN {self._tag(i)}")
             self.out.indent += 1
             self.out.line(f"{text};")
             self.out.indent -= 1
             self.out.line("END_IF;")
-        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+        self.ex.forget()
 
     def _case(self, op: Op, i: int) -> None:
         self.ex.index = i
@@ -216,7 +215,7 @@ class Structurer:
         if not op.case_targets:
             # An empty table calls nothing; 'CASE x OF END_CASE;' is not valid ST (IEC needs at least one case).
             self.out.line(f"(* CASE {sel_text} without entries: nothing to call *) {self._tag(i)}")
-            self.ex.s.regs = {k: None for k in self.ex.s.regs}
+            self.ex.forget()
             return
         self.out.line(f"CASE {sel_text} OF {self._tag(i)}")
         for n, target in enumerate(op.case_targets):
@@ -226,7 +225,7 @@ class Structurer:
                 comment = " " + st_comment(" ".join(note[1]))
             self.out.line(f"    {n}: {self.info.call_name(target)};{comment}")
         self.out.line("END_CASE;")
-        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+        self.ex.forget()
 
     def _forward_jump(self, i: int, hi: int) -> int:
         op = self.ops[i]
@@ -242,7 +241,7 @@ class Structurer:
             # Registers live after the loop or in the rest of the body reach their variables; LA stays
             # symbolic for the test itself.
             self.ex.keep_live(self._live(t) | self._live(i + 1))
-            cond = self._cond(op, op.code == "JPT")
+            cond = self.ex.la_is(op.code == "JPT")
             self.out.line(f"IF {cond.text} THEN")
             self.out.indent += 1
             self.out.line("EXIT;")
@@ -282,13 +281,13 @@ class Structurer:
         live_join = self._live(else_end if else_end is not None else t)
         self.ex.keep_live(live_join)
         snap = self.ex.snapshot()
-        cond = self._cond(op, op.code == "JPF")      # the block runs when the jump is NOT taken
+        cond = self.ex.la_is(op.code == "JPF")      # the block runs when the jump is NOT taken
         then_lines = self._branch(i + 1, t if else_end is None else last, live_join)
         else_lines: list[str] = []
         if else_end is not None:
             self.ex.restore(snap)
             else_lines = self._branch(t, else_end, live_join)
-        self.ex.s.regs = {k: None for k in self.ex.s.regs}
+        self.ex.forget()
         self._emit_if(cond, then_lines, else_lines, i)
         return else_end if else_end is not None else t
 
@@ -349,24 +348,22 @@ class Structurer:
                 # The back jump still reads LA: liveness is taken before it.
                 self.ex.index = j - 1
                 self.ex.keep_live(self._live(h) | self._live(exit_index))
-                cond = self._cond(tail, tail.code == "JPF")     # leave when the back jump is not taken
+                cond = self.ex.la_is(tail.code == "JPF")     # leave when the back jump is not taken
                 self.out.flush_comments()
                 body = self.out.lines
                 self.depth -= 1
                 self.out.lines, self.out.indent = saved_lines, saved_indent
-                self.ex.s.regs = {k: None for k in self.ex.s.regs}
+                self.ex.forget()
                 self.out.line(f"REPEAT {tag}")
                 self.out.lines.extend(body or ["    " * (saved_indent + 1) + f"{self.ex.ctx.register('LA')} := {self.ex.ctx.register('LA')};"])
                 self.out.line(f"UNTIL {cond.text}")
                 self.out.line("END_REPEAT;")
                 return exit_index
-            # Unconditional back jump: a WHILE loop; a leading conditional exit becomes its condition.
-            first = h
-            while first < j and self.ops[first].code in ("LBL", "NOP"):
-                first += 1
-            if self.ops[first].code in ("JPT", "JPF") and self.ops[first].target == exit_index and first == h:
-                cond = self._cond(self.ops[first], self.ops[first].code == "JPF")
-                body = self._branch(first + 1, j, self._live(h) | frozenset(["LA"]))
+            # Unconditional back jump: a WHILE loop; a conditional exit right at the head becomes its condition.
+            head = self.ops[h]
+            if head.code in ("JPT", "JPF") and head.target == exit_index:
+                cond = self.ex.la_is(head.code == "JPF")
+                body = self._branch(h + 1, j, self._live(h) | frozenset(["LA"]))
                 self.out.line(f"WHILE {cond.text} DO {self._tag(h)}")
                 self.out.lines.extend(body)
                 self.out.line("END_WHILE;")
@@ -397,18 +394,18 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
     block_id = {s: n for n, s in enumerate(starts)}
     out = ex.ctx.out
     structurer = Structurer(info, ex)
-    ex.flush(frozenset(["LA", "WA", "SA", "X"]))
+    all_regs = frozenset(REGS)
+    ex.flush(all_regs)
     out.line(f"HH_STATE := {block_id[info.entry.index]};")
     out.line("WHILE HH_STATE >= 0 DO (* irreducible control flow: one state per basic block *)")
     out.indent += 1
     out.line("CASE HH_STATE OF")
     out.indent += 1
-    all_regs = frozenset(["LA", "WA", "SA", "X"])
     for n, start in enumerate(starts):
         end = starts[n + 1] if n + 1 < len(starts) else max(body) + 1
         out.line(f"{n}: (* {ops[start].span.file}:{ops[start].span.line} *)")
         out.indent += 1
-        ex.s.regs = {k: None for k in ex.s.regs}
+        ex.forget()
         i = start
         next_state = None
         while i < end:
@@ -423,8 +420,7 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
             if op.code in ("JPT", "JPF", "EMT", "EMF"):
                 # Conditional jump or return: the taken branch goes to its target (or ends), else fall through.
                 ex.flush(all_regs)
-                la = ex.s.reg("LA")
-                cond = la if op.code in ("JPT", "EMT") else E.b_not(la)
+                cond = ex.la_is(op.code in ("JPT", "EMT"))
                 taken = block_id[op.target] if op.code in ("JPT", "JPF") else -1
                 out.line(f"IF {cond.text} THEN")
                 out.line(f"    HH_STATE := {taken};")

@@ -6,10 +6,11 @@ import dataclasses
 from typing import Callable
 
 from ..iec_model import st_comment
-from ..ir import Op, Operand
+from ..ir import BYTES, Op, Operand
 from . import exprs as E
 from .exprs import Expr
 from .layout import Layout
+from .liveness import REGS
 
 REL = {"==": "=", "<>": "<>", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 WIDTH_TYPE = {8: "SINT", 16: "INT", 32: "DINT"}
@@ -53,7 +54,7 @@ class SymbolicState:
 
     def __init__(self, gen: "RoutineContext"):
         self.gen = gen
-        self.regs: dict[str, Expr | None] = {"LA": None, "WA": None, "SA": None, "X": None}
+        self.regs: dict[str, Expr | None] = dict.fromkeys(REGS)
         self.stack: list[tuple[str, Expr]] = []
         self.frames: list[_Frame] = []
 
@@ -61,8 +62,7 @@ class SymbolicState:
         value = self.regs[name]
         if value is not None:
             return value
-        typ, wanted, comment = REG_TYPES[name]
-        return E.var(self.gen.register(name), typ)
+        return E.var(self.gen.register(name), REG_TYPES[name][0])
 
     def set(self, name: str, value: Expr) -> None:
         self.regs[name] = value
@@ -172,11 +172,20 @@ class Executor:
     def flush(self, live: frozenset[str]) -> None:
         """At a block boundary: live registers into their variables, the data stack into the real stack."""
         self.flush_stack()
-        for reg in ("LA", "WA", "SA", "X"):
+        for reg in REGS:
             if reg in live:
                 self.materialize(reg)
             else:
                 self.s.regs[reg] = None
+
+    def forget(self) -> None:
+        """After a call, a return or a join of paths: every register is read from its variable again."""
+        self.s.regs = dict.fromkeys(REGS)
+
+    def la_is(self, value: bool) -> Expr:
+        """The condition `LA = value`: LA, or NOT LA."""
+        la = self.s.reg("LA")
+        return la if value else E.b_not(la)
 
     def snapshot(self) -> tuple[dict, list]:
         return dict(self.s.regs), list(self.s.stack)
@@ -187,7 +196,7 @@ class Executor:
     def keep_live(self, live: frozenset[str]) -> None:
         """Before a branch: live registers into their variables, the rest stays symbolic for the branch."""
         self.flush_stack()
-        for reg in ("LA", "WA", "SA", "X"):
+        for reg in REGS:
             if reg in live:
                 self.materialize(reg)
 
@@ -209,10 +218,11 @@ class Executor:
         x = self.s.reg("X")
         if x.const is not None:
             ranges = self.ctx.semantics.profile.ranges
-            size = ranges.size("B" if o.kind in "BWD" else o.kind)
-            scale = {"W": 2, "D": 4}.get(o.kind, 1) if self.ctx.semantics["index_scaling"] == "elements" else 1
+            size = ranges.size("B" if o.kind in BYTES else o.kind)
+            width = BYTES.get(o.kind, 1)
+            scale = width if self.ctx.semantics["index_scaling"] == "elements" else 1
             addr = o.addr + x.const * scale
-            if not 0 <= addr <= size - {"W": 2, "D": 4}.get(o.kind, 1):
+            if not 0 <= addr <= size - width:
                 self.materialize("X")
                 x = self.s.reg("X")
         return x
@@ -220,7 +230,7 @@ class Executor:
     def bit(self, o: Operand, offset: int = 0) -> Expr:
         """Read a bit operand: a variable, or for an indexed one the value read now through the accessor FB."""
         if not o.indexed:
-            return self.ctx.layout.bit_lvalue(o, None, offset)
+            return self.ctx.layout.bit_lvalue(o, offset)
         inst = self.ctx.bit_accessor(o.kind)
         index = self.ctx.layout.bit_index(o, self._xi(o), offset)
         self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := FALSE);")
@@ -231,7 +241,7 @@ class Executor:
     def bit_store(self, o: Operand, value: Callable[[], Expr], keep: frozenset[str], offset: int = 0) -> Expr | None:
         """Write a bit operand; returns the target variable (None for an indexed write)."""
         if not o.indexed:
-            return self.store(lambda: self.ctx.layout.bit_lvalue(o, None, offset), value, keep)
+            return self.store(lambda: self.ctx.layout.bit_lvalue(o, offset), value, keep)
         inst = self.ctx.bit_accessor(o.kind)
         # Any operand of this space may change: values in flight that read one of them are saved first.
         deferred = self.prepare_write(f"#{o.kind}", keep | {"X"})
@@ -291,7 +301,7 @@ class Executor:
         return E.binop("-", E.int_const(-1), a, "DINT", E.PREC_ADD, -1 - a.hi, -1 - a.lo)
 
     def _flag(self, marker: int, value: Expr) -> None:
-        self.store(lambda: self.ctx.layout.bit_lvalue(Operand("M", marker), None), lambda: value, frozenset())
+        self.store(lambda: self.ctx.layout.bit_lvalue(Operand("M", marker)), lambda: value, frozenset())
 
     def _mul(self, a: Expr, b: Expr) -> Expr:
         a, b = E.to_dint(a), E.to_dint(b)
@@ -328,15 +338,13 @@ class Executor:
         # Unknown divisor: keep WA and set the marker when it is 0 (spec 6.5, 17b.4).
         result_var = self.ctx.register("WA")
         if not b.simple or result_var.upper() in b.deps:
-            name = self.ctx.temp("DINT")
-            self._assign_raw(name, b)
-            b = E.Expr(name, "DINT", frozenset([name.upper()]), b.lo, b.hi, var=name)
+            b = self._temp_copy(b)
         self.s.regs["WA"] = None
         self.prepare_write(result_var.upper())
         if a.var is None or a.var.upper() != result_var.upper():
             self.ctx.out.line(f"{result_var} := {a.text};")
         a_text = result_var
-        marker = self.ctx.layout.bit_lvalue(Operand("M", flag), None)
+        marker = self.ctx.layout.bit_lvalue(Operand("M", flag))
         self.prepare_write(E.base_name(marker.text))
         self.ctx.helper(fn)
         out = self.ctx.out
@@ -354,8 +362,10 @@ class Executor:
 
     def _stable(self, e: Expr) -> Expr:
         """An expression that may be evaluated twice: simple ones as they are, others through a temporary."""
-        if e.simple:
-            return e
+        return e if e.simple else self._temp_copy(e)
+
+    def _temp_copy(self, e: Expr) -> Expr:
+        """`e` assigned to a new temporary, which then stands for it (with the same value range)."""
         name = self.ctx.temp(e.typ)
         self._assign_raw(name, e)
         return E.Expr(name, e.typ, frozenset([name.upper()]), e.lo, e.hi, var=name)
@@ -371,7 +381,8 @@ class Executor:
     def _compare(self, rel: str, a: Expr, b: Expr, width: int) -> Expr:
         a = self._sext(E.to_dint(a), width)
         b = E.to_dint(b)
-        narrow_a, narrow_b = _unwiden(a), _unwiden(b)
+        # Compare the narrow values themselves where both sides allow it, so that comparisons read like the source.
+        narrow_a, narrow_b = E.unwiden(a), E.unwiden(b)
         if narrow_a is not None and narrow_b is not None and narrow_a.typ == narrow_b.typ:
             a, b = narrow_a, narrow_b
         elif narrow_a is not None and b.const is not None and E.fits(b, *E.RANGES[narrow_a.typ]):
@@ -417,12 +428,7 @@ class Executor:
             out.line(f"{sp} := {sp} - 2;")
             value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT", frozenset([stack.upper(), sp.upper()]))
         # The popped value must be captured now: the stack pointer moves again later.
-        return self._stable_pop(value)
-
-    def _stable_pop(self, value: Expr) -> Expr:
-        name = self.ctx.temp(value.typ)
-        self._assign_raw(name, value)
-        return E.Expr(name, value.typ, frozenset([name.upper()]), value.lo, value.hi, var=name)
+        return self._temp_copy(value)
 
     # ---- the ops
 
@@ -674,18 +680,6 @@ class Executor:
     def op_SCMP(self, op: Op) -> None:
         prec = E.PREC_EQ if op.rel in ("==", "<>") else E.PREC_CMP
         self.s.set("LA", E.binop(REL[op.rel], self.s.reg("SA"), self.string(op.operand), "BOOL", prec, 0, 1))
-
-
-def _unwiden(e: Expr) -> Expr | None:
-    """`INT_TO_DINT(W0)` -> `W0` (typed INT), so that comparisons read like the source."""
-    if e.const is not None:
-        return None
-    for typ in ("SINT", "INT"):
-        prefix = f"{typ}_TO_DINT("
-        if e.text.startswith(prefix) and e.text.endswith(")") and E._balanced(e.text[len(prefix):-1]):
-            inner = e.text[len(prefix):-1]
-            return E.Expr(inner, typ, e.deps, e.lo, e.hi, E.PREC_ATOM if inner.isidentifier() or inner.endswith(")") else E.PREC_OR)
-    return None
 
 
 def _wrap32(v: int) -> int:
