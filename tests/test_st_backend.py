@@ -166,3 +166,21 @@ if __name__ == "__main__" and "--regenerate" in sys.argv:
     (GOLDEN / "project.st").write_text(result.st_text, encoding="utf-8")
     (GOLDEN / "io_map.csv").write_bytes(result.files["io_map.csv"])
     print(f"golden output regenerated in {GOLDEN}")
+
+
+def test_fall_through_into_a_routine_is_a_call_when_another_file_has_a_routine_at_the_same_index(tmp_path):
+    """Op indices are per file: mod.src's Mx6 starts at the same index as main.src's Sub_b and must not hide it."""
+    labels = [f"Mx{i}" for i in range(7)]
+    (tmp_path / "main.src").write_text("\n".join(
+        ["USES mod.src", *(f"EXTERN {m}" for m in labels), "CM    Sub_a", "CM    Sub_b", *(f"CM    {m}" for m in labels),
+         "EM", "LBL Sub_a", "L     I0", "=     O0", "LBL Sub_b", "L     I1", "=     O1", "EM", ""]))
+    (tmp_path / "mod.src").write_text("\n".join(
+        [*(f"GLOBAL {m}" for m in labels), "LBL Mx0", "L     I2", "EM", *(f"LBL {m}\nEM" for m in labels[1:]), ""]))
+    result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {}))
+    assert result.ok
+    entries = {(r.file, r.index) for r in result.program.routines}
+    sub_b = next(r for r in result.program.routines if r.label == "Sub_b")
+    assert (1, sub_b.index) in entries                  # the case this test is about really occurs
+    out = transpile_program(result.program, Diagnostics(), {}, {"st"})
+    sub_a = out.st_text.split("FUNCTION_BLOCK Sub_a", 1)[1].split("END_FUNCTION_BLOCK", 1)[0]
+    assert "i_Sub_b();" in sub_a and "O1 := I1;" not in sub_a

@@ -86,12 +86,16 @@ class StBackend:
         self.layout = layout
         self.liveness = Liveness(self.program)
         self.stack: tuple[str, str] | None = None
-        others = {r.index: r for r in self.program.routines}
+        # Routine entries by file: op indices are per file, so one dict keyed by index alone let the routines of
+        # different files that start at the same index overwrite each other.
+        entries_by_file: dict[int, dict[int, CallTarget]] = {}
+        for r in self.program.routines:
+            entries_by_file.setdefault(r.file, {})[r.index] = r
         pous: dict[tuple[int, int], Pou] = {}
         routine_keys = [(0, 0)] + [r.key for r in self.program.routines]
         self.calls: dict[tuple[int, int], set[tuple[int, int]]] = {}
         for key in routine_keys:
-            pous[key] = self._routine(key, others)
+            pous[key] = self._routine(key, entries_by_file.get(key[0], {}))
         presets = self._presets(layout)
         main = pous.pop((0, 0))
         main = self._with_services(main, layout)
@@ -161,7 +165,8 @@ class StBackend:
     def _module_call(self, number: int) -> str:
         raise Unsupported(f"PLC module {number} (module calls are not translated yet)")
 
-    def _routine(self, key: tuple[int, int], others: dict[int, CallTarget]) -> Pou:
+    def _routine(self, key: tuple[int, int], file_entries: dict[int, CallTarget]) -> Pou:
+        """One POU; `file_entries` are the routine entries of the routine's file (by op index)."""
         program = self.program
         is_main = key == (0, 0)
         entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)
@@ -193,7 +198,7 @@ class StBackend:
 
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
                              self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor)
-        other_entries = {i: t for i, t in others.items() if t.file == key[0] and i != entry.index and i in body}
+        other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i))
         structured = True
