@@ -213,10 +213,6 @@ def test_body_round_trip_edge_cases(body: str) -> None:
     assert extract_pou_bodies(render_st(project))["Main"] == body
 
 
-def test_deterministic() -> None:
-    assert render_st(rich_project()) == render_st(rich_project())
-
-
 def test_constant_and_retain_together_is_refused() -> None:
     project = rich_project()
     bad = dataclasses.replace(project.configuration.globals[1], retain=True)
