@@ -85,8 +85,6 @@ FEATURES: Mapping[str, str] = MappingProxyType({
 KNOWN_DIVERGENT: Mapping[str, str] = MappingProxyType({
     "strings_long": "strings are declared as plain STRING (126 characters in the ST executors) instead of "
                     "STRING[128]: a result of 127 or 128 characters is cut at 126",
-    "index_wide": "an indexed W/D store after '= X': only the first byte uses the new X, the other bytes the stale "
-                  "HH_X (the '= X' itself is not stored)",
 })
 
 

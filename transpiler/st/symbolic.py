@@ -227,6 +227,15 @@ class Executor:
                 x = self.s.reg("X")
         return x
 
+    def pin_index(self, o: Operand) -> None:
+        """Before one op writes an indexed operand in several statements: the index register as a value that
+        those statements cannot change (the first may overwrite memory the index expression reads)."""
+        if not o.indexed:
+            return
+        x = self.s.reg("X")
+        if x.const is None and x.deps - {self.ctx.register("X").upper()}:
+            self.s.set("X", self._temp_copy(x))
+
     def bit(self, o: Operand, offset: int = 0) -> Expr:
         """Read a bit operand: a variable, or for an indexed one the value read now through the accessor FB."""
         if not o.indexed:
@@ -533,6 +542,8 @@ class Executor:
         """Store a DINT value into a B/W/D operand (one assignment, or one per byte in the byte array)."""
         layout = self.ctx.layout
         count = len(layout.write_value(o, self._xi(o), value()))
+        if count > 1:
+            self.pin_index(o)
         if count > 1 and not value().simple:
             # The value is needed once per byte: compute it once.
             v = self._stable(value())
@@ -546,6 +557,7 @@ class Executor:
         wa = self._stable(E.to_dint(self.s.reg("WA")))
         self.s.set("WA", wa)
         self.ctx.helper("HH_BIT")
+        self.pin_index(op.operand)
         for k in range(op.nbits):
             self.bit_store(op.operand,
                            lambda k=k: E.Expr(f"HH_BIT({self.s.reg('WA').text}, {k})", "BOOL", self.s.reg("WA").deps, 0, 1),
@@ -653,12 +665,21 @@ class Executor:
 
     def op_POP(self, op: Op) -> None:
         o = op.operand
+        kind = "bit" if o.is_bit else "val"
+        on_stack = bool(self.s.stack) and self.s.stack[-1][0] == kind
+        if on_stack:
+            # The entry stays on the stack until it is stored: saving in-flight values before the store may
+            # assign a register variable the entry reads, and then replaces the entry by a saved copy.
+            value = lambda: self.s.stack[-1][1]
+        else:
+            popped = self._pop(kind)
+            value = lambda: popped
         if o.is_bit:
-            value = self._pop("bit")
-            self.bit_store(o, lambda: value, frozenset(["X"]))
-            return
-        value = self._pop("val")
-        self._store_value(o, lambda: value)
+            self.bit_store(o, value, frozenset(["X"]))
+        else:
+            self._store_value(o, value)
+        if on_stack:
+            self.s.stack.pop()
 
     def op_PSW(self, op): self.s.stack.append(("val", E.to_dint(self.s.reg("WA"))))
     def op_PLW(self, op): self.s.set("WA", self._pop("val"))
