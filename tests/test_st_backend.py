@@ -11,14 +11,17 @@ from pathlib import Path
 
 import pytest
 
+from transpiler.cosim import builtin_side_factory, cosimulate
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import compile_project
 from transpiler.plcopen import extract_st_bodies
+from transpiler.scenario import load_scenario
 from transpiler.semantics import make_semantics
+from transpiler.simulate import project_names
 from transpiler.st_check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
 from transpiler.st_writer import extract_pou_bodies
-from transpiler.transpile import read_mp_file, transpile_program
+from transpiler.transpile import io_map_of, read_mp_file, transpile_program
 from transpiler.xsd import schema_path, validate_xml
 
 from vectors import SKIP_REASON, SPEC, load_vectors
@@ -184,3 +187,20 @@ def test_fall_through_into_a_routine_is_a_call_when_another_file_has_a_routine_a
     out = transpile_program(result.program, Diagnostics(), {}, {"st"})
     sub_a = out.st_text.split("FUNCTION_BLOCK Sub_a", 1)[1].split("END_FUNCTION_BLOCK", 1)[0]
     assert "i_Sub_b();" in sub_a and "O1 := I1;" not in sub_a
+
+
+def test_fall_through_target_keeps_the_registers_live_at_the_end_of_the_routine_that_falls_in(tmp_path):
+    """Main falls through into Sub_b, translated as a call and a return; WA set there is read in the next cycle, so it
+    must reach its variable at Sub_b's exit although Sub_b's only CM caller overwrites WA (regression 1000181)."""
+    (tmp_path / "main.src").write_text("\n".join(
+        ["==    K7", "=     O0", "CM    Sub_a", "LBL Sub_b", "L     K7", "EM",
+         "LBL Sub_a", "CM    Sub_b", "L     K1", "EM", ""]))
+    (tmp_path / "scenario.yaml").write_text("name: fall_through\ncycles: 3\n")
+    result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {}))
+    assert result.ok
+    out = transpile_program(result.program, Diagnostics(), {}, {"st"})
+    names = project_names(result.program)
+    run = cosimulate(result.program, builtin_side_factory(out.st_text), io_map_of(out.result),
+                     load_scenario(tmp_path / "scenario.yaml", names), names)
+    assert run.equivalent, (run.divergence, run.error)
+    assert run.cycles_run == 3

@@ -74,7 +74,14 @@ class Liveness:
         self.exit_live: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
         self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
         self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
+        self.fall_into = self._fall_throughs(roots)
         self._solve()
+
+    def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
+        """For each routine, the routines whose entry label its body reaches without a call (by falling through)."""
+        entries = {r.key for r in self.program.routines}
+        return {r.key: [(r.file, i) for i in self.bodies[r.key] if i != r.index and (r.file, i) in entries]
+                for r in roots}
 
     def _callees(self, op: Op) -> Iterable[CallTarget]:
         if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
@@ -99,6 +106,10 @@ class Liveness:
                         after = live.get(i + 1, frozenset()) if i + 1 < len(ops) else frozenset()
                         if callee.key in new_exit:
                             new_exit[callee.key] = new_exit[callee.key] | after
+                # The structured translation turns a fall-through into another routine's label into a call of that
+                # routine followed by a return: what is live at this routine's exit is live at the callee's exit too.
+                for other in self.fall_into[key]:
+                    new_exit[other] = new_exit[other] | self.exit_live[key]
             # Registers persist from one cycle to the next: what the main program reads first is live at its end.
             new_exit[self.main.key] = new_exit[self.main.key] | self.entry_use[self.main.key]
             if new_exit != self.exit_live:
