@@ -151,6 +151,15 @@ def test_cli_transpile_writes_all_outputs(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["io_map.csv", "project.st", "project.xml", "report.md"]
     report = (out / "report.md").read_text()
     assert "## I/O map" in report and "## Assumptions applied" in report and "state-machine fallback" in report
+    limits = report.split("## Target limits", 1)[1].split("\n## ", 1)[0]
+    assert "128 characters" in limits and "Init.src:80" in limits     # the sample stores strings (Init.src:80)
+
+
+def test_report_has_no_target_limits_without_strings(tmp_path):
+    (tmp_path / "main.src").write_text("L     I0\n=     O0\nEM\n")
+    result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {}))
+    out = transpile_program(result.program, Diagnostics(), {}, {"st"})
+    assert "## Target limits\n\nnone\n" in out.files["report.md"].decode()
 
 
 def test_cli_transpile_bad_input_writes_nothing(tmp_path):

@@ -86,6 +86,21 @@ def user_pous(result: StResult) -> list[Pou]:
     return [p for p in result.project.pous if p.name in names]
 
 
+STRING_OPS = frozenset({"SLD", "SCAT", "SST", "SCMP"})
+
+
+def _target_limits(program: Program) -> list[str]:
+    """What the vendor-neutral ST cannot hold the way the control does, as far as this program needs it."""
+    string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops if op.code in STRING_OPS]
+    if not string_lines:
+        return []
+    where = ", ".join(string_lines[:5]) + (f" and {len(string_lines) - 5} more" if len(string_lines) > 5 else "")
+    return [f"- Strings ({where}): the control's strings hold 128 characters. The ST declares plain `STRING`, the only "
+            "string declaration matiec accepts; it holds 126 characters in matiec/OpenPLC/Beremiz and 80 by default in "
+            "CODESYS and TwinCAT. Longer values are cut there: on CODESYS/TwinCAT declare the string variables "
+            "`STRING(128)` or raise the default string length; on matiec keep results within 126 characters."]
+
+
 def render_report(program: Program, result: StResult, diags: Diagnostics) -> str:
     user = user_pous(result)
     fallback_names = {f.pou for f in result.fallbacks}
@@ -123,6 +138,8 @@ def render_report(program: Program, result: StResult, diags: Diagnostics) -> str
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
+    lines += ["", "## Target limits", ""]
+    lines += _target_limits(program) or ["none"]
     lines += ["", "## Auto-assigned operands", ""]
     lines += [f"- `{s.name}` -> {s.operand_text}" for s in program.auto_assigned] or ["none"]
     lines += ["", "## Renamed symbols", ""]

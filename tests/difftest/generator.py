@@ -80,11 +80,12 @@ FEATURES: Mapping[str, str] = MappingProxyType({
     "case_mix": "mnemonics in lower case and blanks between operand letter and number (2.3, 2.5)",
 })
 
-# Features disabled by default because they make the current translator diverge (see the report of the
-# generator's author); re-enable with generate(..., enable={"name"}) to check whether a fix works.
+# Features disabled by default because the translation cannot match them on the targets; re-enable with
+# generate(..., enable={"name"}) to check whether that changed.
 KNOWN_DIVERGENT: Mapping[str, str] = MappingProxyType({
-    "strings_long": "strings are declared as plain STRING (126 characters in the ST executors) instead of "
-                    "STRING[128]: a result of 127 or 128 characters is cut at 126",
+    "strings_long": "a target limit, not a translator bug: the ST declares plain STRING (matiec rejects STRING[n]), which "
+                    "holds 126 characters in matiec and the built-in executor; a result of 127 or 128 characters is "
+                    "cut at 126 (report.md lists it under 'Target limits')",
 })
 
 
