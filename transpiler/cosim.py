@@ -10,7 +10,7 @@ from .interp import CompiledProgram
 from .interp.machine import Machine
 from .presets import load_presets
 from .diagnostics import Diagnostics
-from .iomap import IoMap
+from .iomap import Accessor, IoMap
 from .ir import Program
 from .scenario import NameTable, OperandRef, Scenario
 from .shim import HandshakeTimeout, NcModel
@@ -44,11 +44,12 @@ class CosimResult:
     backend: str
     cycles_run: int
     divergence: Divergence | None
-    compared: int                       # operands compared each cycle
+    compared: int                       # operands compared each cycle (the static columns of comparison_for)
     error: str | None = None            # runtime fault or harness problem (not a divergence)
     error_side: str | None = None       # "original" (reference interpreter) or "translated": where `error` arose
     seconds: float = 0.0
     machine: Machine | None = None
+    compared_indexed: int = 0           # addresses added because the program stored to them through the index
 
     @property
     def equivalent(self) -> bool:
@@ -64,7 +65,11 @@ class Comparison:
 
 
 def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
-    """Every operand the program writes plus all outputs (timers and counters included), as far as the map has them."""
+    """Every operand the program writes plus all outputs (timers and counters included), as far as the map has them.
+
+    These are the static columns: operands named in the program text. Operands reached only through the index
+    register (`= M100[X]`, `= W4[X]`, `= S2[X]`) depend on X at run time and are not listed here; cosimulate adds
+    each of them from the cycle the reference interpreter first stores to it through an index (_IndexedColumns)."""
     used, written, outputs = program_operands(program)
     prof = program.semantics.profile
     refs = set(written) | set(outputs)
@@ -102,6 +107,11 @@ class _StDriver:
         acc = self.iomap.accessor(operand)
         return acc.read(self.side) if acc is not None else 0
 
+    def latch_input(self, operand: str, value: int) -> None:
+        """Also rewrite `operand` every cycle from now on (unless it is latched already): an input the program stored
+        to through the index is compared, and the interpreter's latch restores it from the process image."""
+        self.process_inputs.setdefault(operand, value)
+
     def cycle(self, cycle: int, writes: Iterable, actions: Iterable) -> None:
         for w in writes:
             ref = w.ref
@@ -116,6 +126,62 @@ class _StDriver:
         for operand, value in self.process_inputs.items():
             self.write(operand, value)
         self.side.run_cycle()
+
+
+class _IndexedColumns:
+    """Operands reached through the index register, compared every cycle from the cycle of their first indexed store.
+
+    The reference interpreter records the address of every indexed store (Machine.indexed_writes); comparing whole
+    operand spaces every cycle instead would cost thousands of reads per cycle. The set only grows, so an address
+    stays compared after X has moved on, as a static column would."""
+
+    def __init__(self, machine: Machine, side: StSide, iomap: IoMap, names: NameTable, driver: _StDriver,
+                 static: Iterable[OperandRef]):
+        self.machine = machine
+        self.side = side
+        self.iomap = iomap
+        self.names = names
+        self.driver = driver
+        self.seen: set[OperandRef] = set(static)   # the static columns already compare these
+        self.records = 0                           # interpreter records consumed so far
+        self.columns: list[tuple[str, OperandRef]] = []
+        self.accessors: list[Accessor] = []
+        self.original: Callable[[], list] = list
+
+    def update(self) -> None:
+        """Take the indexed stores recorded since the last call; O(1) when there are none."""
+        count = self.machine.indexed_write_count
+        if count == self.records:
+            return
+        before = len(self.columns)
+        for kind, addr in self.machine.indexed_writes(self.records):
+            self._add(OperandRef(kind, addr))
+        self.records = count
+        if len(self.columns) != before:
+            # A compiled reader for all columns, rebuilt only when a new address appears.
+            self.original = self.machine.reader([(ref.kind, ref.addr) for _, ref in self.columns])
+
+    def _add(self, ref: OperandRef) -> None:
+        if ref in self.seen:
+            return
+        self.seen.add(ref)
+        acc = self.iomap.accessor(str(ref))
+        if acc is None:                      # the map has no place for it (no array for that space)
+            return
+        self.columns.append((self.names.display_name(ref), ref))
+        self.accessors.append(acc)
+        if ref.kind == "I":
+            self.driver.latch_input(str(ref), self.machine.state.process_inputs[ref.addr])
+
+    def divergence(self, cycle: int) -> Divergence | None:
+        """The first indexed column whose values differ (read one by one on the ST side: there are few)."""
+        if not self.columns:
+            return None
+        for (display, ref), acc, a in zip(self.columns, self.accessors, self.original()):
+            b = acc.read(self.side)
+            if a != b:
+                return Divergence(cycle, str(ref), display, a, b)
+        return None
 
 
 def set_presets(side: StSide, iomap: IoMap, program: Program, mp: dict, cycle_time_ms: int) -> None:
@@ -134,7 +200,12 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None) -> CosimResult:
     """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`. Callers that
-    co-simulate one program many times pass it `compiled` once (see build_machine)."""
+    co-simulate one program many times pass it `compiled` once (see build_machine).
+
+    Compared after every cycle: the static columns of comparison_for (read in one call where the side has a
+    bulk_reader; `record` sees only these), then every address the original program has stored to through the
+    index register so far, from the cycle of the first such store on (result.compared_indexed counts them); the
+    io map reaches those through the space's array. A divergence on either is reported the same way."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled)
@@ -149,6 +220,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     translated = (bulk_reader([acc.place for acc in accessors]) if bulk_reader is not None
                   else lambda: [acc.read(side) for acc in accessors])
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
+    indexed = _IndexedColumns(machine, side, iomap, names, driver, (ref for _, ref in comparison.columns))
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     start = time.perf_counter()
     result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine)
@@ -181,9 +253,14 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                     result.divergence = Divergence(cycle, str(ref), display, a, b)
                     break
             break
+        indexed.update()
+        result.divergence = indexed.divergence(cycle)
+        if result.divergence is not None:
+            break
         if progress is not None:
             progress(cycle + 1, total)
     result.seconds = time.perf_counter() - start
+    result.compared_indexed = len(indexed.columns)
     return result
 
 

@@ -284,6 +284,15 @@ def _pct(a: int, b: int) -> str:
     return f"{100.0 * a / b:.1f}%" if b else "n/a"
 
 
+def _compared_text(r: CosimResult) -> str:
+    """The operands compared per cycle; addresses the program stored to through the index register are counted
+    apart because they join the comparison only from their first indexed store on (see cosim.cosimulate)."""
+    text = f"{r.compared} operands compared per cycle"
+    if r.compared_indexed:
+        text += f" + {r.compared_indexed} indexed addresses from their first indexed store"
+    return text
+
+
 def _print_outcomes(outcomes: list[Outcome], backend: str, coverage: dict[str, Any]) -> None:
     for o in outcomes:
         r = o.result
@@ -298,8 +307,7 @@ def _print_outcomes(outcomes: list[Outcome], backend: str, coverage: dict[str, A
                       f"{o.shrink_runs} runs); rerun it with --scenario:")
                 print(scenario_to_yaml(o.shrunk))
         else:
-            print(f"equivalent: {r.scenario}: {r.cycles_run} cycles, {r.compared} operands compared per cycle "
-                  f"({r.seconds:.2f} s)")
+            print(f"equivalent: {r.scenario}: {r.cycles_run} cycles, {_compared_text(r)} ({r.seconds:.2f} s)")
     c = coverage
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
@@ -313,6 +321,7 @@ def _write_json(path: Path, outcomes: list[Outcome], backend: str, coverage: dic
     for o in outcomes:
         r = o.result
         runs.append({"scenario": r.scenario, "cycles": r.cycles_run, "compared_operands": r.compared,
+                     "compared_indexed_addresses": r.compared_indexed,
                      "equivalent": r.equivalent, "error": r.error, "seconds": round(r.seconds, 3),
                      "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
                      "shrunk_scenario": scenario_to_yaml(o.shrunk) if o.shrunk else None})

@@ -145,7 +145,7 @@ class _Generator:
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
                    "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six", "srx",
-                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "branch")
+                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "branch", "ixw")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
         self.out(1, "LA = 0; WA = 0; X = 0; SA = ''; n = 0; d = 0; _em = -1")
@@ -267,7 +267,8 @@ class _Generator:
 
     def bit_store(self, indent: int, o: Operand, expr: str, opid: int) -> None:
         if o.indexed:
-            self.out(indent, f"if {self._ix_ok(o)}: {o.kind}[_a] = {expr}", opid)
+            # The inline store records its address (Runtime.indexed_writes); the helper records its own.
+            self.out(indent, f"if {self._ix_ok(o)}: {o.kind}[_a] = {expr}; _ixw(({o.kind!r}, _a))", opid)
             self.out(indent, f"else: _wb({o.kind!r}, {o.addr}, X, {expr})", opid)
         else:
             self.out(indent, f"{o.kind}[{o.addr}] = {expr}", opid)
@@ -319,7 +320,7 @@ class _Generator:
             if k != "B" and not self.native:
                 self.out(indent, slow, opid)
                 return
-            self.out(indent, f"if {self._ix_ok(o)}: {self._mem_store(k, '_a', expr)}", opid)
+            self.out(indent, f"if {self._ix_ok(o)}: {self._mem_store(k, '_a', expr)}; _ixw(({k!r}, _a))", opid)
             self.out(indent, f"else: {slow}", opid)
             return
         self.out(indent, self._mem_store(k, o.addr, expr), opid)

@@ -26,7 +26,7 @@ from ..ir import Program
 from ..shim import HandshakeTimeout, NcModel, SysModules
 from .compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from .faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from .state import MachineState, sext
+from .state import MEM_WIDTH, MachineState, sext
 from .submit import SubmitQueue
 from .support import Runtime
 from ..presets import load_presets
@@ -162,6 +162,25 @@ class Machine:
             namespace.update(mw=st.mw, md=st.md)
         exec(compile(source, "<hh2iec-reader>", "exec"), namespace)  # noqa: S102 - generated from validated operands
         return namespace["_reader"]
+
+    @property
+    def indexed_write_count(self) -> int:
+        """How many distinct indexed stores were recorded so far (grows only): a cheap "anything new?" test."""
+        return len(self.runtime.indexed_writes)
+
+    def indexed_writes(self, start: int = 0) -> list[tuple[str, int]]:
+        """Operands the program has written through the index register, from record `start` on (records keep their
+        first-write order): bits M/I/O/T/C, strings S, and a B/W/D store as the bytes B<n> it covers, because the
+        overlapping byte memory is compared byte by byte. May repeat a byte; the caller keeps its own set."""
+        records = list(self.runtime.indexed_writes)[start:]
+        result: list[tuple[str, int]] = []
+        for kind, addr in records:
+            width = MEM_WIDTH.get(kind)
+            if width is None:
+                result.append((kind, addr))
+            else:
+                result.extend(("B", byte) for byte in range(addr, addr + width))
+        return result
 
     @property
     def registers(self) -> dict[str, int | str]:

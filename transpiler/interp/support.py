@@ -40,6 +40,10 @@ class Runtime:
         self.unknown_modules: dict[int, int] = {}
         self.hits = bytearray(0)
         self.branches: set[tuple[int, int]] = set()
+        # (kind, address) of every store made through an indexed operand, in first-write order (a dict is an
+        # ordered set): co-simulation compares these operands from then on. W/D stores record their kind and
+        # first byte. Stores to named operands never get here, so a program without indexed stores pays nothing.
+        self.indexed_writes: dict[tuple[str, int], None] = {}
 
     def env(self, op_count: int, coverage: bool) -> dict[str, object]:
         st = self.state
@@ -57,6 +61,7 @@ class Runtime:
             "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
             "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": self.hits, "branch": self.branches.add,
+            "ixw": self.indexed_writes.setdefault,
         }
         if st.native:
             env.update(mw=st.mw, mwu=st.mwu, md=st.md, mdu=st.mdu)
@@ -114,24 +119,34 @@ class Runtime:
         return 0 if addr is None else self.state.bits(kind)[addr]
 
     def write_bit_indexed(self, kind: str, base: int, x: int, value: int) -> None:
-        self.state.bits(kind)[self._address(kind, base, x, 1, True)] = 1 if value else 0  # type: ignore[index]
+        addr = self._address(kind, base, x, 1, True)
+        self.state.bits(kind)[addr] = 1 if value else 0  # type: ignore[index]
+        self.indexed_writes.setdefault((kind, addr))  # type: ignore[arg-type]
 
     def read_val_indexed(self, kind: str, base: int, x: int, signed: bool) -> int:
         addr = self._address(kind, base, x, 1, False)
         return 0 if addr is None else self.state.read_mem(kind, addr, signed)
 
     def write_val_indexed(self, kind: str, base: int, x: int, value: int) -> None:
-        self.state.write_mem(kind, self._address(kind, base, x, 1, True), value)  # type: ignore[arg-type]
+        addr = self._address(kind, base, x, 1, True)
+        self.state.write_mem(kind, addr, value)  # type: ignore[arg-type]
+        self.indexed_writes.setdefault((kind, addr))  # type: ignore[arg-type]
 
     def pack_indexed(self, kind: str, base: int, x: int, nbits: int) -> int:
         addr = self._address(kind, base, x, nbits, False)
         return 0 if addr is None else pack_bits(self.state.bits(kind), addr, nbits)
 
     def unpack_indexed(self, kind: str, base: int, x: int, nbits: int, value: int) -> None:
-        unpack_bits(self.state.bits(kind), self._address(kind, base, x, nbits, True), nbits, value)  # type: ignore[arg-type]
+        addr: int = self._address(kind, base, x, nbits, True)  # type: ignore[assignment]
+        unpack_bits(self.state.bits(kind), addr, nbits, value)
+        for bit in range(addr, addr + nbits):
+            self.indexed_writes.setdefault((kind, bit))
 
     def string_index(self, base: int, x: int) -> int:
-        return self._address("S", base, x, 1, True)  # type: ignore[return-value]
+        """Address of an indexed string store (generated code only uses it to write S[...])."""
+        addr: int = self._address("S", base, x, 1, True)  # type: ignore[assignment]
+        self.indexed_writes.setdefault(("S", addr))
+        return addr
 
     def read_string_indexed(self, base: int, x: int) -> str:
         addr = self._address("S", base, x, 1, False)

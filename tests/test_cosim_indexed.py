@@ -1,0 +1,144 @@
+"""Co-simulation compares operands the program reaches only through the index register (`= M200[X]`, `= W100[X]`,
+`= S2[X]`) from the cycle of their first indexed store: a translation that stores to the wrong indexed address, or
+the wrong value there, diverges even though no instruction ever reads that address directly."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from transpiler.cosim import builtin_side_factory, cosimulate
+from transpiler.diagnostics import Diagnostics
+from transpiler.frontend import ProjectOptions
+from transpiler.pipeline import compile_project
+from transpiler.scenario import load_scenario
+from transpiler.semantics import make_semantics
+from transpiler.simulate import project_names
+from transpiler.transpile import io_map_of, transpile_program
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# The index comes from W10, which the scenario sets, so the translator cannot fold the addresses to constants.
+PROGRAM = """\
+; indexed stores whose index comes from the scenario (W10)
+L     W10
+=     X
+L     I0
+=     M200[X]
+L     K77
+=     W100[X]
+L     K-5
+=     D300[X]
+L     I1
+S     M400[X]
+L     S"AB"
+=     S2[X]
+L     K1
+=     I20[X]
+L     K5
+B=    M600[X]
+EM
+"""
+
+# X = 4 for three cycles, then X = 8: the addresses of the first cycles stay compared.
+SCENARIO = """\
+name: indexed_stores
+cycles: 6
+initial: {W10: 4, I0: 1, I1: 1}
+events:
+  - {cycle: 3, set: {W10: 8, I0: 0}}
+"""
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("indexed")
+    (folder / "main.src").write_text(PROGRAM)
+    (folder / "scenario.yaml").write_text(SCENARIO)
+    program = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", {})).program
+    out = transpile_program(program, Diagnostics(), {}, {"st"})
+    names = project_names(program)
+    return folder, program, out, names, load_scenario(folder / "scenario.yaml", names)
+
+
+def _run(project, st_text: str):
+    _, program, out, names, scenario = project
+    return cosimulate(program, builtin_side_factory(st_text), io_map_of(out.result), scenario, names)
+
+
+def test_unmodified_translation_is_equivalent(project):
+    """Includes `= I20[X]`: from cycle 3 (X = 8) the input latch restores I24 on both sides, the ST side because the
+    harness latches an input from its first indexed store on."""
+    result = _run(project, project[2].st_text)
+    assert result.equivalent, (result.divergence, result.error)
+    assert result.cycles_run == 6
+    # M204 M208, W104/W108 and D304/D308 as bytes, M404 M408, S6 S10, I24 I28, and the byte of bits M604..M611
+    # and M608..M615 (overlapping): none is named in the program.
+    assert result.compared_indexed == 2 * (1 + 2 + 4 + 1 + 1 + 1) + 12
+
+
+@pytest.mark.parametrize("pattern, replacement, operand, original, translated", [
+    (r"IDX := 200 \+", "IDX := 201 +", "M204", 1, 0),            # = M200[X]: wrong bit address
+    (r"HH_MEM\[100 \+ ", "HH_MEM[102 + ", "B104", 77, 0),         # = W100[X]: low byte to the wrong address
+    (r"HH_BYTEOF\(-5, 0\)", "HH_BYTEOF(-6, 0)", "B304", -5, -6),  # = D300[X]: wrong value at the right address
+    (r"IDX := 400 \+ (\w+), WRITE := TRUE", r"IDX := 401 + \1, WRITE := TRUE", "M404", 1, 0),   # S M400[X]
+    (r"HH_S\[2 \+ ", "HH_S[3 + ", "S6", "AB", ""),                # = S2[X]
+    (r"IDX := 600 \+", "IDX := 601 +", "M604", 1, 0),            # B= M600[X]: bit 0 of K5 to the wrong bit
+], ids=["bit", "word_address", "dword_value", "set_bit", "string", "bit_field"])
+def test_wrong_indexed_store_diverges(project, pattern, replacement, operand, original, translated):
+    broken, count = re.subn(pattern, replacement, project[2].st_text)
+    assert count == 1, "the mutation site moved: update the test"
+    result = _run(project, broken)
+    assert result.error is None
+    d = result.divergence
+    assert d is not None, "a wrong indexed store must be seen"
+    assert (d.cycle, d.operand, d.name, d.original, d.translated) == (0, operand, operand, original, translated)
+
+
+def test_indexed_addresses_stay_compared_after_x_moves_on(project):
+    """M204 is first stored to while X = 4; the broken translation clears it in cycle 3, when X = 8 and no
+    instruction of that cycle reaches M204: the divergence shows that the address is still compared."""
+    clear = "    IF HH_MEM[10] = 8 THEN HH_M_index(IDX := 204, WRITE := TRUE, VALUE := FALSE); END_IF;\n"
+    broken = project[2].st_text.replace("END_PROGRAM", clear + "END_PROGRAM", 1)
+    result = _run(project, broken)
+    d = result.divergence
+    assert d is not None and (d.cycle, d.operand, d.original, d.translated) == (3, "M204", 1, 0)
+
+
+def test_machine_records_indexed_stores_as_operands(project):
+    result = _run(project, project[2].st_text)
+    writes = result.machine.indexed_writes()
+    assert ("M", 204) in writes and ("S", 6) in writes and ("I", 24) in writes and ("M", 611) in writes
+    assert {("B", b) for b in range(104, 106)} | {("B", b) for b in range(304, 308)} <= set(writes)
+    assert not any(kind in "WD" for kind, _ in writes)      # byte memory is reported byte by byte
+    assert result.machine.indexed_writes(result.machine.indexed_write_count) == []
+
+
+def test_program_without_indexed_stores_adds_nothing(tmp_path):
+    (tmp_path / "main.src").write_text("L     W10\n=     X\nL     M200[X]\n=     O1\nEM\n")
+    (tmp_path / "scenario.yaml").write_text("name: reads\ncycles: 3\ninitial: {W10: 4, M204: 1}\n")
+    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
+    out = transpile_program(program, Diagnostics(), {}, {"st"})
+    names = project_names(program)
+    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result),
+                        load_scenario(tmp_path / "scenario.yaml", names), names)
+    assert result.equivalent, (result.divergence, result.error)
+    assert result.compared_indexed == 0 and result.machine.indexed_write_count == 0
+
+
+def test_cli_reports_indexed_addresses(project, tmp_path):
+    folder = project[0]
+    proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "equiv", str(folder / "main.src"),
+                           "--scenario", str(folder / "scenario.yaml"), "--backend", "builtin",
+                           "--report", str(tmp_path / "r.json")],
+                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "+ 32 indexed addresses from their first indexed store" in proc.stdout
+    run = json.loads((tmp_path / "r.json").read_text())["runs"][0]
+    assert run["compared_indexed_addresses"] == 32
