@@ -46,7 +46,9 @@ TARGET = 0.90
 RANDOM_CYCLES = 2000
 PERTURBED_TOGGLE = 0.01          # every input of the program may toggle on top of a hand-written scenario
 NC_RUN_CYCLES = 3000
+POWER_ON_CYCLES = 30
 M_CODES = (3, 4, 5, 7, 8, 9, 10, 11, 19, 30, 50, 51, 99)
+POCKET_EDGES = (-1, 0, 1, 2, 23, 24, 25)
 # Interface words the NC model itself writes for nc actions (scenario format): never set at random.
 NC_MODEL_WORDS = {("W", 256), ("W", 260), ("W", 262), ("W", 264), ("W", 272), ("D", 280), ("D", 284), ("D", 356)}
 WORD_VALUES = (0, 1, 2, 3, 4, 7, 8, 15, 16, 255, 256, -1, 32767, -32768)
@@ -60,6 +62,15 @@ CASE_LABEL = re.compile(r"^(\s*)(\d+)(\s*:)")
 INTEGER = re.compile(r"(?<![\w#.])\d+(?![\w#.])")
 COMPARISONS = {"<>": "=", "<=": "<", ">=": ">", "=": "<>", "<": "<=", ">": ">="}
 COMPARISON = re.compile(r"<>|<=|>=|(?<![:<>])=|<(?![>=])|>(?!=)")
+
+
+def boundary_values(program) -> tuple[int, ...]:  # noqa: ANN001 - ir.Program
+    """Word values worth trying: the usual edges plus every constant of the program and its neighbours (a mutated
+    comparison or constant differs from the original only at such a boundary)."""
+    constants = {op.operand.addr for f in program.files for op in f.ops
+                 if op.operand is not None and op.operand.kind == "K"}
+    near = {c + d for c in constants for d in (-1, 0, 1)}
+    return tuple(sorted(set(WORD_VALUES) | {v for v in near if -(1 << 15) <= v < (1 << 15)}))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,39 +205,86 @@ class Harness:
         self.iomap = io_map_of(self.out.result)
         self.names = project_names(self.program)
         self.compiled = compile_program(self.program)      # the reference side, compiled once for every run
+        self.word_values = boundary_values(self.program)
         written = [load_scenario(p, self.names) for p in sorted((SAMPLE / "scenarios").glob("*.yaml"))]
         random_run = random_scenario(self.program, self.names, RANDOM_CYCLES, seed=1,
                                      machine_parameters=SAMPLE / "MP_data.mp")
         inputs = random_run.random.inputs
         generated = [self._perturbed(s, inputs, seed) for seed, s in enumerate(written, 1) if s.cycles <= 1000]
-        generated += [self._nc_run(written, inputs, seed) for seed in (1, 2, 3)]
+        healthy = next(s for s in written if s.name == "random_keys_automatic_mode")
+        generated += [self._power_on(healthy, value) for value in self.word_values]
+        generated += self._value_variants(written)
+        # NC jobs on a machine whose inputs also toggle at random, and on a healthy one (no toggles) where
+        # sequences such as tool changes run to their end.
+        generated += [self._nc_run(written, inputs, seed, PERTURBED_TOGGLE) for seed in (1, 2, 3)]
+        generated += [self._nc_run(written, inputs, seed, 0.0) for seed in (4, 5, 6)]
         self.generated = {s.name for s in generated}        # may be cut short by keep_equivalent_scenarios
         candidates = written + [random_run] + generated
         self.backend = backend
         self.iec2c = find_iec2c() if backend == "matiec" else None
         self.scenarios = sorted(candidates, key=lambda s: s.cycles)
 
-    def _perturbed(self, scenario: Scenario, inputs: list[str], seed: int) -> Scenario:
-        """A hand-written scenario from dirty memory (every marker and word the program writes starts with a random
-        value, as after a restart with remanent memory) with rare random toggles of every input: the states next to
-        the intended path, and initialisations that would otherwise only ever write the value already there."""
-        rng = random.Random(seed)
+    def _dirty(self, rng: random.Random, uniform: int | None = None) -> dict[str, int]:
+        """Start values for every marker and word the program writes, as after a restart with remanent memory:
+        markers at random; words at random, near a constant of the program, or all `uniform`."""
         _, written, _ = program_operands(self.program)
         dirty = {}
         for ref in sorted(written, key=lambda r: (r.kind, r.addr)):
             if ref.kind == "M":
                 dirty[self.names.display_name(ref)] = rng.randrange(2)
             elif ref.kind in "BWD":
+                # Double words are mostly bit sets (packed markers): a boundary value leaves most bits alike.
                 bits = {"B": 8, "W": 16, "D": 32}[ref.kind]
-                value = (rng.choice(WORD_VALUES) if rng.random() < 0.5
+                value = (uniform if uniform is not None
+                         else rng.choice(self.word_values) if rng.random() < (0.2 if bits == 32 else 0.5)
                          else rng.randrange(-(1 << (bits - 1)), 1 << (bits - 1)))
                 dirty[self.names.display_name(ref)] = max(-(1 << (bits - 1)), min((1 << (bits - 1)) - 1, value))
-        initial = {**dirty, **scenario.initial}
+        return dirty
+
+    def _perturbed(self, scenario: Scenario, inputs: list[str], seed: int) -> Scenario:
+        """A hand-written scenario from dirty memory with rare random toggles of every input: the states next to
+        the intended path, and initialisations that would otherwise only ever write the value already there."""
+        initial = {**self._dirty(random.Random(seed)), **scenario.initial}
         return bind(scenario.model_copy(update={
             "name": f"{scenario.name}_perturbed", "expect": [], "initial": initial,
             "random": RandomStimulus(seed=seed, inputs=inputs, toggle_probability=PERTURBED_TOGGLE)}), self.names)
 
-    def _nc_run(self, written: list[Scenario], inputs: list[str], seed: int) -> Scenario:
+    def _power_on(self, base: Scenario, value: int) -> Scenario:
+        """The first cycles of a healthy machine with every written word at `value` (one run per boundary value):
+        the checks of the first cycle see each edge of the program's ranges once."""
+        initial = {**self._dirty(random.Random(value), uniform=value), **base.initial}
+        return bind(base.model_copy(update={
+            "name": f"power_on_{value}", "cycles": POWER_ON_CYCLES, "expect": [], "initial": initial,
+            "events": [e for e in base.events if e.cycle < POWER_ON_CYCLES], "random": None}), self.names)
+
+    def _value_variants(self, written: list[Scenario]) -> list[Scenario]:
+        """Each hand-written scenario again with the value of one NC job changed to an edge of its range: the
+        scenario's own input events then drive the sequence the other value starts (M19 instead of M3, pocket 24,
+        mode 3, ...)."""
+        edges = {
+            "m_function": lambda v: [{"m_function": m} for m in M_CODES if m != v],
+            "tool_call": lambda v: [{"tool_call": {**v, "pocket": p}} for p in POCKET_EDGES if p != v["pocket"]],
+            "tool_def": lambda v: [{"tool_def": {**v, "pocket": p}} for p in POCKET_EDGES if p != v["pocket"]],
+            "spindle_speed": lambda v: [{"spindle_speed": w} for w in self.word_values if w >= 0 and w != v],
+            "gear": lambda v: [{"gear": g} for g in (0, 1, 2, 3) if g != v],
+            "mode": lambda v: [{"mode": m} for m in range(7) if m != v],
+        }
+        variants = []
+        for scenario in written:
+            if scenario.cycles > 1000:
+                continue
+            for k, event in enumerate(scenario.events):
+                if event.nc is None or event.nc.kind not in edges:
+                    continue
+                plain = event.nc.as_dict()
+                for n, action in enumerate(edges[event.nc.kind](plain[event.nc.kind])):
+                    events = list(scenario.events)
+                    events[k] = Event(cycle=event.cycle, nc=NcAction(**action))
+                    variants.append(bind(scenario.model_copy(update={
+                        "name": f"{scenario.name}_event{k}_{n}", "events": events, "expect": []}), self.names))
+        return variants
+
+    def _nc_run(self, written: list[Scenario], inputs: list[str], seed: int, toggle: float) -> Scenario:
         """A machine switched on (the automatic-mode scenario's start) fed random NC jobs and random input toggles."""
         base = next(s for s in written if s.name == "random_keys_automatic_mode")
         rng = random.Random(seed)
@@ -237,25 +295,29 @@ class Harness:
         words = sorted(self.names.display_name(r) for r in set(used) - set(written)
                        if r.kind in "WD" and (r.kind, r.addr) not in NC_MODEL_WORDS
                        and profile.is_interface(r.kind, r.addr, 2 if r.kind == "W" else 4))
+        def pocket() -> int:
+            """Half of the pockets at the ends of the magazine's range (1 and 24) or just outside it (-1, 0, 25)."""
+            return rng.choice(POCKET_EDGES) if rng.random() < 0.5 else rng.randrange(0, 25)
+
         cycle = 40
         while cycle < NC_RUN_CYCLES - 50:
             kind = rng.choice(("m_function", "m_function", "tool_call", "spindle_speed", "mode", "tool_def", "gear",
                                "restart"))
             value = {"m_function": lambda: rng.choice(M_CODES),
-                     "tool_call": lambda: {"tool": rng.randrange(0, 30), "pocket": rng.randrange(0, 25)},
-                     "tool_def": lambda: {"tool": rng.randrange(0, 30), "pocket": rng.randrange(0, 25)},
+                     "tool_call": lambda: {"tool": rng.randrange(0, 30), "pocket": pocket()},
+                     "tool_def": lambda: {"tool": rng.randrange(0, 30), "pocket": pocket()},
                      "spindle_speed": lambda: rng.choice((0, 59, 60, 61, 1500, 4000, 12000)),
-                     "mode": lambda: rng.choice((0, 1, 2, 5, 6)),
+                     "mode": lambda: rng.randrange(0, 7),
                      "gear": lambda: rng.randrange(1, 3),
                      "restart": lambda: rng.choice(("program", "machine_parameters"))}[kind]()
             events.append(Event(cycle=cycle, nc=NcAction(**{kind: value})))
             if words:
                 operand = rng.choice(words)
-                events.append(Event(cycle=cycle + 1, set={operand: rng.choice(WORD_VALUES)}))
+                events.append(Event(cycle=cycle + 1, set={operand: rng.choice(self.word_values)}))
             cycle += rng.randrange(30, 200)
         return bind(base.model_copy(update={
             "name": f"nc_jobs_{seed}", "cycles": NC_RUN_CYCLES, "events": events, "expect": [],
-            "random": RandomStimulus(seed=seed, inputs=inputs, toggle_probability=PERTURBED_TOGGLE)}), self.names)
+            "random": RandomStimulus(seed=seed, inputs=inputs, toggle_probability=toggle)}), self.names)
 
     def keep_equivalent_scenarios(self) -> list[str]:
         """Generated scenarios end where the unmutated run stops being defined (a random NC job the machine cannot
