@@ -4,9 +4,11 @@ Usage: python -m tests.mutants [--count 150] [--seed 1] [--backend auto|builtin|
 
 Each mutant changes one place in the body of one translated POU (the emitted HH_* library is left alone):
 AND<->OR, a negation dropped or TRUE<->FALSE, an integer constant +-1, a comparison operator replaced, a
-statement dropped, two CASE branches swapped. Every mutant is co-simulated against the reference interpreter
-under the sample's scenarios (shortest first) and 2 000 random cycles, until a divergence or a runtime fault of
-the translated program shows it. The output lists how many were detected per operator and every survivor, so
+statement dropped, two CASE branches swapped. Every mutant is co-simulated against the reference interpreter,
+shortest scenario first, until a divergence or a runtime fault of the translated program shows it: the sample's
+scenarios, 2 000 random cycles, and scenarios aimed at boundaries (the hand-written ones from dirty memory, a short
+power-on per boundary value of the program's constants, the hand-written ones with one NC job moved to an edge of
+its range, long runs of random NC jobs on a healthy and on a toggling machine). The output lists how many were detected per operator and every survivor, so
 that each can be judged (a survivor is either a gap in the scenarios or a mutation that cannot change behaviour).
 Exit 0 when at least 90 % are detected, 1 otherwise, 2 on a usage or setup problem.
 """
@@ -285,7 +287,8 @@ class Harness:
         return variants
 
     def _nc_run(self, written: list[Scenario], inputs: list[str], seed: int, toggle: float) -> Scenario:
-        """A machine switched on (the automatic-mode scenario's start) fed random NC jobs and random input toggles."""
+        """A machine switched on (the automatic-mode scenario's start) fed random NC jobs, every input toggling with
+        probability `toggle` per cycle."""
         base = next(s for s in written if s.name == "random_keys_automatic_mode")
         rng = random.Random(seed)
         events = [e for e in base.events if e.cycle < 20]
@@ -295,6 +298,7 @@ class Harness:
         words = sorted(self.names.display_name(r) for r in set(used) - set(written)
                        if r.kind in "WD" and (r.kind, r.addr) not in NC_MODEL_WORDS
                        and profile.is_interface(r.kind, r.addr, 2 if r.kind == "W" else 4))
+
         def pocket() -> int:
             """Half of the pockets at the ends of the magazine's range (1 and 24) or just outside it (-1, 0, 25)."""
             return rng.choice(POCKET_EDGES) if rng.random() < 0.5 else rng.randrange(0, 25)

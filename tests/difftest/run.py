@@ -107,8 +107,12 @@ def run_batch(jobs: list[Job], processes: int) -> list[tuple[Job, Verdict, float
 
 
 def _progress(done: int, total: int, start: float) -> None:
+    text = f"difftest: {done}/{total} programs ({time.perf_counter() - start:.0f} s)"
     if sys.stderr.isatty():
-        print(f"\rdifftest: {done}/{total} programs ({time.perf_counter() - start:.0f} s)", end="", file=sys.stderr)
+        print(f"\r{text}", end="", file=sys.stderr)
+    elif total >= 1000 and done % (total // 20) == 0:
+        # A long run in a log or CI: a line every 5 % shows it is alive.
+        print(text, file=sys.stderr, flush=True)
 
 
 def print_summary(results: list[tuple[Job, Verdict, float]], seconds: float, quiet: bool = False) -> None:
