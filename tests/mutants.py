@@ -252,8 +252,8 @@ class Harness:
             "random": RandomStimulus(seed=seed, inputs=inputs, toggle_probability=PERTURBED_TOGGLE)}), self.names)
 
     def _power_on(self, base: Scenario, value: int) -> Scenario:
-        """The first cycles of a healthy machine with every written word at `value` (one run per boundary value):
-        the checks of the first cycle see each edge of the program's ranges once."""
+        """The first cycles of a machine with healthy inputs, every written word at `value` (one run per boundary
+        value) and the markers at random: the checks of the first cycle see each edge of the program's ranges."""
         initial = {**self._dirty(random.Random(value), uniform=value), **base.initial}
         return bind(base.model_copy(update={
             "name": f"power_on_{value}", "cycles": POWER_ON_CYCLES, "expect": [], "initial": initial,

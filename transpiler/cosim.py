@@ -8,6 +8,7 @@ from typing import Callable, Iterable, Protocol
 
 from .interp import CompiledProgram
 from .interp.machine import Machine
+from .interp.state import MEM_WIDTH
 from .presets import load_presets
 from .diagnostics import Diagnostics
 from .iomap import Accessor, IoMap
@@ -142,7 +143,11 @@ class _IndexedColumns:
         self.iomap = iomap
         self.names = names
         self.driver = driver
-        self.seen: set[OperandRef] = set(static)   # the static columns already compare these
+        self.seen: set[OperandRef] = set()          # the static columns already compare these
+        for ref in static:
+            self.seen.add(ref)
+            # Indexed stores are recorded as bytes: a static W/D column already compares its bytes.
+            self.seen.update(OperandRef("B", ref.addr + k) for k in range(MEM_WIDTH.get(ref.kind, 1)) if ref.kind in "WD")
         self.records = 0                           # interpreter records consumed so far
         self.columns: list[tuple[str, OperandRef]] = []
         self.accessors: list[Accessor] = []

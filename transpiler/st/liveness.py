@@ -78,7 +78,8 @@ class Liveness:
         self._solve()
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
-        """For each routine, the routines whose entry label its body reaches without a call (by falling through)."""
+        """For each routine, the routines whose entry label its body reaches without a call (falling through or
+        jumping there): the structured translation calls them."""
         entries = {r.key for r in self.program.routines}
         return {r.key: [(r.file, i) for i in self.bodies[r.key] if i != r.index and (r.file, i) in entries]
                 for r in roots}
@@ -90,7 +91,9 @@ class Liveness:
             yield from (t for t in op.case_targets if t is not None and t.file >= 0)
 
     def _solve(self) -> None:
-        for _ in range(64):
+        # The sets only grow from round to round, so every round that changes something adds one register to one
+        # routine's entry or exit set at least: the lattice height bounds the rounds.
+        for _ in range(2 * len(self.bodies) * len(REGS) + 2):
             changed = False
             new_exit = {k: frozenset() for k in self.bodies}
             for key, body in self.bodies.items():

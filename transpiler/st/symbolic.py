@@ -665,21 +665,15 @@ class Executor:
 
     def op_POP(self, op: Op) -> None:
         o = op.operand
-        kind = "bit" if o.is_bit else "val"
-        on_stack = bool(self.s.stack) and self.s.stack[-1][0] == kind
-        if on_stack:
-            # The entry stays on the stack until it is stored: saving in-flight values before the store may
-            # assign a register variable the entry reads, and then replaces the entry by a saved copy.
-            value = lambda: self.s.stack[-1][1]
-        else:
-            popped = self._pop(kind)
-            value = lambda: popped
+        value = self._pop("bit" if o.is_bit else "val")
+        registers = {name.upper() for name, g in self.ctx.layout.globals.items() if g.group == "register"}
+        if value.deps & registers:
+            # Saving in-flight values before the store may assign the register variable the value reads.
+            value = self._temp_copy(value)
         if o.is_bit:
-            self.bit_store(o, value, frozenset(["X"]))
+            self.bit_store(o, lambda: value, frozenset(["X"]))
         else:
-            self._store_value(o, value)
-        if on_stack:
-            self.s.stack.pop()
+            self._store_value(o, lambda: value)
 
     def op_PSW(self, op): self.s.stack.append(("val", E.to_dint(self.s.reg("WA"))))
     def op_PLW(self, op): self.s.set("WA", self._pop("val"))
