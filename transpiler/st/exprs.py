@@ -18,12 +18,21 @@ class Expr:
     text: str
     typ: str
     deps: frozenset[str] = frozenset()
-    lo: int = 0
-    hi: int = 0
+    lo: int = None  # type: ignore[assignment]  # None: the whole range of `typ` (set in __post_init__)
+    hi: int = None  # type: ignore[assignment]
     prec: int = PREC_ATOM
     var: str | None = None          # set when the expression is exactly one variable (an lvalue)
     const: int | None = None        # set for integer literals
     bool_const: bool | None = None  # set for TRUE/FALSE
+
+    def __post_init__(self) -> None:
+        # An integer expression built without a range may hold any value of its type: assuming less would let
+        # range-based simplifications (overflow checks left out) go wrong.
+        full = RANGES.get(self.typ, (0, 0))
+        if self.lo is None:
+            object.__setattr__(self, "lo", full[0])
+        if self.hi is None:
+            object.__setattr__(self, "hi", full[1])
 
     def wrap(self, prec: int) -> str:
         return self.text if self.prec >= prec else f"({self.text})"
