@@ -7,7 +7,7 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from transpiler.cosim import CosimResult, builtin_side_factory, cosimulate
+from transpiler.cosim import CosimResult, Divergence, builtin_side_factory, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.equiv import random_scenario
 from transpiler.frontend import ProjectOptions
@@ -20,11 +20,15 @@ from transpiler.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names
 from transpiler.simulate import run_scenario as simulate
 from transpiler.st_check import find_iec2c
+from transpiler.stexec.typesys import STR_MAX
 from transpiler.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
 
 # Verdicts. "invalid" means the project is not a well-defined program (front-end errors or a runtime fault of the
 # reference interpreter): the generator is to blame, not the translator.
-OK, MISMATCH, INVALID, ERROR = "ok", "mismatch", "invalid", "error"
+# "target limit": the translated program behaves as written, but a value exceeds what the target holds (a string
+# longer than matiec's 126 characters, reported in report.md under "Target limits"); neither side is to blame.
+OK, MISMATCH, INVALID, ERROR, TARGET_LIMIT = "ok", "mismatch", "invalid", "error", "target limit"
+PASSING = frozenset({OK, TARGET_LIMIT})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,6 +124,8 @@ def judge(results: dict[str, CosimResult]) -> Verdict:
         return Verdict(OK, cycles=cycles)
     first_backend, first = next(iter(bad.items()))
     detail = _describe(first_backend, first)
+    if all(_string_cut(r.divergence) for r in bad.values()):
+        return Verdict(TARGET_LIMIT, "", detail, cycles, first.divergence.cycle)
     if len(results) == 1:
         blame = "translator or built-in executor" if first_backend == "builtin" else "translator or matiec"
     elif len(bad) == len(results):
@@ -128,6 +134,12 @@ def judge(results: dict[str, CosimResult]) -> Verdict:
         blame = "built-in executor" if first_backend == "builtin" else "matiec"
     status = MISMATCH if first.divergence is not None else ERROR
     return Verdict(status, blame, detail, cycles, first.divergence.cycle if first.divergence else None)
+
+
+def _string_cut(d: Divergence | None) -> bool:
+    """The translated string is the original one cut at the target's string length."""
+    return (d is not None and isinstance(d.original, str) and isinstance(d.translated, str)
+            and len(d.original) > STR_MAX and d.translated == d.original[:STR_MAX])
 
 
 def _describe(backend: str, result: CosimResult) -> str:

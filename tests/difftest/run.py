@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tests.difftest.check import OK, Verdict, available_backends, check_files  # noqa: E402
+from tests.difftest.check import OK, PASSING, STR_MAX, TARGET_LIMIT, Verdict, available_backends, check_files  # noqa: E402
 from tests.difftest.generator import generate  # noqa: E402
 
 REGRESSIONS = ROOT / "tests" / "regressions"
@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     start = time.perf_counter()
     results = run_batch(jobs_for(args), args.jobs)
-    failures = [(job, v) for job, v, _ in results if v.status != OK]
+    failures = [(job, v) for job, v, _ in results if v.status not in PASSING]
     print_summary(results, time.perf_counter() - start, quiet=args.quiet)
     if args.reduce:
         for job, verdict in failures:
@@ -119,16 +119,17 @@ def print_summary(results: list[tuple[Job, Verdict, float]], seconds: float, qui
     statuses = collections.Counter(v.status for _, v, _ in results)
     cycles = sum(v.cycles for _, v, _ in results)
     on_matiec = sum(1 for job, _, _ in results if "matiec" in job.backends)
-    blames = collections.Counter(v.blame for _, v, _ in results if v.status != OK)
+    blames = collections.Counter(v.blame for _, v, _ in results if v.status not in PASSING)
     print(f"difftest: {len(results)} programs ({on_matiec} also on matiec), {cycles} cycles compared, "
           f"{statuses.get('mismatch', 0)} mismatches, {statuses.get('error', 0)} errors, "
-          f"{statuses.get('invalid', 0)} invalid programs, in {seconds:.1f} s")
+          f"{statuses.get('invalid', 0)} invalid programs, {statuses.get(TARGET_LIMIT, 0)} beyond a target limit "
+          f"(string longer than {STR_MAX} characters), in {seconds:.1f} s")
     if blames:
         print("blame: " + ", ".join(f"{who} {n}" for who, n in sorted(blames.items())))
     if not quiet:
         for job, v, _ in results:
             if v.status != OK:
-                print(f"  program {job.program_seed}: {v.status} ({v.blame}): {v.detail}")
+                print(f"  program {job.program_seed}: {v.status} ({v.blame or 'no one'}): {v.detail}")
 
 
 def reduce_failure(job: Job, verdict: Verdict, out: Path) -> Path:
