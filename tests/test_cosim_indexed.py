@@ -20,6 +20,7 @@ from transpiler.pipeline import compile_project
 from transpiler.scenario import load_scenario
 from transpiler.semantics import make_semantics
 from transpiler.simulate import project_names
+from transpiler.st_check import find_iec2c
 from transpiler.transpile import io_map_of, transpile_program
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,15 +68,25 @@ def project(tmp_path_factory):
     return folder, program, out, names, load_scenario(folder / "scenario.yaml", names)
 
 
-def _run(project, st_text: str):
+def _run(project, st_text: str, backend: str = "builtin"):
     _, program, out, names, scenario = project
-    return cosimulate(program, builtin_side_factory(st_text), io_map_of(out.result), scenario, names)
+    if backend == "matiec":
+        from transpiler.matiec_side import matiec_side_factory
+        factory = matiec_side_factory(st_text, out.result.project, find_iec2c())
+    else:
+        factory = builtin_side_factory(st_text)
+    return cosimulate(program, factory, io_map_of(out.result), scenario, names)
 
 
-def test_unmodified_translation_is_equivalent(project):
+BACKENDS = ["builtin", pytest.param("matiec", marks=pytest.mark.skipif(
+    find_iec2c() is None, reason="iec2c not found ($MATIEC_HOME/iec2c or PATH)"))]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_unmodified_translation_is_equivalent(project, backend):
     """Includes `= I20[X]`: from cycle 3 (X = 8) the input latch restores I24 on both sides, the ST side because the
     harness latches an input from its first indexed store on."""
-    result = _run(project, project[2].st_text)
+    result = _run(project, project[2].st_text, backend)
     assert result.equivalent, (result.divergence, result.error)
     assert result.cycles_run == 6
     # M204 M208, W104/W108 and D304/D308 as bytes, M404 M408, S6 S10, I24 I28, and the byte of bits M604..M611
@@ -91,10 +102,11 @@ def test_unmodified_translation_is_equivalent(project):
     (r"HH_S\[2 \+ ", "HH_S[3 + ", "S6", "AB", ""),                # = S2[X]
     (r"IDX := 600 \+", "IDX := 601 +", "M604", 1, 0),            # B= M600[X]: bit 0 of K5 to the wrong bit
 ], ids=["bit", "word_address", "dword_value", "set_bit", "string", "bit_field"])
-def test_wrong_indexed_store_diverges(project, pattern, replacement, operand, original, translated):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_wrong_indexed_store_diverges(project, pattern, replacement, operand, original, translated, backend):
     broken, count = re.subn(pattern, replacement, project[2].st_text)
     assert count == 1, "the mutation site moved: update the test"
-    result = _run(project, broken)
+    result = _run(project, broken, backend)
     assert result.error is None
     d = result.divergence
     assert d is not None, "a wrong indexed store must be seen"

@@ -152,6 +152,7 @@ class _IndexedColumns:
         self.columns: list[tuple[str, OperandRef]] = []
         self.accessors: list[Accessor] = []
         self.original: Callable[[], list] = list
+        self.translated: Callable[[], list] = list
 
     def update(self) -> None:
         """Take the indexed stores recorded since the last call; O(1) when there are none."""
@@ -163,8 +164,9 @@ class _IndexedColumns:
             self._add(OperandRef(kind, addr))
         self.records = count
         if len(self.columns) != before:
-            # A compiled reader for all columns, rebuilt only when a new address appears.
+            # Readers for all columns on both sides, rebuilt only when a new address appears.
             self.original = self.machine.reader([(ref.kind, ref.addr) for _, ref in self.columns])
+            self.translated = side_reader(self.side, self.accessors)
 
     def _add(self, ref: OperandRef) -> None:
         if ref in self.seen:
@@ -179,14 +181,22 @@ class _IndexedColumns:
             self.driver.latch_input(str(ref), self.machine.state.process_inputs[ref.addr])
 
     def divergence(self, cycle: int) -> Divergence | None:
-        """The first indexed column whose values differ (read one by one on the ST side: there are few)."""
+        """The first indexed column whose values differ."""
         if not self.columns:
             return None
-        for (display, ref), acc, a in zip(self.columns, self.accessors, self.original()):
-            b = acc.read(self.side)
-            if a != b:
-                return Divergence(cycle, str(ref), display, a, b)
-        return None
+        a_values, b_values = self.original(), self.translated()
+        if a_values == b_values:
+            return None
+        return next(Divergence(cycle, str(ref), display, a, b)
+                    for (display, ref), a, b in zip(self.columns, a_values, b_values) if a != b)
+
+
+def side_reader(side: StSide, accessors: list[Accessor]) -> Callable[[], list]:
+    """Reads the accessors' values from the ST side in one call where the side can (matiec), else one by one."""
+    bulk_reader = getattr(side, "bulk_reader", None)
+    if bulk_reader is not None:
+        return bulk_reader([acc.place for acc in accessors])
+    return lambda: [acc.read(side) for acc in accessors]
 
 
 def set_presets(side: StSide, iomap: IoMap, program: Program, mp: dict, cycle_time_ms: int) -> None:
@@ -221,9 +231,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     comparison = comparison_for(program, names, iomap)
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
-    bulk_reader = getattr(side, "bulk_reader", None)
-    translated = (bulk_reader([acc.place for acc in accessors]) if bulk_reader is not None
-                  else lambda: [acc.read(side) for acc in accessors])
+    translated = side_reader(side, accessors)
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
     indexed = _IndexedColumns(machine, side, iomap, names, driver, (ref for _, ref in comparison.columns))
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
