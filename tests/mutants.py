@@ -8,8 +8,9 @@ statement dropped, two CASE branches swapped. Every mutant is co-simulated again
 shortest scenario first, until a divergence or a runtime fault of the translated program shows it: the sample's
 scenarios, 2 000 random cycles, and scenarios aimed at boundaries (the hand-written ones from dirty memory, a short
 power-on per boundary value of the program's constants, the hand-written ones with one NC job moved to an edge of
-its range, long runs of random NC jobs on a healthy and on a toggling machine). The output lists how many were detected per operator and every survivor, so
-that each can be judged (a survivor is either a gap in the scenarios or a mutation that cannot change behaviour).
+its range, long runs of random NC jobs on a healthy and on a toggling machine). The output lists how many were
+detected per operator and every survivor, so that each can be judged (a survivor is either a gap in the scenarios
+or a mutation that cannot change behaviour).
 Exit 0 when at least 90 % are detected, 1 otherwise, 2 on a usage or setup problem.
 """
 
@@ -218,8 +219,8 @@ class Harness:
         generated += self._value_variants(written)
         # NC jobs on a machine whose inputs also toggle at random, and on a healthy one (no toggles) where
         # sequences such as tool changes run to their end.
-        generated += [self._nc_run(written, inputs, seed, PERTURBED_TOGGLE) for seed in (1, 2, 3)]
-        generated += [self._nc_run(written, inputs, seed, 0.0) for seed in (4, 5, 6)]
+        generated += [self._nc_run(healthy, inputs, seed, PERTURBED_TOGGLE) for seed in (1, 2, 3)]
+        generated += [self._nc_run(healthy, inputs, seed, 0.0) for seed in (4, 5, 6)]
         self.generated = {s.name for s in generated}        # may be cut short by keep_equivalent_scenarios
         candidates = written + [random_run] + generated
         self.backend = backend
@@ -286,10 +287,9 @@ class Harness:
                         "name": f"{scenario.name}_event{k}_{n}", "events": events, "expect": []}), self.names))
         return variants
 
-    def _nc_run(self, written: list[Scenario], inputs: list[str], seed: int, toggle: float) -> Scenario:
-        """A machine switched on (the automatic-mode scenario's start) fed random NC jobs, every input toggling with
+    def _nc_run(self, base: Scenario, inputs: list[str], seed: int, toggle: float) -> Scenario:
+        """A machine switched on (the first cycles of `base`) fed random NC jobs, every input toggling with
         probability `toggle` per cycle."""
-        base = next(s for s in written if s.name == "random_keys_automatic_mode")
         rng = random.Random(seed)
         events = [e for e in base.events if e.cycle < 20]
         # Status words the NC owns and the program only reads (axes in position, ...) get random values too.

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Callable, Iterable, Protocol
+from typing import Callable, Iterable, Protocol, Sequence
 
 from .interp import CompiledProgram
 from .interp.machine import Machine
-from .interp.state import MEM_WIDTH
+from .interp.state import byte_cells
 from .presets import load_presets
 from .diagnostics import Diagnostics
 from .iomap import Accessor, IoMap
@@ -137,17 +137,16 @@ class _IndexedColumns:
     stays compared after X has moved on, as a static column would."""
 
     def __init__(self, machine: Machine, side: StSide, iomap: IoMap, names: NameTable, driver: _StDriver,
-                 static: Iterable[OperandRef]):
+                 static: list[OperandRef]):
         self.machine = machine
         self.side = side
         self.iomap = iomap
         self.names = names
         self.driver = driver
-        self.seen: set[OperandRef] = set()          # the static columns already compare these
-        for ref in static:
-            self.seen.add(ref)
-            # Indexed stores are recorded as bytes: a static W/D column already compares its bytes.
-            self.seen.update(OperandRef("B", ref.addr + k) for k in range(MEM_WIDTH.get(ref.kind, 1)) if ref.kind in "WD")
+        # The static columns already compare these; indexed stores come as bytes, and a static W/D column
+        # compares its bytes.
+        self.seen = {OperandRef(kind, addr) for ref in static for kind, addr in byte_cells(ref.kind, ref.addr)}
+        self.seen.update(static)
         self.records = 0                           # interpreter records consumed so far
         self.columns: list[tuple[str, OperandRef]] = []
         self.accessors: list[Accessor] = []
@@ -184,11 +183,16 @@ class _IndexedColumns:
         """The first indexed column whose values differ."""
         if not self.columns:
             return None
-        a_values, b_values = self.original(), self.translated()
-        if a_values == b_values:
-            return None
-        return next(Divergence(cycle, str(ref), display, a, b)
-                    for (display, ref), a, b in zip(self.columns, a_values, b_values) if a != b)
+        return first_divergence(cycle, self.columns, self.original(), self.translated())
+
+
+def first_divergence(cycle: int, columns: Sequence[tuple[str, OperandRef]], a_values: list,
+                     b_values: list) -> Divergence | None:
+    """The first column whose original and translated values differ (None when all agree)."""
+    if a_values == b_values:
+        return None
+    return next(Divergence(cycle, str(ref), display, a, b)
+                for (display, ref), a, b in zip(columns, a_values, b_values) if a != b)
 
 
 def side_reader(side: StSide, accessors: list[Accessor]) -> Callable[[], list]:
@@ -233,7 +237,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
     translated = side_reader(side, accessors)
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
-    indexed = _IndexedColumns(machine, side, iomap, names, driver, (ref for _, ref in comparison.columns))
+    indexed = _IndexedColumns(machine, side, iomap, names, driver, [ref for _, ref in comparison.columns])
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     start = time.perf_counter()
     result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine)
@@ -260,14 +264,10 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         b_values = translated()
         if record is not None:
             record(cycle, a_values, b_values)
-        if a_values != b_values:
-            for (display, ref), a, b in zip(comparison.columns, a_values, b_values):
-                if a != b:
-                    result.divergence = Divergence(cycle, str(ref), display, a, b)
-                    break
-            break
-        indexed.update()
-        result.divergence = indexed.divergence(cycle)
+        result.divergence = first_divergence(cycle, comparison.columns, a_values, b_values)
+        if result.divergence is None:
+            indexed.update()
+            result.divergence = indexed.divergence(cycle)
         if result.divergence is not None:
             break
         if progress is not None:

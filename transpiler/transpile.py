@@ -14,6 +14,7 @@ from .ir import Program
 from .parse import MpParser
 from .sources import ProjectFolders, read_source
 from .st.backend import StBackend, StResult
+from .st.liveness import use_def
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,12 +87,10 @@ def user_pous(result: StResult) -> list[Pou]:
     return [p for p in result.project.pous if p.name in names]
 
 
-STRING_OPS = frozenset({"SLD", "SCAT", "SST", "SCMP"})
-
-
 def _target_limits(program: Program) -> list[str]:
     """What the vendor-neutral ST cannot hold the way the control does, as far as this program needs it."""
-    string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops if op.code in STRING_OPS]
+    string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops
+                    if "SA" in frozenset().union(*use_def(op))]
     if not string_lines:
         return []
     where = ", ".join(string_lines[:5]) + (f" and {len(string_lines) - 5} more" if len(string_lines) > 5 else "")

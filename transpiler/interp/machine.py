@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import itertools
 from decimal import Decimal, InvalidOperation
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
@@ -26,7 +27,7 @@ from ..ir import Program
 from ..shim import HandshakeTimeout, NcModel, SysModules
 from .compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from .faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from .state import MEM_WIDTH, MachineState, sext
+from .state import MachineState, byte_cells, sext
 from .submit import SubmitQueue
 from .support import Runtime
 from ..presets import load_presets
@@ -172,15 +173,8 @@ class Machine:
         """Operands the program has written through the index register, from record `start` on (records keep their
         first-write order): bits M/I/O/T/C, strings S, and a B/W/D store as the bytes B<n> it covers, because the
         overlapping byte memory is compared byte by byte. May repeat a byte; the caller keeps its own set."""
-        records = list(self.runtime.indexed_writes)[start:]
-        result: list[tuple[str, int]] = []
-        for kind, addr in records:
-            width = MEM_WIDTH.get(kind)
-            if width is None:
-                result.append((kind, addr))
-            else:
-                result.extend(("B", byte) for byte in range(addr, addr + width))
-        return result
+        records = itertools.islice(self.runtime.indexed_writes, start, None)
+        return [cell for kind, addr in records for cell in byte_cells(kind, addr)]
 
     @property
     def registers(self) -> dict[str, int | str]:

@@ -13,6 +13,12 @@ MEM_WIDTH = {"B": 1, "W": 2, "D": 4}
 INT32_MIN = -(1 << 31)
 
 
+def byte_cells(kind: str, addr: int) -> list[tuple[str, int]]:
+    """A B/W/D operand as the bytes B<n> it covers (the memory overlaps byte-wise); any other operand as itself."""
+    width = MEM_WIDTH.get(kind)
+    return [(kind, addr)] if width is None else [("B", byte) for byte in range(addr, addr + width)]
+
+
 def sext(value: int, bits: int) -> int:
     """The low `bits` bits of value as a signed number."""
     mask = (1 << bits) - 1

@@ -233,6 +233,7 @@ class Executor:
         if not o.indexed:
             return
         x = self.s.reg("X")
+        # Only X's own variable is safe to read: saving another register variable before a store may drop X.
         if x.const is None and x.deps - {self.ctx.register("X").upper()}:
             self.s.set("X", self._temp_copy(x))
 
