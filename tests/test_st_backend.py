@@ -219,8 +219,8 @@ def test_empty_case_table_translates_to_valid_st_that_calls_nothing(tmp_path):
     """A CASE table emptied by #if calls nothing: IEC needs at least one case, so 'CASE x OF END_CASE;' may not be
     emitted (found by difftest feature case_empty); the code after ENDC still runs."""
     (tmp_path / "main.src").write_text("\n".join(
-        ["L     I0", "=     O1", "CASE  B10", "#ifdef CFG_never_defined", "CM    Step_a", "#endif", "ENDC", "L     I1", "=     O0", "EM",
-         "LBL Step_a", "L     K1", "=     O2", "EM", ""]))
+        ["L     I0", "=     O1", "CASE  B10", "#ifdef CFG_never_defined", "CM    Step_a", "#endif", "ENDC",
+         "L     I1", "=     O0", "EM", "LBL Step_a", "L     K1", "=     O2", "EM", ""]))
     (tmp_path / "scenario.yaml").write_text(
         "name: empty_case\ncycles: 4\nevents:\n  - {cycle: 1, set: {I0: 1, I1: 1}}\n  - {cycle: 3, set: {I1: 0}}\n")
     result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {}))
