@@ -64,7 +64,7 @@ def test_a_mutant_changes_one_place_except_a_case_swap_or_a_dropped_statement():
             assert changed == [m.line - 1], m
 
 
-def test_choose_spreads_the_sample_over_the_operators_and_is_seeded():
+def test_choose_spreads_the_sample_over_the_operators_and_oversampling_returns_every_site():
     sites = mutation_sites(ST)
     picked = choose(sites, 6, seed=3)
     assert len(picked) == 6 and len({m.operator for m in picked}) == len(OPERATORS)

@@ -48,6 +48,9 @@ class Layout:
         self.profile = program.semantics.profile
         self.little = program.semantics.little_endian
         self.globals: dict[str, GlobalVar] = {}
+        # Upper-case names of the 'register' group (accumulators, X, data stack): the variables that saving
+        # in-flight values may assign (kept by _add_global, so that the translator need not scan every global).
+        self.register_vars: set[str] = set()
         self.rows: list[OperandVar] = []
         self._bit_var: dict[tuple[str, int], str] = {}
         self._mem_var: dict[tuple[str, int], str] = {}
@@ -245,6 +248,8 @@ class Layout:
 
     def _add_global(self, var: GlobalVar) -> None:
         self.globals[var.name] = var
+        if var.group == "register":
+            self.register_vars.add(var.name.upper())
 
     def add_register(self, key: str, wanted: str, typ: str, comment: str, initial: str | None = None,
                      group: str = "register") -> str:

@@ -667,8 +667,7 @@ class Executor:
     def op_POP(self, op: Op) -> None:
         o = op.operand
         value = self._pop("bit" if o.is_bit else "val")
-        registers = {name.upper() for name, g in self.ctx.layout.globals.items() if g.group == "register"}
-        if value.deps & registers:
+        if value.deps & self.ctx.layout.register_vars:
             # Saving in-flight values before the store may assign the register variable the value reads.
             value = self._temp_copy(value)
         if o.is_bit:
