@@ -17,7 +17,7 @@ if str(ROOT) not in sys.path:
 
 from transpiler.frontend import ProjectOptions  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
-from transpiler.semantics import make_semantics  # noqa: E402
+from transpiler.language.semantics import make_semantics  # noqa: E402
 
 TARGET_SECONDS = 2.0
 TARGET_MB = 500

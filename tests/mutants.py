@@ -39,7 +39,7 @@ from transpiler.frontend import ProjectOptions  # noqa: E402
 from transpiler.interp import compile_program  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
-from transpiler.semantics import make_semantics  # noqa: E402
+from transpiler.language.semantics import make_semantics  # noqa: E402
 from transpiler.simulate import program_operands, project_names  # noqa: E402
 from transpiler.st_check import find_iec2c  # noqa: E402
 from transpiler.transpile import io_map_of, read_mp_file, transpile_program  # noqa: E402

@@ -18,7 +18,7 @@ from transpiler.diagnostics import Diagnostics
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import compile_project
 from transpiler.scenario import load_scenario
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 from transpiler.simulate import project_names
 from transpiler.st_check import find_iec2c
 from transpiler.transpile import io_map_of, transpile_program

@@ -23,10 +23,10 @@ from tests.difftest.generator import (  # noqa: E402
 from transpiler.diagnostics import Diagnostics  # noqa: E402
 from transpiler.frontend import ProjectOptions  # noqa: E402
 from transpiler.interp import Machine  # noqa: E402
-from transpiler.mnemonics import MNEMONICS, canonical  # noqa: E402
+from transpiler.language.mnemonics import MNEMONICS, canonical  # noqa: E402
 from transpiler.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import OperandRef  # noqa: E402
-from transpiler.semantics import PROFILES, make_semantics  # noqa: E402
+from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
 from transpiler.stimulus import Write  # noqa: E402
 from transpiler.transpile import read_mp_file  # noqa: E402
 

@@ -144,7 +144,7 @@ def test_matiec_bulk_read_agrees_with_single_reads(project):
     from transpiler.frontend import ProjectOptions
     from transpiler.matiec_side import matiec_side_factory
     from transpiler.pipeline import compile_project
-    from transpiler.semantics import make_semantics
+    from transpiler.language.semantics import make_semantics
     from transpiler.st_check import find_iec2c
     from transpiler.transpile import transpile_program
     program = compile_project(ProjectOptions(main=ROOT / project), make_semantics("itnc530", {})).program

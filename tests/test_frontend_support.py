@@ -9,7 +9,7 @@ from typing import Mapping
 from transpiler.diagnostics import Diagnostic
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import CompileResult, compile_project
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 
 
 def write_project(folder: Path, files: Mapping[str, str | bytes]) -> None:

@@ -8,7 +8,7 @@ from vectors import SKIP_REASON, SPEC, Vector, load_vectors
 
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import compile_project
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 
 VECTORS = load_vectors() if SPEC.exists() else []
 

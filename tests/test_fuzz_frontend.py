@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 from test_frontend_support import compile_files, errors
 
 from transpiler.frontend import Parsers, ProjectOptions
-from transpiler.mnemonics import MNEMONICS
+from transpiler.language.mnemonics import MNEMONICS
 from transpiler.pipeline import compile_project
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 
 LIMIT = 10.0                     # seconds allowed per input (the machine may be shared and slow)
 SAMPLE_SEEDS = fuzz.sample_seeds()

@@ -16,7 +16,7 @@ from transpiler.interp import Machine, MachineConfigError, MachineHalted, compil
 from transpiler.interp.faults import CycleReport
 from transpiler.ir import Program
 from transpiler.pipeline import compile_project
-from transpiler.semantics import Semantics, make_semantics
+from transpiler.language.semantics import Semantics, make_semantics
 
 # ---------------------------------------------------------------------------------------------
 # helpers (also used by test_interp_switches.py)

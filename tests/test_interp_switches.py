@@ -9,7 +9,7 @@ import pytest
 
 from tests.test_interp import compile_text, cycles, fault_of, machine, ref, values, with_setting
 from transpiler.interp import Machine, MachineConfigError
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 
 
 def _trace(m: Machine, count: int, names: tuple[str, ...], inputs: dict[str, list] | None = None) -> dict[str, list]:

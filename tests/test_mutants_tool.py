@@ -5,7 +5,7 @@ from __future__ import annotations
 from tests.mutants import OPERATORS, boundary_values, choose, mutation_sites
 from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import compile_project
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 
 ST = """\
 FUNCTION HH_HELPER : BOOL

@@ -10,7 +10,7 @@ from test_frontend_support import compile_files, errors, program_ops
 
 from transpiler import ast
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.mnemonics import MNEMONICS, canonical
+from transpiler.language.mnemonics import MNEMONICS, canonical
 from transpiler.parse import DefParser, MpParser, SrcParser, parse_constant
 from transpiler.preprocess import Line, split_comment
 

@@ -17,7 +17,7 @@ from transpiler.frontend import ProjectOptions
 from transpiler.pipeline import compile_project
 from transpiler.plcopen import extract_st_bodies
 from transpiler.scenario import load_scenario
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 from transpiler.simulate import project_names
 from transpiler.st_check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
 from transpiler.st_writer import extract_pou_bodies

@@ -12,7 +12,7 @@ from transpiler.frontend import ProjectOptions
 from transpiler.interp import Machine
 from transpiler.pipeline import compile_project
 from transpiler.scenario import parse_operand, values_equal
-from transpiler.semantics import ASSUMPTIONS, PROFILES, make_semantics
+from transpiler.language.semantics import ASSUMPTIONS, PROFILES, make_semantics
 
 VECTORS = load_vectors() if SPEC.exists() else []
 RUNTIME = [v for v in VECTORS if (v.expect_error or {}).get("phase") != "compile"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Union
 
-from .diagnostics import Span
+from transpiler.diagnostics import Span
 
 
 @dataclasses.dataclass(frozen=True, slots=True)

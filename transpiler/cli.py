@@ -9,11 +9,11 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
-from .diagnostics import CompileFailed, Diagnostics, NO_SPAN, explain
-from .frontend import ProjectOptions
-from .pipeline import CompileResult, compile_project
-from .preprocess import parse_define_value
-from .semantics import ASSUMPTION_BY_KEY, PROFILES, SemanticsError, make_semantics
+from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN, explain
+from transpiler.frontend import ProjectOptions
+from transpiler.pipeline import CompileResult, compile_project
+from transpiler.preprocess import parse_define_value
+from transpiler.language.semantics import ASSUMPTION_BY_KEY, PROFILES, SemanticsError, make_semantics
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 

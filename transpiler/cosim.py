@@ -6,17 +6,17 @@ import dataclasses
 import time
 from typing import Callable, Iterable, Protocol, Sequence
 
-from .interp import CompiledProgram
-from .interp.machine import Machine
-from .interp.state import byte_cells
-from .presets import load_presets
-from .diagnostics import Diagnostics
-from .iomap import Accessor, IoMap
-from .ir import Program
-from .scenario import NameTable, OperandRef, Scenario
-from .shim import HandshakeTimeout, NcModel
-from .simulate import build_machine, machine_parameters, program_operands
-from .stimulus import Stimulus, build_stimulus
+from transpiler.interp import CompiledProgram
+from transpiler.interp.machine import Machine
+from transpiler.interp.state import byte_cells
+from transpiler.language.presets import load_presets
+from transpiler.diagnostics import Diagnostics
+from transpiler.iomap import Accessor, IoMap
+from transpiler.ir import Program
+from transpiler.scenario import NameTable, OperandRef, Scenario
+from transpiler.shim import HandshakeTimeout, NcModel
+from transpiler.simulate import build_machine, machine_parameters, program_operands
+from transpiler.stimulus import Stimulus, build_stimulus
 
 
 class StSide(Protocol):
@@ -279,7 +279,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
-    from .stexec import load_st
+    from transpiler.stexec import load_st
     project = load_st(st_text, filename)
 
     class _Side:

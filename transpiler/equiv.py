@@ -11,20 +11,20 @@ from pathlib import Path
 from typing import Any, Callable
 from xml.sax.saxutils import escape, quoteattr
 
-from .cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
-from .atomic import write_files_atomically
-from .cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
-from .diagnostics import CompileFailed, Diagnostics, NO_SPAN
-from .interp import CompiledProgram, compile_program
-from .iomap import IoMap
-from .ir import Program
-from .pipeline import compile_project
-from .scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
-from .shim import ShimUnavailable
-from .simulate import program_operands, project_names, scenario_semantics
-from .stimulus import materialize_random, scenario_to_yaml
-from .traces import TraceRecorder
-from .transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
+from transpiler.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
+from transpiler.atomic import write_files_atomically
+from transpiler.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
+from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN
+from transpiler.interp import CompiledProgram, compile_program
+from transpiler.iomap import IoMap
+from transpiler.ir import Program
+from transpiler.pipeline import compile_project
+from transpiler.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
+from transpiler.shim import ShimUnavailable
+from transpiler.simulate import program_operands, project_names, scenario_semantics
+from transpiler.stimulus import materialize_random, scenario_to_yaml
+from transpiler.traces import TraceRecorder
+from transpiler.transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
 
 SHRINK_BUDGET = 150
 
@@ -222,12 +222,12 @@ def cmd_equiv(args: argparse.Namespace) -> int:
 
 
 def _backend(choice: str, st_text: str, st_name: str, transpiled) -> tuple[str, Callable[[], StSide] | None, str]:
-    from .st_check import find_iec2c
+    from transpiler.st_check import find_iec2c
     if choice in ("auto", "matiec"):
         iec2c = find_iec2c()
         if iec2c is not None:
             try:
-                from .matiec_side import matiec_side_factory
+                from transpiler.matiec_side import matiec_side_factory
                 return "matiec", matiec_side_factory(st_text, transpiled.result.project, iec2c), ""
             except ImportError:
                 if choice == "matiec":

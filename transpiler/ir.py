@@ -5,8 +5,8 @@ from __future__ import annotations
 import dataclasses
 from typing import Mapping
 
-from .diagnostics import Span
-from .semantics import Semantics
+from transpiler.diagnostics import Span
+from transpiler.language.semantics import Semantics
 
 BIT_KINDS = frozenset("MIOTC")
 MEM_KINDS = frozenset("BWD")

@@ -13,9 +13,9 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from .iec_model import IecProject
-from .iomap import Place
-from .st_check import matiec_home
+from transpiler.iec_model import IecProject
+from transpiler.iomap import Place
+from transpiler.st_check import matiec_home
 
 SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
            "UINT": "UINT", "UDINT": "UDINT", "BYTE": "BYTE", "WORD": "WORD", "DWORD": "DWORD"}

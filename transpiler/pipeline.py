@@ -6,11 +6,11 @@ import contextlib
 import dataclasses
 import gc
 
-from .diagnostics import Diagnostics
-from .frontend import Parsers, ProjectOptions, load_project
-from .ir import Program
-from .resolve import resolve
-from .semantics import Semantics
+from transpiler.diagnostics import Diagnostics
+from transpiler.frontend import Parsers, ProjectOptions, load_project
+from transpiler.ir import Program
+from transpiler.resolve import resolve
+from transpiler.language.semantics import Semantics
 
 
 @dataclasses.dataclass(frozen=True)

@@ -9,8 +9,8 @@ from typing import Callable, Mapping, NamedTuple, Union
 
 from lark import LarkError, Transformer
 
-from .diagnostics import Diagnostics, Span
-from .grammars import lalr_parser
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.grammars import lalr_parser
 
 DefineValue = Union[int, str]
 

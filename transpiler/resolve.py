@@ -6,13 +6,13 @@ import dataclasses
 import re
 from typing import Iterable
 
-from . import ast
-from .diagnostics import Diagnostics, Span
-from .frontend import ParsedProject
-from .ir import BIT_KINDS, BYTES, MEM_KINDS, Bracket, CallTarget, FileCode, Op, Operand, Program, Symbol
-from .mnemonics import MNEMONICS
-from .modules import MODULES
-from .semantics import Semantics
+from transpiler import ast
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.frontend import ParsedProject
+from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Bracket, CallTarget, FileCode, Op, Operand, Program, Symbol
+from transpiler.language.mnemonics import MNEMONICS
+from transpiler.language.modules import MODULES
+from transpiler.language.semantics import Semantics
 
 _RESERVED = re.compile(r"^(?:[MIOTCBWDS][0-9]+|K[0-9]+|X|KF|S#[ED][0-9]+)$", re.IGNORECASE)
 LOGIC_GATES = {"A": "AND", "AN": "ANDN", "O": "OR", "ON": "ORN", "XO": "XOR", "XON": "XORN"}

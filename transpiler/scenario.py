@@ -16,7 +16,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, 
     model_validator
 
 from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
-from transpiler.semantics import PROFILES
+from transpiler.language.semantics import PROFILES
 
 # ---------------------------------------------------------------------------------------------
 # Operands and names

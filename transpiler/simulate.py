@@ -12,17 +12,17 @@ from typing import Any, Callable
 
 import yaml
 
-from .cli import UsageError, options_from_args
-from .diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
-from .interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
-from .ir import Program
-from .parse import MpParser
-from .pipeline import compile_project
-from .scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
-from .semantics import Semantics, PROFILES, SemanticsError, make_semantics
-from .shim import NcActionError, ShimUnavailable, UnknownModule
-from .stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
-from .traces import TraceRecorder
+from transpiler.cli import UsageError, options_from_args
+from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
+from transpiler.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
+from transpiler.ir import Program
+from transpiler.parse import MpParser
+from transpiler.pipeline import compile_project
+from transpiler.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
+from transpiler.language.semantics import Semantics, PROFILES, SemanticsError, make_semantics
+from transpiler.shim import NcActionError, ShimUnavailable, UnknownModule
+from transpiler.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
+from transpiler.traces import TraceRecorder
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 _WRITES = {"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "WST", "POP", "INC", "DEC", "SST"}

@@ -7,7 +7,7 @@ import os
 import re
 from pathlib import Path
 
-from .diagnostics import Diagnostics, Span
+from transpiler.diagnostics import Diagnostics, Span
 
 _LINE_SPLIT = re.compile(r"\r\n|\r|\n")
 MAX_FILE_BYTES = 64 * 1024 * 1024

@@ -7,14 +7,14 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Mapping
 
-from .diagnostics import Diagnostics, NO_SPAN
-from .iec_model import Pou
-from .iomap import IoMap, MapRow
-from .ir import Program
-from .parse import MpParser
-from .sources import ProjectFolders, read_source
-from .st.backend import StBackend, StResult
-from .st.liveness import use_def
+from transpiler.diagnostics import Diagnostics, NO_SPAN
+from transpiler.iec_model import Pou
+from transpiler.iomap import IoMap, MapRow
+from transpiler.ir import Program
+from transpiler.parse import MpParser
+from transpiler.sources import ProjectFolders, read_source
+from transpiler.st.backend import StBackend, StResult
+from transpiler.st.liveness import use_def
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,8 +42,8 @@ def read_mp_file(path: Path, diags: Diagnostics) -> dict[tuple[int, int], Decima
 
 def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
                       formats: set[str]) -> Transpiled:
-    from .plcopen import render_xml
-    from .st_writer import render_st
+    from transpiler.plcopen import render_xml
+    from transpiler.st_writer import render_st
     result = StBackend(program, diags, mp).build()
     project = result.project
     files: dict[str, bytes] = {}

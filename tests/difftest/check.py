@@ -16,7 +16,7 @@ from transpiler.ir import Program
 from transpiler.iomap import IoMap
 from transpiler.pipeline import compile_project
 from transpiler.scenario import NameTable, Scenario
-from transpiler.semantics import make_semantics
+from transpiler.language.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names
 from transpiler.simulate import run_scenario as simulate
 from transpiler.st_check import find_iec2c

@@ -28,9 +28,9 @@ import sys
 import types
 from typing import Callable
 
-from ..ir import FileCode, Op, Operand, Program
-from ..semantics import Semantics
-from .state import space_size
+from transpiler.ir import FileCode, Op, Operand, Program
+from transpiler.language.semantics import Semantics
+from transpiler.interp.state import space_size
 
 GENERATED_FILENAME = "<hh2iec-interp>"
 _GROUP = 8                      # blocks per leaf of the dispatch tree

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..diagnostics import CompileFailed, Span
+from transpiler.diagnostics import CompileFailed, Span
 
 
 class Fault(Exception):

@@ -22,16 +22,16 @@ import itertools
 from decimal import Decimal, InvalidOperation
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-from ..diagnostics import Diagnostics, Span
-from ..ir import Program
-from ..shim import HandshakeTimeout, NcModel, SysModules
-from .compile import GENERATED_FILENAME, CompiledProgram, compile_program
-from .faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from .state import MachineState, byte_cells, sext
-from .submit import SubmitQueue
-from .support import Runtime
-from ..presets import load_presets
-from .timers import TimerService
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.ir import Program
+from transpiler.shim import HandshakeTimeout, NcModel, SysModules
+from transpiler.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
+from transpiler.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
+from transpiler.interp.state import MachineState, byte_cells, sext
+from transpiler.interp.submit import SubmitQueue
+from transpiler.interp.support import Runtime
+from transpiler.language.presets import load_presets
+from transpiler.interp.timers import TimerService
 
 PSEUDO = ("LA", "WA", "X", "SA")
 WriteLike = Any   # stimulus.Write (ref, value, name), or a (kind, addr, value) tuple

@@ -6,7 +6,7 @@ import dataclasses
 import struct
 import sys
 
-from ..semantics import Profile, Semantics
+from transpiler.language.semantics import Profile, Semantics
 
 BIT_SPACES = "MIOTC"
 MEM_WIDTH = {"B": 1, "W": 2, "D": 4}

@@ -5,11 +5,11 @@ from __future__ import annotations
 import collections
 from typing import Callable
 
-from ..semantics import Semantics
-from ..shim import SysModules
-from .faults import BudgetExceeded, Fault, JobCancelled
-from .state import INT32_MIN, MEM_WIDTH, MachineState, sext
-from .submit import SubmitQueue
+from transpiler.language.semantics import Semantics
+from transpiler.shim import SysModules
+from transpiler.interp.faults import BudgetExceeded, Fault, JobCancelled
+from transpiler.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
+from transpiler.interp.submit import SubmitQueue
 
 _TO_CHARS = bytes.maketrans(b"\x00\x01", b"01")
 _FROM_CHARS = bytes.maketrans(b"01", b"\x00\x01")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from ..semantics import Semantics
+from transpiler.language.semantics import Semantics
 
 
 class TimerService:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import dataclasses
 from collections import defaultdict
 
-from ..ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
-from . import exprs as E
-from .names import NameTable
+from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
+from transpiler.st import exprs as E
+from transpiler.st.names import NameTable
 
 MEM_TYPE = {"B": "SINT", "W": "INT", "D": "DINT"}
 BYTE_ARRAY_TYPE = "T_HH_MEM"

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..iec_model import IecVar, Pou, VarSection
-from ..semantics import Semantics
+from transpiler.iec_model import IecVar, Pou, VarSection
+from transpiler.language.semantics import Semantics
 
 
 def _fn(name: str, ret: str, inputs: list[tuple[str, str]], body: str, comment: str,

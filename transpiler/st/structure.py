@@ -5,11 +5,11 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from ..iec_model import st_comment
-from ..ir import CallTarget, FileCode, Op
-from . import exprs as E
-from .liveness import REGS
-from .symbolic import Executor, Unsupported
+from transpiler.iec_model import st_comment
+from transpiler.ir import CallTarget, FileCode, Op
+from transpiler.st import exprs as E
+from transpiler.st.liveness import REGS
+from transpiler.st.symbolic import Executor, Unsupported
 
 JUMPS = ("JP", "JPT", "JPF")
 

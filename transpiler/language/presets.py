@@ -5,8 +5,8 @@ from __future__ import annotations
 from decimal import Decimal
 from typing import Mapping
 
-from .diagnostics import Diagnostics, Span
-from .semantics import Semantics
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.language.semantics import Semantics
 
 MpKey = tuple[int, int]
 TIMER_MP, COUNTER_MP = 4110, 4120
