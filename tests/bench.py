@@ -15,9 +15,9 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from tests.bench_frontend import bench_frontend, generate_project  # noqa: E402
-from transpiler.frontend import ProjectOptions  # noqa: E402
+from transpiler.frontend.load import ProjectOptions  # noqa: E402
 from transpiler.interp import Machine, compile_program  # noqa: E402
-from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
 INTERP_TARGET = 2_000_000          # source instructions per second on one core (issue 4)

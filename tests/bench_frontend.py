@@ -15,8 +15,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from transpiler.frontend import ProjectOptions  # noqa: E402
-from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.frontend.load import ProjectOptions  # noqa: E402
+from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
 TARGET_SECONDS = 2.0

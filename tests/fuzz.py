@@ -35,8 +35,8 @@ if str(ROOT) not in sys.path:
 
 from transpiler.cli import summary  # noqa: E402
 from transpiler.diagnostics import CODES  # noqa: E402
-from transpiler.frontend import Parsers, ProjectOptions  # noqa: E402
-from transpiler.pipeline import CompileResult, compile_project  # noqa: E402
+from transpiler.frontend.load import Parsers, ProjectOptions  # noqa: E402
+from transpiler.frontend.pipeline import CompileResult, compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
 SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp")

@@ -35,9 +35,9 @@ if str(ROOT) not in sys.path:
 from transpiler.cosim import builtin_side_factory, cosimulate  # noqa: E402
 from transpiler.diagnostics import CompileFailed, Diagnostics  # noqa: E402
 from transpiler.equiv import random_scenario  # noqa: E402
-from transpiler.frontend import ProjectOptions  # noqa: E402
+from transpiler.frontend.load import ProjectOptions  # noqa: E402
 from transpiler.interp import compile_program  # noqa: E402
-from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 from transpiler.simulate import program_operands, project_names  # noqa: E402

@@ -21,10 +21,10 @@ from tests.difftest import generator  # noqa: E402
 from tests.difftest.generator import (  # noqa: E402
     FEATURES, KNOWN_DIVERGENT, GeneratedProject, default_features, generate, main as generator_main)
 from transpiler.diagnostics import Diagnostics  # noqa: E402
-from transpiler.frontend import ProjectOptions  # noqa: E402
+from transpiler.frontend.load import ProjectOptions  # noqa: E402
 from transpiler.interp import Machine  # noqa: E402
 from transpiler.language.mnemonics import MNEMONICS, canonical  # noqa: E402
-from transpiler.pipeline import compile_project  # noqa: E402
+from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import OperandRef  # noqa: E402
 from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
 from transpiler.stimulus import Write  # noqa: E402

@@ -141,9 +141,9 @@ def test_matiec_bulk_read_agrees_with_single_reads(project):
     import random
     from transpiler.cosim import comparison_for
     from transpiler.diagnostics import Diagnostics
-    from transpiler.frontend import ProjectOptions
+    from transpiler.frontend.load import ProjectOptions
     from transpiler.matiec_side import matiec_side_factory
-    from transpiler.pipeline import compile_project
+    from transpiler.frontend.pipeline import compile_project
     from transpiler.language.semantics import make_semantics
     from transpiler.st_check import find_iec2c
     from transpiler.transpile import transpile_program

@@ -8,7 +8,7 @@ import pytest
 from test_frontend_support import Found, compile_files, errors, warnings
 
 from transpiler.diagnostics import CODES, Diagnostics, Severity
-from transpiler.parse import MpParser
+from transpiler.frontend.parse import MpParser
 
 # (id, files, expected errors as (code, file, line, col)); the list is the complete error list,
 # so every case also checks that one fault gives one error (no cascade).

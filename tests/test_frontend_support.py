@@ -7,8 +7,8 @@ from pathlib import Path
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostic
-from transpiler.frontend import ProjectOptions
-from transpiler.pipeline import CompileResult, compile_project
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import CompileResult, compile_project
 from transpiler.language.semantics import make_semantics
 
 

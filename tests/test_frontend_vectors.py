@@ -6,8 +6,8 @@ import pytest
 from test_frontend_support import errors
 from vectors import SKIP_REASON, SPEC, Vector, load_vectors
 
-from transpiler.frontend import ProjectOptions
-from transpiler.pipeline import compile_project
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 
 VECTORS = load_vectors() if SPEC.exists() else []

@@ -15,9 +15,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_frontend_support import compile_files, errors
 
-from transpiler.frontend import Parsers, ProjectOptions
+from transpiler.frontend.load import Parsers, ProjectOptions
 from transpiler.language.mnemonics import MNEMONICS
-from transpiler.pipeline import compile_project
+from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 
 LIMIT = 10.0                     # seconds allowed per input (the machine may be shared and slow)

@@ -7,8 +7,8 @@ import inspect
 import pytest
 from lark import Lark, Token, Transformer, Tree
 
-from transpiler import parse, preprocess
-from transpiler.grammars import lalr_parser, load_grammar
+from transpiler.frontend import parse, preprocess
+from transpiler.frontend.grammars import lalr_parser, load_grammar
 
 # Lines (comments already split off, as the parsers receive them) that together use every rule and terminal.
 CORPUS = {
@@ -83,7 +83,7 @@ def test_the_mp_grammar_is_read_without_a_transformer():
 
 def test_every_grammar_file_is_covered():
     from importlib import resources
-    files = {p.name for p in resources.files("transpiler.grammars").iterdir() if p.name.endswith(".lark")}
+    files = {p.name for p in resources.files("transpiler.frontend.grammars").iterdir() if p.name.endswith(".lark")}
     assert files == set(CORPUS)
 
 

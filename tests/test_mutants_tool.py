@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from tests.mutants import OPERATORS, boundary_values, choose, mutation_sites
-from transpiler.frontend import ProjectOptions
-from transpiler.pipeline import compile_project
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 
 ST = """\

@@ -8,11 +8,11 @@ from decimal import Decimal
 import pytest
 from test_frontend_support import compile_files, errors, program_ops
 
-from transpiler import ast
+from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.language.mnemonics import MNEMONICS, canonical
-from transpiler.parse import DefParser, MpParser, SrcParser, parse_constant
-from transpiler.preprocess import Line, split_comment
+from transpiler.frontend.parse import DefParser, MpParser, SrcParser, parse_constant
+from transpiler.frontend.preprocess import Line, split_comment
 
 # An operand of each kind, as written, for building one valid line per mnemonic.
 SAMPLE_OPERAND = {"M": "M12", "I": "I3", "O": "O4", "T": "T5", "C": "C6", "B": "B8", "W": "W10", "D": "D12",
@@ -172,7 +172,7 @@ def test_spans_carry_the_column_of_the_first_character(tmp_path):
 
 def test_en_dash_spellings_of_l_minus():
     """The manuals print `L–`; U+2013, its UTF-8 bytes read as Latin-1 and the cp1252 byte all mean '-'."""
-    from transpiler.preprocess import PPParser, Preprocessor, initial_defines
+    from transpiler.frontend.preprocess import PPParser, Preprocessor, initial_defines
     lines = ("L\u2013 W2", "L\xe2\x80\x93 W4", "L\x96 W6", "\u2013[")
     out = Preprocessor(initial_defines({}), Diagnostics(), PPParser()).run("f.src", lines)
     assert [_parse(line.code)[1] for line in out] == ["L-", "L-", "L-", "-["]

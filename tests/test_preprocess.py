@@ -6,7 +6,7 @@ import pytest
 from test_frontend_support import Found, compile_files, errors, program_ops, warnings
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.preprocess import (PPParser, Preprocessor, initial_defines, parse_define_value, read_config,
+from transpiler.frontend.preprocess import (PPParser, Preprocessor, initial_defines, parse_define_value, read_config,
                                    split_comment)
 
 

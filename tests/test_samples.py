@@ -23,8 +23,8 @@ def test_basic_program_checks_clean(cfg, capsys):
 
 
 def test_basic_program_is_large_and_uses_every_instruction_group():
-    from transpiler.frontend import ProjectOptions
-    from transpiler.pipeline import compile_project
+    from transpiler.frontend.load import ProjectOptions
+    from transpiler.frontend.pipeline import compile_project
     from transpiler.language.semantics import make_semantics
     lines = sum(len(p.read_text(encoding="latin-1").splitlines()) for p in BASIC.iterdir()
                 if p.suffix.lower() in (".src", ".def", ".cfg", ".mp"))

@@ -13,8 +13,8 @@ import pytest
 
 from transpiler.cosim import builtin_side_factory, cosimulate
 from transpiler.diagnostics import Diagnostics
-from transpiler.frontend import ProjectOptions
-from transpiler.pipeline import compile_project
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
 from transpiler.plcopen import extract_st_bodies
 from transpiler.scenario import load_scenario
 from transpiler.language.semantics import make_semantics

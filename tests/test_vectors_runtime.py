@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from tests.vectors import SKIP_REASON, SPEC, Vector, load_vectors
-from transpiler.frontend import ProjectOptions
+from transpiler.frontend.load import ProjectOptions
 from transpiler.interp import Machine
-from transpiler.pipeline import compile_project
+from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import parse_operand, values_equal
 from transpiler.language.semantics import ASSUMPTIONS, PROFILES, make_semantics
 

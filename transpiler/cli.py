@@ -10,9 +10,9 @@ from pathlib import Path
 from typing import Sequence
 
 from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN, explain
-from transpiler.frontend import ProjectOptions
-from transpiler.pipeline import CompileResult, compile_project
-from transpiler.preprocess import parse_define_value
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import CompileResult, compile_project
+from transpiler.frontend.preprocess import parse_define_value
 from transpiler.language.semantics import ASSUMPTION_BY_KEY, PROFILES, SemanticsError, make_semantics
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2

@@ -18,7 +18,7 @@ from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN
 from transpiler.interp import CompiledProgram, compile_program
 from transpiler.iomap import IoMap
 from transpiler.ir import Program
-from transpiler.pipeline import compile_project
+from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
 from transpiler.shim import ShimUnavailable
 from transpiler.simulate import program_operands, project_names, scenario_semantics

@@ -16,8 +16,8 @@ from transpiler.cli import UsageError, options_from_args
 from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program
-from transpiler.parse import MpParser
-from transpiler.pipeline import compile_project
+from transpiler.frontend.parse import MpParser
+from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
 from transpiler.language.semantics import Semantics, PROFILES, SemanticsError, make_semantics
 from transpiler.shim import NcActionError, ShimUnavailable, UnknownModule

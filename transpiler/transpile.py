@@ -11,8 +11,8 @@ from transpiler.diagnostics import Diagnostics, NO_SPAN
 from transpiler.iec_model import Pou
 from transpiler.iomap import IoMap, MapRow
 from transpiler.ir import Program
-from transpiler.parse import MpParser
-from transpiler.sources import ProjectFolders, read_source
+from transpiler.frontend.parse import MpParser
+from transpiler.frontend.sources import ProjectFolders, read_source
 from transpiler.st.backend import StBackend, StResult
 from transpiler.st.liveness import use_def
 

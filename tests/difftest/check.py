@@ -10,11 +10,11 @@ from typing import Callable
 from transpiler.cosim import CosimResult, Divergence, builtin_side_factory, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.equiv import random_scenario
-from transpiler.frontend import ProjectOptions
+from transpiler.frontend.load import ProjectOptions
 from transpiler.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.iomap import IoMap
-from transpiler.pipeline import compile_project
+from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import NameTable, Scenario
 from transpiler.language.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names

@@ -12,7 +12,7 @@ from transpiler.iec_model import (ArrayDim, Configuration, DataType, IecProject,
                          Task, VarSection)
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
-from transpiler.resolve import routine_body
+from transpiler.frontend.resolve import routine_body
 from transpiler.st import library
 from transpiler.st.layout import GlobalVar, Layout
 from transpiler.st.liveness import Liveness

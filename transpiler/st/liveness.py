@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Iterable
 
 from transpiler.ir import CallTarget, Op, Program
-from transpiler.resolve import routine_body, successors
+from transpiler.frontend.resolve import routine_body, successors
 
 REGS = ("LA", "WA", "SA", "X")
 _LA_USE = {"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",

@@ -10,7 +10,7 @@ from typing import Callable, Mapping, NamedTuple, Union
 from lark import LarkError, Transformer
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.grammars import lalr_parser
+from transpiler.frontend.grammars import lalr_parser
 
 DefineValue = Union[int, str]
 

@@ -6,13 +6,13 @@ import dataclasses
 from pathlib import Path
 from typing import Iterator, Mapping
 
-from transpiler import ast
+from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span, NO_SPAN
-from transpiler.parse import DefParser, SrcParser
-from transpiler.preprocess import (DefineValue, Defines, InactiveRegion, PPParser, Preprocessor, find_default_cfg,
+from transpiler.frontend.parse import DefParser, SrcParser
+from transpiler.frontend.preprocess import (DefineValue, Defines, InactiveRegion, PPParser, Preprocessor, find_default_cfg,
                          initial_defines, read_config)
 from transpiler.language.semantics import Semantics
-from transpiler.sources import ProjectFolders, SourceText, read_source
+from transpiler.frontend.sources import ProjectFolders, SourceText, read_source
 
 
 MAX_DEF_NESTING = 64          # #define inside definition files

@@ -10,11 +10,11 @@ from typing import Iterable, Iterator
 from lark import LarkError, Token, Transformer
 from lark.exceptions import UnexpectedInput, VisitError
 
-from transpiler import ast
+from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.grammars import lalr_parser
+from transpiler.frontend.grammars import lalr_parser
 from transpiler.language.mnemonics import MNEMONICS, canonical
-from transpiler.preprocess import Line, split_comment
+from transpiler.frontend.preprocess import Line, split_comment
 
 INT32_MIN, INT32_MAX = -(2 ** 31), 2 ** 31 - 1
 UINT32_MAX = 2 ** 32 - 1

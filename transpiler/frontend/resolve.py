@@ -6,9 +6,9 @@ import dataclasses
 import re
 from typing import Iterable
 
-from transpiler import ast
+from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.frontend import ParsedProject
+from transpiler.frontend.load import ParsedProject
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Bracket, CallTarget, FileCode, Op, Operand, Program, Symbol
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.modules import MODULES

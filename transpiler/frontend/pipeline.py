@@ -7,9 +7,9 @@ import dataclasses
 import gc
 
 from transpiler.diagnostics import Diagnostics
-from transpiler.frontend import Parsers, ProjectOptions, load_project
+from transpiler.frontend.load import Parsers, ProjectOptions, load_project
 from transpiler.ir import Program
-from transpiler.resolve import resolve
+from transpiler.frontend.resolve import resolve
 from transpiler.language.semantics import Semantics
 
 
