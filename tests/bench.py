@@ -78,7 +78,7 @@ MATIEC_TARGET = 10.0   # seconds for 10 000 cycles of the sample with matiec, in
 def bench_transpile(lines: int = 100_000) -> dict:
     """ST backend + ST writer + PLCopen XML writer on the generated 100 000-line project (front end excluded)."""
     from transpiler.diagnostics import Diagnostics
-    from transpiler.transpile import transpile_program
+    from transpiler.backends.transpile import transpile_program
     with tempfile.TemporaryDirectory(prefix="hh2iec-bench-") as tmp:
         main = generate_project(Path(tmp), lines)
         result = compile_project(ProjectOptions(main=main), make_semantics("itnc530", {}))
@@ -101,8 +101,8 @@ def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
     from transpiler.diagnostics import Diagnostics
     from transpiler.equiv import random_scenario
     from transpiler.simulate import project_names
-    from transpiler.st_check import find_iec2c
-    from transpiler.transpile import io_map_of, read_mp_file, transpile_program
+    from transpiler.backends.st.check import find_iec2c
+    from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program
     result = compile_project(ProjectOptions(main=SAMPLE), make_semantics("itnc530", {}))
     diags = Diagnostics()
     out = transpile_program(result.program, diags, read_mp_file(SAMPLE.parent / "MP_data.mp", diags), {"st"})

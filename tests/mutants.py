@@ -41,8 +41,8 @@ from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 from transpiler.simulate import program_operands, project_names  # noqa: E402
-from transpiler.st_check import find_iec2c  # noqa: E402
-from transpiler.transpile import io_map_of, read_mp_file, transpile_program  # noqa: E402
+from transpiler.backends.st.check import find_iec2c  # noqa: E402
+from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program  # noqa: E402
 
 SAMPLE = ROOT / "samples" / "basic_program"
 TARGET = 0.90

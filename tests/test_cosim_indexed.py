@@ -20,8 +20,8 @@ from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import load_scenario
 from transpiler.language.semantics import make_semantics
 from transpiler.simulate import project_names
-from transpiler.st_check import find_iec2c
-from transpiler.transpile import io_map_of, transpile_program
+from transpiler.backends.st.check import find_iec2c
+from transpiler.backends.transpile import io_map_of, transpile_program
 
 ROOT = Path(__file__).resolve().parents[1]
 

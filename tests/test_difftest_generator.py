@@ -28,7 +28,7 @@ from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import OperandRef  # noqa: E402
 from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
 from transpiler.stimulus import Write  # noqa: E402
-from transpiler.transpile import read_mp_file  # noqa: E402
+from transpiler.backends.transpile import read_mp_file  # noqa: E402
 
 COVERAGE_SEEDS = range(1, 101)
 

@@ -15,7 +15,7 @@ from transpiler.cosim import builtin_side_factory, cosimulate
 from transpiler.equiv import random_scenario, shrink
 from transpiler.scenario import load_scenario
 from transpiler.simulate import project_names
-from transpiler.transpile import io_map_of
+from transpiler.backends.transpile import io_map_of
 
 from test_st_backend import SAMPLE, transpile_sample, transpile_vector
 from vectors import SKIP_REASON, SPEC, load_vectors, vector_scenario_yaml
@@ -117,11 +117,11 @@ def test_cli_equiv_sample_is_equivalent(tmp_path):
     assert "EQUIVALENT" in proc.stdout and "backend builtin" in proc.stdout and "coverage:" in proc.stdout
 
 
-@pytest.mark.skipif(__import__("transpiler.st_check", fromlist=["find_iec2c"]).find_iec2c() is None,
+@pytest.mark.skipif(__import__("transpiler.backends.st.check", fromlist=["find_iec2c"]).find_iec2c() is None,
                     reason="iec2c not found ($MATIEC_HOME/iec2c or PATH): the matiec co-simulation backend is skipped")
 def test_sample_is_equivalent_on_matiec(sample):
     from transpiler.matiec_side import matiec_side_factory
-    from transpiler.st_check import find_iec2c
+    from transpiler.backends.st.check import find_iec2c
     program, out, _, iomap, names = sample
     factory = matiec_side_factory(out.st_text, out.result.project, find_iec2c())
     for name in ("spindle_m3_m5", "tool_call_magazine"):
@@ -132,7 +132,7 @@ def test_sample_is_equivalent_on_matiec(sample):
     assert result.divergence is not None
 
 
-@pytest.mark.skipif(__import__("transpiler.st_check", fromlist=["find_iec2c"]).find_iec2c() is None,
+@pytest.mark.skipif(__import__("transpiler.backends.st.check", fromlist=["find_iec2c"]).find_iec2c() is None,
                     reason="iec2c not found ($MATIEC_HOME/iec2c or PATH): the matiec co-simulation backend is skipped")
 @pytest.mark.parametrize("project", ["samples/constructs/byte_overlap/main.src", "samples/constructs/indexed/main.src",
                                      "samples/constructs/strings/main.src"])
@@ -145,8 +145,8 @@ def test_matiec_bulk_read_agrees_with_single_reads(project):
     from transpiler.matiec_side import matiec_side_factory
     from transpiler.frontend.pipeline import compile_project
     from transpiler.language.semantics import make_semantics
-    from transpiler.st_check import find_iec2c
-    from transpiler.transpile import transpile_program
+    from transpiler.backends.st.check import find_iec2c
+    from transpiler.backends.transpile import transpile_program
     program = compile_project(ProjectOptions(main=ROOT / project), make_semantics("itnc530", {})).program
     out = transpile_program(program, Diagnostics(), {}, {"st"})
     iomap = io_map_of(out.result)

@@ -14,8 +14,9 @@ import pytest
 from lxml import etree
 from test_st_writer import NASTY, rich_project
 
-from transpiler import atomic, xsd
-from transpiler.iec_model import (
+from transpiler import atomic
+from transpiler.backends.plcopen import xsd
+from transpiler.backends.iec_model import (
     Configuration,
     DataType,
     IecProject,
@@ -26,8 +27,8 @@ from transpiler.iec_model import (
     Task,
     VarSection,
 )
-from transpiler.plcopen import extract_st_bodies, render_xml
-from transpiler.st_writer import extract_pou_bodies, render_st
+from transpiler.backends.plcopen.writer import extract_st_bodies, render_xml
+from transpiler.backends.st.writer import extract_pou_bodies, render_st
 
 NS = {"p": "http://www.plcopen.org/xml/tc6_0201", "x": "http://www.w3.org/1999/xhtml", "hh": "urn:hh2iec:sourcemap"}
 EPOCH = "1700000000"

@@ -15,14 +15,14 @@ from transpiler.cosim import builtin_side_factory, cosimulate
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
-from transpiler.plcopen import extract_st_bodies
+from transpiler.backends.plcopen.writer import extract_st_bodies
 from transpiler.scenario import load_scenario
 from transpiler.language.semantics import make_semantics
 from transpiler.simulate import project_names
-from transpiler.st_check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
-from transpiler.st_writer import extract_pou_bodies
-from transpiler.transpile import io_map_of, read_mp_file, transpile_program
-from transpiler.xsd import schema_path, validate_xml
+from transpiler.backends.st.check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
+from transpiler.backends.st.writer import extract_pou_bodies
+from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program
+from transpiler.backends.plcopen.xsd import schema_path, validate_xml
 
 from vectors import SKIP_REASON, SPEC, load_vectors
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from test_st_writer import rich_project
 
-from transpiler import st_check
-from transpiler.plcopen import extract_st_bodies, render_xml
-from transpiler.st_writer import extract_pou_bodies, render_st
+from transpiler.backends.st import check as st_check
+from transpiler.backends.plcopen.writer import extract_st_bodies, render_xml
+from transpiler.backends.st.writer import extract_pou_bodies, render_st
 
 BROKEN_PROGRAM = """\
 PROGRAM P

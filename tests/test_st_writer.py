@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from transpiler.iec_model import (
+from transpiler.backends.iec_model import (
     ArrayDim,
     Configuration,
     DataType,
@@ -19,7 +19,7 @@ from transpiler.iec_model import (
     Task,
     VarSection,
 )
-from transpiler.st_writer import extract_pou_bodies, render_st
+from transpiler.backends.st.writer import extract_pou_bodies, render_st
 
 # Comment text that must survive every container: XML specials, a CDATA terminator,
 # ST comment markers, non-ASCII, a control character and a line break.
@@ -242,7 +242,7 @@ def _unwritable_projects() -> list[tuple[str, IecProject]]:
 
 @pytest.mark.parametrize(("message", "project"), _unwritable_projects())
 def test_unwritable_models_are_refused_by_both_containers(message: str, project: IecProject) -> None:
-    from transpiler.plcopen import render_xml
+    from transpiler.backends.plcopen.writer import render_xml
 
     with pytest.raises(ValueError, match=message):
         render_st(project)

@@ -9,7 +9,7 @@ from pathlib import Path
 from transpiler.atomic import write_files_atomically
 from transpiler.cli import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
 from transpiler.diagnostics import NO_SPAN
-from transpiler.transpile import find_mp_file, read_mp_file, transpile_program, user_pous
+from transpiler.backends.transpile import find_mp_file, read_mp_file, transpile_program, user_pous
 
 
 def register(sub, common) -> None:
@@ -42,7 +42,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     out = transpile_program(result.program, diags, mp, formats)
     if "xml" in formats:
-        from transpiler.xsd import FETCH_HINT, schema_path, validate_xml
+        from transpiler.backends.plcopen.xsd import FETCH_HINT, schema_path, validate_xml
         if schema_path() is None:
             print(f"note: the PLCopen schema is not cached, project.xml was not validated. {FETCH_HINT}", file=sys.stderr)
         else:
@@ -66,7 +66,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
 
 
 def cmd_fetch_schema(args: argparse.Namespace) -> int:
-    from transpiler.xsd import SchemaUnavailable, fetch_schema
+    from transpiler.backends.plcopen.xsd import SchemaUnavailable, fetch_schema
     try:
         path = fetch_schema()
     except SchemaUnavailable as exc:

@@ -11,7 +11,7 @@ from transpiler.interp.machine import Machine
 from transpiler.interp.state import byte_cells
 from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics
-from transpiler.iomap import Accessor, IoMap
+from transpiler.backends.report.iomap import Accessor, IoMap
 from transpiler.ir import Program
 from transpiler.scenario import NameTable, OperandRef, Scenario
 from transpiler.shim import HandshakeTimeout, NcModel

@@ -16,7 +16,7 @@ from transpiler.atomic import write_files_atomically
 from transpiler.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN
 from transpiler.interp import CompiledProgram, compile_program
-from transpiler.iomap import IoMap
+from transpiler.backends.report.iomap import IoMap
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
@@ -24,7 +24,7 @@ from transpiler.shim import ShimUnavailable
 from transpiler.simulate import program_operands, project_names, scenario_semantics
 from transpiler.stimulus import materialize_random, scenario_to_yaml
 from transpiler.traces import TraceRecorder
-from transpiler.transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
+from transpiler.backends.transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
 
 SHRINK_BUDGET = 150
 
@@ -222,7 +222,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
 
 
 def _backend(choice: str, st_text: str, st_name: str, transpiled) -> tuple[str, Callable[[], StSide] | None, str]:
-    from transpiler.st_check import find_iec2c
+    from transpiler.backends.st.check import find_iec2c
     if choice in ("auto", "matiec"):
         iec2c = find_iec2c()
         if iec2c is not None:

@@ -13,9 +13,9 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from transpiler.iec_model import IecProject
-from transpiler.iomap import Place
-from transpiler.st_check import matiec_home
+from transpiler.backends.iec_model import IecProject
+from transpiler.backends.report.iomap import Place
+from transpiler.backends.st.check import matiec_home
 
 SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
            "UINT": "UINT", "UDINT": "UDINT", "BYTE": "BYTE", "WORD": "WORD", "DWORD": "DWORD"}

@@ -13,15 +13,15 @@ from transpiler.equiv import random_scenario
 from transpiler.frontend.load import ProjectOptions
 from transpiler.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
-from transpiler.iomap import IoMap
+from transpiler.backends.report.iomap import IoMap
 from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import NameTable, Scenario
 from transpiler.language.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names
 from transpiler.simulate import run_scenario as simulate
-from transpiler.st_check import find_iec2c
+from transpiler.backends.st.check import find_iec2c
 from transpiler.stexec.typesys import STR_MAX
-from transpiler.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
+from transpiler.backends.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
 
 # Verdicts. "invalid" means the project is not a well-defined program (front-end errors or a runtime fault of the
 # reference interpreter): the generator is to blame, not the translator.

@@ -5,12 +5,12 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from transpiler.iec_model import st_comment
+from transpiler.backends.iec_model import st_comment
 from transpiler.ir import BYTES, Op, Operand
-from transpiler.st import exprs as E
-from transpiler.st.exprs import Expr
-from transpiler.st.layout import Layout
-from transpiler.st.liveness import REGS
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.exprs import Expr
+from transpiler.backends.st.layout import Layout
+from transpiler.backends.st.liveness import REGS
 
 REL = {"==": "=", "<>": "<>", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 WIDTH_TYPE = {8: "SINT", 16: "INT", 32: "DINT"}

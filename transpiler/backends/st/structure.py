@@ -5,11 +5,11 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from transpiler.iec_model import st_comment
+from transpiler.backends.iec_model import st_comment
 from transpiler.ir import CallTarget, FileCode, Op
-from transpiler.st import exprs as E
-from transpiler.st.liveness import REGS
-from transpiler.st.symbolic import Executor, Unsupported
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.liveness import REGS
+from transpiler.backends.st.symbolic import Executor, Unsupported
 
 JUMPS = ("JP", "JPT", "JPF")
 

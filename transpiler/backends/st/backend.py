@@ -8,17 +8,17 @@ from decimal import Decimal
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
+from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
                          Task, VarSection)
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
-from transpiler.st import library
-from transpiler.st.layout import GlobalVar, Layout
-from transpiler.st.liveness import Liveness
-from transpiler.st.names import TEMP_PREFIX, NameTable
-from transpiler.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
-from transpiler.st.symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
+from transpiler.backends.st import library
+from transpiler.backends.st.layout import GlobalVar, Layout
+from transpiler.backends.st.liveness import Liveness
+from transpiler.backends.st.names import TEMP_PREFIX, NameTable
+from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
+from transpiler.backends.st.symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
 
 GROUP_TITLES = {"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
                 "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",

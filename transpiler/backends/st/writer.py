@@ -7,9 +7,9 @@ from pathlib import Path
 
 import jinja2
 
-from transpiler.iec_model import IecProject, IecVar, VarSection, st_comment
+from transpiler.backends.iec_model import IecProject, IecVar, VarSection, st_comment
 
-TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates" / "st"
+TEMPLATE_DIR = Path(__file__).resolve().parents[3] / "templates" / "st"
 BODY_INDENT = "    "
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")

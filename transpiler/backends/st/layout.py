@@ -6,8 +6,8 @@ import dataclasses
 from collections import defaultdict
 
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
-from transpiler.st import exprs as E
-from transpiler.st.names import NameTable
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.names import NameTable
 
 MEM_TYPE = {"B": "SINT", "W": "INT", "D": "DINT"}
 BYTE_ARRAY_TYPE = "T_HH_MEM"

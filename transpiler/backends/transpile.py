@@ -8,13 +8,13 @@ from pathlib import Path
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics, NO_SPAN
-from transpiler.iec_model import Pou
-from transpiler.iomap import IoMap, MapRow
+from transpiler.backends.iec_model import Pou
+from transpiler.backends.report.iomap import IoMap, MapRow
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.sources import ProjectFolders, read_source
-from transpiler.st.backend import StBackend, StResult
-from transpiler.st.liveness import use_def
+from transpiler.backends.st.backend import StBackend, StResult
+from transpiler.backends.st.liveness import use_def
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,8 +42,8 @@ def read_mp_file(path: Path, diags: Diagnostics) -> dict[tuple[int, int], Decima
 
 def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
                       formats: set[str]) -> Transpiled:
-    from transpiler.plcopen import render_xml
-    from transpiler.st_writer import render_st
+    from transpiler.backends.plcopen.writer import render_xml
+    from transpiler.backends.st.writer import render_st
     result = StBackend(program, diags, mp).build()
     project = result.project
     files: dict[str, bytes] = {}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from transpiler.iec_model import IecVar, Pou, VarSection
+from transpiler.backends.iec_model import IecVar, Pou, VarSection
 from transpiler.language.semantics import Semantics
 
 

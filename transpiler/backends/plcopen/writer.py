@@ -16,8 +16,8 @@ from datetime import datetime, timezone
 
 from lxml import etree
 
-from transpiler.iec_model import DataType, IecProject, IecVar, Pou, VarSection
-from transpiler.st_writer import check_formattable
+from transpiler.backends.iec_model import DataType, IecProject, IecVar, Pou, VarSection
+from transpiler.backends.st.writer import check_formattable
 
 NS = "http://www.plcopen.org/xml/tc6_0201"
 XHTML = "http://www.w3.org/1999/xhtml"
