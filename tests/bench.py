@@ -16,7 +16,7 @@ if str(ROOT) not in sys.path:
 
 from tests.bench_frontend import bench_frontend, generate_project  # noqa: E402
 from transpiler.frontend.load import ProjectOptions  # noqa: E402
-from transpiler.interp import Machine, compile_program  # noqa: E402
+from transpiler.exec.interp import Machine, compile_program  # noqa: E402
 from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
@@ -110,7 +110,7 @@ def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
     factories = {"builtin": (cycles, builtin_side_factory(out.st_text))}
     iec2c = find_iec2c()
     if iec2c is not None:
-        from transpiler.matiec_side import matiec_side_factory
+        from transpiler.exec.compiled.matiec_side import matiec_side_factory
         factories["matiec"] = (MATIEC_CYCLES, matiec_side_factory(out.st_text, out.result.project, iec2c))
     else:
         print("co-simulation, matiec backend: skipped (iec2c not found; set MATIEC_HOME)")

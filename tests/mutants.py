@@ -36,7 +36,7 @@ from transpiler.cosim import builtin_side_factory, cosimulate  # noqa: E402
 from transpiler.diagnostics import CompileFailed, Diagnostics  # noqa: E402
 from transpiler.equiv import random_scenario  # noqa: E402
 from transpiler.frontend.load import ProjectOptions  # noqa: E402
-from transpiler.interp import compile_program  # noqa: E402
+from transpiler.exec.interp import compile_program  # noqa: E402
 from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
@@ -344,7 +344,7 @@ class Harness:
 
     def side_factory(self, st_text: str) -> Callable:
         if self.backend == "matiec":
-            from transpiler.matiec_side import matiec_side_factory
+            from transpiler.exec.compiled.matiec_side import matiec_side_factory
             return matiec_side_factory(st_text, self.out.result.project, self.iec2c)
         return builtin_side_factory(st_text)
 

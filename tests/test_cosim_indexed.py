@@ -71,7 +71,7 @@ def project(tmp_path_factory):
 def _run(project, st_text: str, backend: str = "builtin"):
     _, program, out, names, scenario = project
     if backend == "matiec":
-        from transpiler.matiec_side import matiec_side_factory
+        from transpiler.exec.compiled.matiec_side import matiec_side_factory
         factory = matiec_side_factory(st_text, out.result.project, find_iec2c())
     else:
         factory = builtin_side_factory(st_text)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from tests.difftest.check import MISMATCH, OK, TARGET_LIMIT, judge
 from transpiler.cosim import CosimResult, Divergence
-from transpiler.stexec.typesys import STR_MAX
+from transpiler.exec.stexec.typesys import STR_MAX
 
 
 def _result(backend: str, divergence: Divergence | None) -> CosimResult:

@@ -22,7 +22,7 @@ from tests.difftest.generator import (  # noqa: E402
     FEATURES, KNOWN_DIVERGENT, GeneratedProject, default_features, generate, main as generator_main)
 from transpiler.diagnostics import Diagnostics  # noqa: E402
 from transpiler.frontend.load import ProjectOptions  # noqa: E402
-from transpiler.interp import Machine  # noqa: E402
+from transpiler.exec.interp import Machine  # noqa: E402
 from transpiler.language.mnemonics import MNEMONICS, canonical  # noqa: E402
 from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.scenario import OperandRef  # noqa: E402

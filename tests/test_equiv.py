@@ -120,7 +120,7 @@ def test_cli_equiv_sample_is_equivalent(tmp_path):
 @pytest.mark.skipif(__import__("transpiler.backends.st.check", fromlist=["find_iec2c"]).find_iec2c() is None,
                     reason="iec2c not found ($MATIEC_HOME/iec2c or PATH): the matiec co-simulation backend is skipped")
 def test_sample_is_equivalent_on_matiec(sample):
-    from transpiler.matiec_side import matiec_side_factory
+    from transpiler.exec.compiled.matiec_side import matiec_side_factory
     from transpiler.backends.st.check import find_iec2c
     program, out, _, iomap, names = sample
     factory = matiec_side_factory(out.st_text, out.result.project, find_iec2c())
@@ -142,7 +142,7 @@ def test_matiec_bulk_read_agrees_with_single_reads(project):
     from transpiler.cosim import comparison_for
     from transpiler.diagnostics import Diagnostics
     from transpiler.frontend.load import ProjectOptions
-    from transpiler.matiec_side import matiec_side_factory
+    from transpiler.exec.compiled.matiec_side import matiec_side_factory
     from transpiler.frontend.pipeline import compile_project
     from transpiler.language.semantics import make_semantics
     from transpiler.backends.st.check import find_iec2c

@@ -12,8 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from transpiler.frontend.load import ProjectOptions
-from transpiler.interp import Machine, MachineConfigError, MachineHalted, compile_program
-from transpiler.interp.faults import CycleReport
+from transpiler.exec.interp import Machine, MachineConfigError, MachineHalted, compile_program
+from transpiler.exec.interp.faults import CycleReport
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import Semantics, make_semantics

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from tests.test_interp import compile_text, cycles, fault_of, machine, ref, values, with_setting
-from transpiler.interp import Machine, MachineConfigError
+from transpiler.exec.interp import Machine, MachineConfigError
 from transpiler.language.semantics import make_semantics
 
 

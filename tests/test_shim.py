@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from transpiler import shim
+from transpiler.exec.compiled import shim
 
 ROOT = Path(__file__).resolve().parent.parent
 SPEC = ROOT.parent / "shared" / "spec" / "heidenhain-plc.md"

@@ -8,7 +8,7 @@ import time
 import pytest
 
 from transpiler.diagnostics import CompileFailed
-from transpiler.stexec import StError, StRuntimeError, load_st
+from transpiler.exec.stexec import StError, StRuntimeError, load_st
 
 CONFIG = """
 CONFIGURATION Cfg

@@ -9,7 +9,7 @@ import pytest
 
 from tests.vectors import SKIP_REASON, SPEC, Vector, load_vectors
 from transpiler.frontend.load import ProjectOptions
-from transpiler.interp import Machine
+from transpiler.exec.interp import Machine
 from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import parse_operand, values_equal
 from transpiler.language.semantics import ASSUMPTIONS, PROFILES, make_semantics

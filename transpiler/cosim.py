@@ -6,15 +6,15 @@ import dataclasses
 import time
 from typing import Callable, Iterable, Protocol, Sequence
 
-from transpiler.interp import CompiledProgram
-from transpiler.interp.machine import Machine
-from transpiler.interp.state import byte_cells
+from transpiler.exec.interp import CompiledProgram
+from transpiler.exec.interp.machine import Machine
+from transpiler.exec.interp.state import byte_cells
 from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics
 from transpiler.backends.report.iomap import Accessor, IoMap
 from transpiler.ir import Program
 from transpiler.scenario import NameTable, OperandRef, Scenario
-from transpiler.shim import HandshakeTimeout, NcModel
+from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.simulate import build_machine, machine_parameters, program_operands
 from transpiler.stimulus import Stimulus, build_stimulus
 
@@ -279,7 +279,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
-    from transpiler.stexec import load_st
+    from transpiler.exec.stexec import load_st
     project = load_st(st_text, filename)
 
     class _Side:

@@ -15,12 +15,12 @@ from transpiler.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, opt
 from transpiler.atomic import write_files_atomically
 from transpiler.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN
-from transpiler.interp import CompiledProgram, compile_program
+from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.backends.report.iomap import IoMap
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
-from transpiler.shim import ShimUnavailable
+from transpiler.exec.compiled.shim import ShimUnavailable
 from transpiler.simulate import program_operands, project_names, scenario_semantics
 from transpiler.stimulus import materialize_random, scenario_to_yaml
 from transpiler.traces import TraceRecorder
@@ -227,7 +227,7 @@ def _backend(choice: str, st_text: str, st_name: str, transpiled) -> tuple[str, 
         iec2c = find_iec2c()
         if iec2c is not None:
             try:
-                from transpiler.matiec_side import matiec_side_factory
+                from transpiler.exec.compiled.matiec_side import matiec_side_factory
                 return "matiec", matiec_side_factory(st_text, transpiled.result.project, iec2c), ""
             except ImportError:
                 if choice == "matiec":

@@ -14,13 +14,13 @@ import yaml
 
 from transpiler.cli import UsageError, options_from_args
 from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
-from transpiler.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
+from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.pipeline import compile_project
 from transpiler.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
 from transpiler.language.semantics import Semantics, PROFILES, SemanticsError, make_semantics
-from transpiler.shim import NcActionError, ShimUnavailable, UnknownModule
+from transpiler.exec.compiled.shim import NcActionError, ShimUnavailable, UnknownModule
 from transpiler.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
 from transpiler.traces import TraceRecorder
 

@@ -11,7 +11,7 @@ from transpiler.cosim import CosimResult, Divergence, builtin_side_factory, cosi
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.equiv import random_scenario
 from transpiler.frontend.load import ProjectOptions
-from transpiler.interp import CompiledProgram, compile_program
+from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.backends.report.iomap import IoMap
 from transpiler.frontend.pipeline import compile_project
@@ -20,7 +20,7 @@ from transpiler.language.semantics import make_semantics
 from transpiler.simulate import build_machine, project_names
 from transpiler.simulate import run_scenario as simulate
 from transpiler.backends.st.check import find_iec2c
-from transpiler.stexec.typesys import STR_MAX
+from transpiler.exec.stexec.typesys import STR_MAX
 from transpiler.backends.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
 
 # Verdicts. "invalid" means the project is not a well-defined program (front-end errors or a runtime fault of the
@@ -82,7 +82,7 @@ def side_factories(prepared: Prepared, backends: tuple[str, ...]) -> dict[str, C
             if backend == "builtin":
                 factories[backend] = builtin_side_factory(st_text)
             else:
-                from transpiler.matiec_side import matiec_side_factory
+                from transpiler.exec.compiled.matiec_side import matiec_side_factory
                 factories[backend] = matiec_side_factory(st_text, prepared.transpiled.result.project, find_iec2c())
         except CompileFailed as exc:
             first = exc.diagnostics[0].render() if exc.diagnostics else str(exc)

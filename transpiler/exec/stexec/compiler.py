@@ -7,15 +7,15 @@ import math
 from typing import Optional
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.stexec import nodes as n
-from transpiler.stexec import typesys as T
-from transpiler.stexec.codegen import (Context, Ex, PouCompiler, default_code, location_attr, normalise_address,
+from transpiler.exec.stexec import nodes as n
+from transpiler.exec.stexec import typesys as T
+from transpiler.exec.stexec.codegen import (Context, Ex, PouCompiler, default_code, location_attr, normalise_address,
                                        storage_attr)
-from transpiler.stexec.errors import ST_CODE, StError
-from transpiler.stexec.model import CompiledProject, PouInfo, ProgramInstance, TaskInfo, VarInfo
-from transpiler.stexec.parser import parse
-from transpiler.stexec.prelude import prelude_text
-from transpiler.stexec.stdlib import is_standard_name
+from transpiler.exec.stexec.errors import ST_CODE, StError
+from transpiler.exec.stexec.model import CompiledProject, PouInfo, ProgramInstance, TaskInfo, VarInfo
+from transpiler.exec.stexec.parser import parse
+from transpiler.exec.stexec.prelude import prelude_text
+from transpiler.exec.stexec.stdlib import is_standard_name
 
 PRELUDE_FILE = "<iec-standard-library>"
 # The type an address's size prefix implies: its width must match a declaration, and it types an undeclared use.

@@ -24,14 +24,14 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.ir import Program
-from transpiler.shim import HandshakeTimeout, NcModel, SysModules
-from transpiler.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
-from transpiler.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from transpiler.interp.state import MachineState, byte_cells, sext
-from transpiler.interp.submit import SubmitQueue
-from transpiler.interp.support import Runtime
+from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel, SysModules
+from transpiler.exec.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
+from transpiler.exec.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
+from transpiler.exec.interp.state import MachineState, byte_cells, sext
+from transpiler.exec.interp.submit import SubmitQueue
+from transpiler.exec.interp.support import Runtime
 from transpiler.language.presets import load_presets
-from transpiler.interp.timers import TimerService
+from transpiler.exec.interp.timers import TimerService
 
 PSEUDO = ("LA", "WA", "X", "SA")
 WriteLike = Any   # stimulus.Write (ref, value, name), or a (kind, addr, value) tuple

@@ -30,7 +30,7 @@ from typing import Callable
 
 from transpiler.ir import FileCode, Op, Operand, Program
 from transpiler.language.semantics import Semantics
-from transpiler.interp.state import space_size
+from transpiler.exec.interp.state import space_size
 
 GENERATED_FILENAME = "<hh2iec-interp>"
 _GROUP = 8                      # blocks per leaf of the dispatch tree

@@ -10,8 +10,8 @@ from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from transpiler.diagnostics import Span
-from transpiler.stexec import nodes as n
-from transpiler.stexec.errors import StError, st_diag
+from transpiler.exec.stexec import nodes as n
+from transpiler.exec.stexec.errors import StError, st_diag
 
 _GRAMMAR = pathlib.Path(__file__).with_name("grammar.lark")
 

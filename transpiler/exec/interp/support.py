@@ -6,10 +6,10 @@ import collections
 from typing import Callable
 
 from transpiler.language.semantics import Semantics
-from transpiler.shim import SysModules
-from transpiler.interp.faults import BudgetExceeded, Fault, JobCancelled
-from transpiler.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
-from transpiler.interp.submit import SubmitQueue
+from transpiler.exec.compiled.shim import SysModules
+from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
+from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
+from transpiler.exec.interp.submit import SubmitQueue
 
 _TO_CHARS = bytes.maketrans(b"\x00\x01", b"01")
 _FROM_CHARS = bytes.maketrans(b"01", b"\x00\x01")

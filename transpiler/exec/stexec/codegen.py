@@ -7,11 +7,11 @@ import re
 from typing import Any, Callable, Optional
 
 from transpiler.diagnostics import Span
-from transpiler.stexec import nodes as n
-from transpiler.stexec import typesys as T
-from transpiler.stexec.errors import Trap
-from transpiler.stexec.model import PouInfo, VarInfo
-from transpiler.stexec.rtlib import f32, idiv, imod, wrap_int
+from transpiler.exec.stexec import nodes as n
+from transpiler.exec.stexec import typesys as T
+from transpiler.exec.stexec.errors import Trap
+from transpiler.exec.stexec.model import PouInfo, VarInfo
+from transpiler.exec.stexec.rtlib import f32, idiv, imod, wrap_int
 
 # Python operator precedence levels, used to parenthesise only where needed (deep parentheses nesting
 # makes CPython's parser fail on long AND/OR chains).
@@ -438,7 +438,7 @@ class PouCompiler:
         elif isinstance(node, n.Index):
             ex = self.index_ex(node)
         elif isinstance(node, n.Call):
-            from transpiler.stexec.stdlib import compile_call
+            from transpiler.exec.stexec.stdlib import compile_call
             return compile_call(self, node)
         elif isinstance(node, n.Unary):
             return self.unary(node)
@@ -763,7 +763,7 @@ class PouCompiler:
             self.emit(line)
 
     def s_callstmt(self, s: n.CallStmt) -> None:
-        from transpiler.stexec.stdlib import compile_call_stmt
+        from transpiler.exec.stexec.stdlib import compile_call_stmt
         compile_call_stmt(self, s)
 
     def s_if(self, s: n.If) -> None:

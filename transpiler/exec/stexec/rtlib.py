@@ -6,8 +6,8 @@ import math
 import re
 import struct
 
-from transpiler.stexec.errors import Trap
-from transpiler.stexec.typesys import STR_MAX
+from transpiler.exec.stexec.errors import Trap
+from transpiler.exec.stexec.typesys import STR_MAX
 
 _F32 = struct.Struct("<f")
 _INF = math.inf

@@ -6,8 +6,8 @@ import dataclasses
 from typing import Any, Optional
 
 from transpiler.diagnostics import Span
-from transpiler.stexec import nodes as n
-from transpiler.stexec.typesys import FbT, Type, is_aggregate
+from transpiler.exec.stexec import nodes as n
+from transpiler.exec.stexec.typesys import FbT, Type, is_aggregate
 
 
 @dataclasses.dataclass

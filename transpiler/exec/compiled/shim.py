@@ -11,7 +11,7 @@ from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence, TypeVar
 
-SHIM_DIR = Path(__file__).resolve().parent.parent / "runtime_shim"
+SHIM_DIR = Path(__file__).resolve().parents[3] / "runtime_shim"
 LIB_NAME = "libhhshim.so"
 
 # Mirrors of the C constants (hh_nc.h, hh_modules.h).

@@ -5,12 +5,12 @@ from __future__ import annotations
 from typing import Optional
 
 from transpiler.diagnostics import Span
-from transpiler.stexec import nodes as n
-from transpiler.stexec import typesys as T
-from transpiler.stexec.codegen import (ERR_EX, P_ADD, P_ATOM, P_BAND, P_CMP, P_COND, Ex, PouCompiler, const_ex,
+from transpiler.exec.stexec import nodes as n
+from transpiler.exec.stexec import typesys as T
+from transpiler.exec.stexec.codegen import (ERR_EX, P_ADD, P_ATOM, P_BAND, P_CMP, P_COND, Ex, PouCompiler, const_ex,
                                        paren)
-from transpiler.stexec.model import PouInfo
-from transpiler.stexec.rtlib import real_to_int, time_to_secs
+from transpiler.exec.stexec.model import PouInfo
+from transpiler.exec.stexec.rtlib import real_to_int, time_to_secs
 
 # Standard function name -> formal parameter names (a trailing "..." means more numbered inputs may follow).
 _SIGNATURES: dict[str, tuple[str, ...]] = {
