@@ -97,10 +97,10 @@ def bench_transpile(lines: int = 100_000) -> dict:
 
 def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
     """Co-simulation cycles per second on the sample project for each available ST backend (compile excluded)."""
-    from transpiler.cosim import builtin_side_factory, cosimulate
+    from transpiler.verify.cosim import builtin_side_factory, cosimulate
     from transpiler.diagnostics import Diagnostics
-    from transpiler.equiv import random_scenario
-    from transpiler.simulate import project_names
+    from transpiler.verify.equiv import random_scenario
+    from transpiler.verify.simulate import project_names
     from transpiler.backends.st.check import find_iec2c
     from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program
     result = compile_project(ProjectOptions(main=SAMPLE), make_semantics("itnc530", {}))

@@ -32,15 +32,15 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from transpiler.cosim import builtin_side_factory, cosimulate  # noqa: E402
+from transpiler.verify.cosim import builtin_side_factory, cosimulate  # noqa: E402
 from transpiler.diagnostics import CompileFailed, Diagnostics  # noqa: E402
-from transpiler.equiv import random_scenario  # noqa: E402
+from transpiler.verify.equiv import random_scenario  # noqa: E402
 from transpiler.frontend.load import ProjectOptions  # noqa: E402
 from transpiler.exec.interp import compile_program  # noqa: E402
 from transpiler.frontend.pipeline import compile_project  # noqa: E402
-from transpiler.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
+from transpiler.verify.scenario import Event, NcAction, RandomStimulus, Scenario, bind, load_scenario  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
-from transpiler.simulate import program_operands, project_names  # noqa: E402
+from transpiler.verify.simulate import program_operands, project_names  # noqa: E402
 from transpiler.backends.st.check import find_iec2c  # noqa: E402
 from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program  # noqa: E402
 

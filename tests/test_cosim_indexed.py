@@ -13,13 +13,13 @@ from pathlib import Path
 
 import pytest
 
-from transpiler.cosim import builtin_side_factory, cosimulate
+from transpiler.verify.cosim import builtin_side_factory, cosimulate
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
-from transpiler.scenario import load_scenario
+from transpiler.verify.scenario import load_scenario
 from transpiler.language.semantics import make_semantics
-from transpiler.simulate import project_names
+from transpiler.verify.simulate import project_names
 from transpiler.backends.st.check import find_iec2c
 from transpiler.backends.transpile import io_map_of, transpile_program
 

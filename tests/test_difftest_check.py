@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from tests.difftest.check import MISMATCH, OK, TARGET_LIMIT, judge
-from transpiler.cosim import CosimResult, Divergence
+from transpiler.verify.cosim import CosimResult, Divergence
 from transpiler.exec.stexec.typesys import STR_MAX
 
 

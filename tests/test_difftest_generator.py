@@ -25,9 +25,9 @@ from transpiler.frontend.load import ProjectOptions  # noqa: E402
 from transpiler.exec.interp import Machine  # noqa: E402
 from transpiler.language.mnemonics import MNEMONICS, canonical  # noqa: E402
 from transpiler.frontend.pipeline import compile_project  # noqa: E402
-from transpiler.scenario import OperandRef  # noqa: E402
+from transpiler.verify.scenario import OperandRef  # noqa: E402
 from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
-from transpiler.stimulus import Write  # noqa: E402
+from transpiler.verify.stimulus import Write  # noqa: E402
 from transpiler.backends.transpile import read_mp_file  # noqa: E402
 
 COVERAGE_SEEDS = range(1, 101)

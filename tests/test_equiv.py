@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from transpiler.cosim import builtin_side_factory, cosimulate
-from transpiler.equiv import random_scenario, shrink
-from transpiler.scenario import load_scenario
-from transpiler.simulate import project_names
+from transpiler.verify.cosim import builtin_side_factory, cosimulate
+from transpiler.verify.equiv import random_scenario, shrink
+from transpiler.verify.scenario import load_scenario
+from transpiler.verify.simulate import project_names
 from transpiler.backends.transpile import io_map_of
 
 from test_st_backend import SAMPLE, transpile_sample, transpile_vector
@@ -139,7 +139,7 @@ def test_sample_is_equivalent_on_matiec(sample):
 def test_matiec_bulk_read_agrees_with_single_reads(project):
     """The one-call reader of the matiec side returns what each accessor reads, byte-array words included."""
     import random
-    from transpiler.cosim import comparison_for
+    from transpiler.verify.cosim import comparison_for
     from transpiler.diagnostics import Diagnostics
     from transpiler.frontend.load import ProjectOptions
     from transpiler.exec.compiled.matiec_side import matiec_side_factory

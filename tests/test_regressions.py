@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from tests.difftest.check import OK, available_backends, prepare, run_scenario, side_factories
-from transpiler.scenario import load_scenario
+from transpiler.verify.scenario import load_scenario
 
 REGRESSIONS = Path(__file__).resolve().parent / "regressions"
 CASES = sorted(p.parent for p in REGRESSIONS.glob("*/regression.yaml"))

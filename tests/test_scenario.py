@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from transpiler.diagnostics import CompileFailed, Diagnostics, Severity
-from transpiler.scenario import NameTable, OperandRef, Scenario, ScenarioError, bind, load_scenario
-from transpiler.stimulus import (ExpectationFailure, build_stimulus, check_expectations, materialize_random,
+from transpiler.verify.scenario import NameTable, OperandRef, Scenario, ScenarioError, bind, load_scenario
+from transpiler.verify.stimulus import (ExpectationFailure, build_stimulus, check_expectations, materialize_random,
                                  observed_operands, scenario_to_yaml)
 
 R = OperandRef

@@ -11,14 +11,14 @@ from pathlib import Path
 
 import pytest
 
-from transpiler.cosim import builtin_side_factory, cosimulate
+from transpiler.verify.cosim import builtin_side_factory, cosimulate
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.backends.plcopen.writer import extract_st_bodies
-from transpiler.scenario import load_scenario
+from transpiler.verify.scenario import load_scenario
 from transpiler.language.semantics import make_semantics
-from transpiler.simulate import project_names
+from transpiler.verify.simulate import project_names
 from transpiler.backends.st.check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
 from transpiler.backends.st.writer import extract_pou_bodies
 from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program

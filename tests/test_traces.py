@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from vcd.reader import TokenKind, tokenize
 
-from transpiler.scenario import OperandRef
-from transpiler.traces import TraceRecorder
+from transpiler.verify.scenario import OperandRef
+from transpiler.verify.traces import TraceRecorder
 
 R = OperandRef
 COLUMNS = [("O_lamp", R("O", 5)), ("B_byte", R("B", 10)), ("W262", R("W", 262)), ("D_pos", R("D", 40)),

@@ -11,7 +11,7 @@ from tests.vectors import SKIP_REASON, SPEC, Vector, load_vectors
 from transpiler.frontend.load import ProjectOptions
 from transpiler.exec.interp import Machine
 from transpiler.frontend.pipeline import compile_project
-from transpiler.scenario import parse_operand, values_equal
+from transpiler.verify.scenario import parse_operand, values_equal
 from transpiler.language.semantics import ASSUMPTIONS, PROFILES, make_semantics
 
 VECTORS = load_vectors() if SPEC.exists() else []

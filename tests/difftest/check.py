@@ -7,18 +7,18 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from transpiler.cosim import CosimResult, Divergence, builtin_side_factory, cosimulate
+from transpiler.verify.cosim import CosimResult, Divergence, builtin_side_factory, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics
-from transpiler.equiv import random_scenario
+from transpiler.verify.equiv import random_scenario
 from transpiler.frontend.load import ProjectOptions
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.backends.report.iomap import IoMap
 from transpiler.frontend.pipeline import compile_project
-from transpiler.scenario import NameTable, Scenario
+from transpiler.verify.scenario import NameTable, Scenario
 from transpiler.language.semantics import make_semantics
-from transpiler.simulate import build_machine, project_names
-from transpiler.simulate import run_scenario as simulate
+from transpiler.verify.simulate import build_machine, project_names
+from transpiler.verify.simulate import run_scenario as simulate
 from transpiler.backends.st.check import find_iec2c
 from transpiler.exec.stexec.typesys import STR_MAX
 from transpiler.backends.transpile import Transpiled, io_map_of, read_mp_file, transpile_program

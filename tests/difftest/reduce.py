@@ -10,9 +10,9 @@ from pathlib import Path
 import yaml
 
 from transpiler.atomic import write_files_atomically
-from transpiler.cosim import cosimulate
-from transpiler.equiv import random_scenario, shrink
-from transpiler.stimulus import materialize_random, scenario_to_yaml
+from transpiler.verify.cosim import cosimulate
+from transpiler.verify.equiv import random_scenario, shrink
+from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
 
 from .check import Verdict, check_files, prepare, side_factories
 

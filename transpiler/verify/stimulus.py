@@ -12,7 +12,7 @@ from typing import Any, Callable, Iterable, Mapping, NamedTuple
 import yaml
 
 from transpiler.diagnostics import Diagnostic, Diagnostics, Span
-from transpiler.scenario import (BIT_KINDS, KIND_ORDER, Event, NameProblem, NameTable, OperandRef, Scenario, bind,
+from transpiler.verify.scenario import (BIT_KINDS, KIND_ORDER, Event, NameProblem, NameTable, OperandRef, Scenario, bind,
                                  is_glob, mp_key_text, parse_operand, values_equal)
 
 

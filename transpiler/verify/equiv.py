@@ -13,17 +13,17 @@ from xml.sax.saxutils import escape, quoteattr
 
 from transpiler.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
 from transpiler.atomic import write_files_atomically
-from transpiler.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
+from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.backends.report.iomap import IoMap
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
-from transpiler.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
+from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, ScenarioError, bind, load_scenario
 from transpiler.exec.compiled.shim import ShimUnavailable
-from transpiler.simulate import program_operands, project_names, scenario_semantics
-from transpiler.stimulus import materialize_random, scenario_to_yaml
-from transpiler.traces import TraceRecorder
+from transpiler.verify.simulate import program_operands, project_names, scenario_semantics
+from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
+from transpiler.verify.traces import TraceRecorder
 from transpiler.backends.transpile import find_mp_file, io_map_of, read_mp_file, transpile_program
 
 SHRINK_BUDGET = 150

@@ -18,11 +18,11 @@ from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError,
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.pipeline import compile_project
-from transpiler.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
+from transpiler.verify.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
 from transpiler.language.semantics import Semantics, PROFILES, SemanticsError, make_semantics
 from transpiler.exec.compiled.shim import NcActionError, ShimUnavailable, UnknownModule
-from transpiler.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
-from transpiler.traces import TraceRecorder
+from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
+from transpiler.verify.traces import TraceRecorder
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 _WRITES = {"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "WST", "POP", "INC", "DEC", "SST"}

@@ -11,7 +11,7 @@ from typing import IO, Iterator, Sequence
 
 from vcd import VCDWriter
 
-from transpiler.scenario import WIDTHS, OperandRef, normalize_value
+from transpiler.verify.scenario import WIDTHS, OperandRef, normalize_value
 
 
 @contextlib.contextmanager

@@ -13,10 +13,10 @@ from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics
 from transpiler.backends.report.iomap import Accessor, IoMap
 from transpiler.ir import Program
-from transpiler.scenario import NameTable, OperandRef, Scenario
+from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
-from transpiler.simulate import build_machine, machine_parameters, program_operands
-from transpiler.stimulus import Stimulus, build_stimulus
+from transpiler.verify.simulate import build_machine, machine_parameters, program_operands
+from transpiler.verify.stimulus import Stimulus, build_stimulus
 
 
 class StSide(Protocol):
