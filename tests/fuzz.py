@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from transpiler.cli import summary  # noqa: E402
+from transpiler.cli.app import summary  # noqa: E402
 from transpiler.diagnostics import CODES  # noqa: E402
 from transpiler.frontend.load import Parsers, ProjectOptions  # noqa: E402
 from transpiler.frontend.pipeline import CompileResult, compile_project  # noqa: E402

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, Callable
 from xml.sax.saxutils import escape, quoteattr
 
-from transpiler.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
+from transpiler.cli.app import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, options_from_args
 from transpiler.atomic import write_files_atomically
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN

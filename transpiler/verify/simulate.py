@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 import yaml
 
-from transpiler.cli import UsageError, options_from_args
+from transpiler.cli.app import UsageError, options_from_args
 from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from transpiler.atomic import write_files_atomically
-from transpiler.cli import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
+from transpiler.cli.app import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
 from transpiler.diagnostics import NO_SPAN
 from transpiler.backends.transpile import find_mp_file, read_mp_file, transpile_program, user_pous
 

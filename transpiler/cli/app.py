@@ -44,7 +44,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 # Modules of the later stages; each has `register(subparsers, common)`. Imported lazily so that
 # `check` does not load the interpreter, the C shim or the ST executor.
-SUBCOMMAND_MODULES = ("cli_transpile", "simulate", "equiv")
+SUBCOMMAND_MODULES = ("cli.transpile", "verify.simulate", "verify.equiv")
 
 
 def build_parser() -> argparse.ArgumentParser:
