@@ -70,7 +70,7 @@ def test_warnings_do_not_fail_the_check(tmp_path, capsys):
     write_project(tmp_path, {**PROJECT, "OEM.cfg": "DEFINE CFG = 1\nsome free text\n"})
     code, out, err = _run(["check", tmp_path / "Main.src", "--json"], capsys)
     assert code == 0 and json.loads(out)["warnings"] == 1
-    assert DIAGNOSTIC_LINE.match(err.strip()).group("sev", "code") == ("warning", "E-CFG-SYNTAX")
+    assert DIAGNOSTIC_LINE.match(err.strip()).group("sev", "code") == ("warning", "E-CFG-IGNORED")
 
 
 def test_options_reach_the_front_end(tmp_path, capsys):

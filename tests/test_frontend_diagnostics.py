@@ -172,7 +172,7 @@ WARNING_CASES = [
     ("pp-undef-ref", {"main.src": "DEFINE A = &zzz\nEM\n"}, [("E-PP-UNDEF-REF", "main.src", 1, 1)]),
     ("def-redefine", {"main.src": "DEFINE A = 1\n  DEFINE A = 2\nEM\n"}, [("E-DEF-REDEFINE", "main.src", 2, 3)]),
     ("cfg-free-text", {"main.src": "EM\n", "OEM.cfg": "DEFINE A = 1\nthis line explains something\n"},
-     [("E-CFG-SYNTAX", "OEM.cfg", 2, 1)]),
+     [("E-CFG-IGNORED", "OEM.cfg", 2, 1)]),
     ("mod-unreachable", {"main.src": "USES m.src\nEXTERN Fn\nCM Fn\nEM\n", "m.src": "GLOBAL Fn\nL I1\nLBL Fn\nEM\n"},
      [("E-MOD-UNREACHABLE", "m.src", 2, 1)]),
     ("sym-case", {"main.src": "#define /g a.def\nEM\n", "a.def": "MG_a M 1\nMG_A M 2\n"}, [("E-SYM-CASE", "a.def", 2, 1)]),

@@ -75,7 +75,7 @@ def test_malformed_define_value_is_an_error_and_free_text_a_warning():
     read_config("OEM.cfg", ("DEFINE A = 1.5", "free text line", "* star comment", "; comment", ""),
                 initial_defines({}), diags, PPParser())
     assert [(d.code, d.severity.value, d.span.line) for d in diags.items] == [
-        ("E-CFG-SYNTAX", "error", 1), ("E-CFG-SYNTAX", "warning", 2)]
+        ("E-CFG-SYNTAX", "error", 1), ("E-CFG-IGNORED", "warning", 2)]
 
 
 # --------------------------------------------------------------------------------------- conditional code

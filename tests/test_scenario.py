@@ -337,7 +337,7 @@ def test_glob_matching_nothing_is_a_warning_with_its_line(tmp_path: Path, names:
         """)
     st = build_stimulus(load_scenario(path, names), names)
     assert [(d.severity, d.code, d.span.line) for d in st.diagnostics] == [
-        (Severity.WARNING, "E-SCENARIO", 6), (Severity.WARNING, "E-SCENARIO", 7)]
+        (Severity.WARNING, "E-SCENARIO-UNUSED", 6), (Severity.WARNING, "E-SCENARIO-UNUSED", 7)]
     assert "matches no name" in st.diagnostics[0].message
     assert st.toggled == (("I18", R("I", 18)),)
 
@@ -417,7 +417,7 @@ def test_observed_operands_follow_the_observe_globs(tmp_path: Path, names: NameT
     diags = Diagnostics()
     columns = observed_operands(s, names, written={R("M", 10)}, outputs={R("O", 7)}, diagnostics=diags)
     assert columns == [("O_lamp", R("O", 5)), ("I18", R("I", 18)), ("I_key_M3", R("I", 1)), ("I_key_M5", R("I", 2))]
-    assert [(d.code, d.span.line) for d in diags.warnings] == [("E-SCENARIO", 2)]
+    assert [(d.code, d.span.line) for d in diags.warnings] == [("E-SCENARIO-UNUSED", 2)]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -32,16 +32,22 @@ NO_SPAN = Span("<command line>", 1, 1)
 
 @dataclasses.dataclass(frozen=True)
 class CodeInfo:
-    """What a diagnostic code means, its default severity, and a small example that triggers it."""
+    """What a diagnostic code means, its severity, and a small example that triggers it.
+
+    The severity here is the only one a code ever has: call sites report a code, never a
+    severity. `allowable` errors may be turned into warnings by an explicit user choice
+    (e.g. `--allow-untranslated`); no other error can.
+    """
 
     code: str
     severity: Severity
     summary: str
     example: str = ""
+    allowable: bool = False
 
 
-def _c(code: str, sev: str, summary: str, example: str = "") -> CodeInfo:
-    return CodeInfo(code, Severity(sev), summary, example)
+def _c(code: str, sev: str, summary: str, example: str = "", *, allowable: bool = False) -> CodeInfo:
+    return CodeInfo(code, Severity(sev), summary, example, allowable)
 
 
 # The one registry of diagnostic codes (spec sections 1-17b plus the tool's own).
@@ -56,8 +62,10 @@ CODES: dict[str, CodeInfo] = {
            "DEFINE A = &undefined_name"),
         _c("E-PP-SYNTAX", "error", "malformed preprocessor directive", "#if = 3"),
         _c("E-DEF-REDEFINE", "warning", "a DEFINE is defined again; the later value wins", "DEFINE A = 1\nDEFINE A = 2"),
-        _c("E-CFG-SYNTAX", "error", "malformed configuration line (a DEFINE value that is not a string, integer, %binary, $hex or &name is an error; free text is a warning)",
+        _c("E-CFG-SYNTAX", "error", "malformed configuration line: a DEFINE value that is not a string, integer, %binary, $hex or &name",
            "DEFINE A = 1.5"),
+        _c("E-CFG-IGNORED", "warning", "a configuration line that is neither a DEFINE nor a directive is ignored",
+           "this line is free text"),
         _c("E-MP-VALUE", "error", "malformed machine-parameter line or value", "MP4110.0 : fast"),
         # files
         _c("E-FILE-NOT-FOUND", "error", "a file named by the command line, USES, #define or INCLUDE does not exist",
@@ -69,8 +77,9 @@ CODES: dict[str, CodeInfo] = {
         _c("E-FILE-INCLUDE-CYCLE", "error", "a file includes itself (directly or indirectly)", 'INCLUDE "self.src"'),
         # lexical and syntax
         _c("E-SYNTAX", "error", "the line is not a valid instruction, directive or definition", "L I1 I2"),
-        _c("E-UNSUPPORTED", "error", "a construct that hh2iec does not support (first word is no mnemonic, directive or label; structured symbols)",
-           "ERROR_MACRO 12"),
+        _c("E-UNSUPPORTED", "error", "a construct that hh2iec does not support (first word is no mnemonic, directive or label; "
+           "structured symbols; code the ST back end cannot translate, which `--allow-untranslated` accepts with a warning)",
+           "ERROR_MACRO 12", allowable=True),
         _c("E-LIT-RANGE", "error", "a literal does not fit in 32 bits", "L K4294967296"),
         _c("E-MOD-UNREACHABLE", "warning", "executable statement in a module file before its first LBL (never executed)",
            "GLOBAL Fn\nL I1\nLBL Fn\nEM"),
@@ -135,6 +144,8 @@ CODES: dict[str, CodeInfo] = {
            "; scenario: nc: [{cycle: 0, m_function: 3}]\n; program: never sets the acknowledgement M4092\nEM"),
         # scenarios and tool
         _c("E-SCENARIO", "error", "malformed scenario file (unknown key, unknown name, value out of range)", "cycles: -1"),
+        _c("E-SCENARIO-UNUSED", "warning", "a scenario pattern has no effect: it matches no name, or only aliases, constants "
+           "or non-bit operands that are never toggled", "random:\n  inputs: [NO_SUCH_*]"),
         _c("E-ST-PARSE", "error", "the ST file could not be parsed by the built-in ST executor",
            "hh2iec equiv Main.src --st broken.st\n; broken.st:  PROGRAM P  x := ;  END_PROGRAM"),
         _c("E-TOOL", "error", "internal tool error or missing tool (a bug in hh2iec or a missing dependency)",
@@ -155,6 +166,14 @@ class Diagnostic:
     message: str
     notes: tuple[str, ...] = ()
 
+    @classmethod
+    def of(cls, code: str, span: Span, message: str, *notes: str) -> "Diagnostic":
+        """A diagnostic with the severity the registry gives `code`."""
+        info = CODES.get(code)
+        if info is None:
+            raise KeyError(f"unregistered diagnostic code {code}")
+        return cls(code, info.severity, span, message, tuple(notes))
+
     def render(self) -> str:
         text = f"{self.span}: {self.severity.value}[{self.code}]: {self.message}"
         for note in self.notes:
@@ -171,33 +190,37 @@ class CompileFailed(Exception):
 
 
 class Diagnostics:
-    """Collects diagnostics of one run; suppresses exact duplicates so that one fault yields one message."""
+    """Collects diagnostics of one run; suppresses exact duplicates so that one fault yields one message.
 
-    def __init__(self, warnings_as_errors: bool = False) -> None:
+    `allowed` names error codes the user explicitly accepted (each must be registered as
+    allowable): they are collected as warnings.
+    """
+
+    def __init__(self, warnings_as_errors: bool = False, allowed: Iterable[str] = ()) -> None:
         self._items: list[Diagnostic] = []
         self._seen: set[tuple[str, Span, str]] = set()
         self.warnings_as_errors = warnings_as_errors
+        self.allowed = frozenset(allowed)
+        for code in self.allowed:
+            if not CODES[code].allowable:
+                raise ValueError(f"{code} is not an error a user may allow")
 
-    def report(self, code: str, span: Span, message: str, *notes: str, severity: Severity | None = None) -> None:
-        info = CODES.get(code)
-        if info is None:
-            raise KeyError(f"unregistered diagnostic code {code}")
-        sev = severity or info.severity
-        key = (code, span, message)
-        if key in self._seen:
-            return
-        self._seen.add(key)
-        self._items.append(Diagnostic(code, sev, span, message, tuple(notes)))
-
-    def error(self, code: str, span: Span, message: str, *notes: str) -> None:
-        self.report(code, span, message, *notes, severity=Severity.ERROR)
-
-    def warning(self, code: str, span: Span, message: str, *notes: str) -> None:
-        self.report(code, span, message, *notes, severity=Severity.WARNING)
+    def report(self, code: str, span: Span, message: str, *notes: str) -> None:
+        """Collect `code` at `span` with the severity the registry gives it."""
+        self._add(Diagnostic.of(code, span, message, *notes))
 
     def extend(self, items: Iterable[Diagnostic]) -> None:
         for d in items:
-            self.report(d.code, d.span, d.message, *d.notes, severity=d.severity)
+            self._add(d)
+
+    def _add(self, diag: Diagnostic) -> None:
+        key = (diag.code, diag.span, diag.message)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        if diag.severity is Severity.ERROR and diag.code in self.allowed:
+            diag = dataclasses.replace(diag, severity=Severity.WARNING)
+        self._items.append(diag)
 
     @property
     def items(self) -> list[Diagnostic]:

@@ -109,7 +109,7 @@ class _Loader:
             if cfg_text is not None:
                 read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.parsers.pp)
         if not opts.main.is_file():
-            self.diags.error("E-FILE-NOT-FOUND", NO_SPAN, f"main program {opts.main} not found")
+            self.diags.report("E-FILE-NOT-FOUND", NO_SPAN, f"main program {opts.main} not found")
             return self._empty()
         src_files: list[ast.SourceFile] = []
         seen: set[Path] = set()
@@ -185,11 +185,11 @@ class _Loader:
         if path in loaded:
             return [loaded[path]]
         if path in active:
-            self.diags.error("E-FILE-INCLUDE-CYCLE", at, f"{path.name} includes itself")
+            self.diags.report("E-FILE-INCLUDE-CYCLE", at, f"{path.name} includes itself")
             return []
         if len(active) >= MAX_DEF_NESTING:
             # (a chain of distinct files this deep is generated, not written; it would exhaust the stack)
-            self.diags.error("E-FILE-INCLUDE-CYCLE", at, f"definition files nested more than {MAX_DEF_NESTING} deep")
+            self.diags.report("E-FILE-INCLUDE-CYCLE", at, f"definition files nested more than {MAX_DEF_NESTING} deep")
             self._def_missing = True
             return []
         text = self._read(path, at)

@@ -265,7 +265,7 @@ class SrcParser(_CachedLineParser):
         for code, span, comments in _code_lines(lines, trailing_comments):
             status, result = self.parse_line(code)
             if status == "range":
-                diags.error("E-LIT-RANGE", span, f"literal {result} does not fit in 32 bits")
+                diags.report("E-LIT-RANGE", span, f"literal {result} does not fit in 32 bits")
                 continue
             if status == "syntax":
                 self._report_syntax(code, span, result, diags)
@@ -280,14 +280,14 @@ class SrcParser(_CachedLineParser):
                     statements.append(ast.KField(kfield.name, tuple(kfield.values), kfield.span, kfield.comments))
                     kfield = None
                     continue
-                diags.error("E-SYNTAX", span, "only K constants may stand between KFIELD and ENDK")
+                diags.report("E-SYNTAX", span, "only K constants may stand between KFIELD and ENDK")
                 continue
             if tag == "kfield":
                 kfield = _PendingKField(result[1], span, comments, [])
             elif tag == "endk":
-                diags.error("E-SYNTAX", span, "ENDK without KFIELD")
+                diags.report("E-SYNTAX", span, "ENDK without KFIELD")
             elif tag == "kentry":
-                diags.error("E-SYNTAX", span, "a constant line outside a KFIELD table")
+                diags.report("E-SYNTAX", span, "a constant line outside a KFIELD table")
             elif tag == "label":
                 statements.append(ast.Label(result[1], span, comments))
             elif tag == "uses":
@@ -301,26 +301,26 @@ class SrcParser(_CachedLineParser):
             else:
                 if not self.lenient_brackets and result[1].endswith("[") and _BLANK_BEFORE_BRACKET.match(code):
                     # reported, but the bracket is kept so that its ']' does not cascade into E-BRACKET-BALANCE
-                    diags.error("E-SYNTAX", span, f"blank between {result[1][:-1]} and '[' (lenient_brackets is off, A-02b)")
+                    diags.report("E-SYNTAX", span, f"blank between {result[1][:-1]} and '[' (lenient_brackets is off, A-02b)")
                 instr = self._instruction(result[1], result[2], span, comments, diags, code)
                 if instr is not None:
                     statements.append(instr)
         if kfield is not None:
-            diags.error("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
+            diags.report("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
         return ast.SourceFile(display, tuple(statements), tuple(trailing_comments), line_count, tuple(broken_labels))
 
     def _instruction(self, mnemonic: str, operand: ast.OperandSyntax | None, span: Span,
                      comments: tuple[str, ...], diags: Diagnostics, code: str) -> ast.Instr | None:
         info = MNEMONICS.get(mnemonic)
         if info is None:
-            diags.error("E-SYNTAX", span, f"unknown mnemonic '{mnemonic}'")
+            diags.report("E-SYNTAX", span, f"unknown mnemonic '{mnemonic}'")
             return None
         if info.form == "none" and operand is not None:
-            diags.error("E-SYNTAX", span, f"{mnemonic} takes no operand")
+            diags.report("E-SYNTAX", span, f"{mnemonic} takes no operand")
             return None
         if info.form != "none" and operand is None:
             what = {"label": "a label", "call": "a label or module number"}.get(info.form, "an operand")
-            diags.error("E-SYNTAX", span, f"{mnemonic} needs {what}")
+            diags.report("E-SYNTAX", span, f"{mnemonic} needs {what}")
             return None
         if info.form == "label" or info.form == "call" and operand.kind != "NUM":
             # A jump or call target is a label name, whatever terminal it lexed as (`LBL S12` defines a
@@ -329,11 +329,11 @@ class SrcParser(_CachedLineParser):
             written = parts[1].strip() if len(parts) == 2 else operand.text
             if operand.indexed or not _LABEL_NAME.fullmatch(written):
                 what = "a label name" if info.form == "label" else "a label name or a module number"
-                diags.error("E-SYNTAX", span, f"{mnemonic} needs {what}, not '{operand.text}'")
+                diags.report("E-SYNTAX", span, f"{mnemonic} needs {what}, not '{operand.text}'")
                 return None
             operand = ast.OperandSyntax("SYM", written, False, written)
         if info.form == "operand" and operand.kind == "NUM":
-            diags.error("E-SYNTAX", span, f"'{operand.text}' is not an operand (a constant is written K{operand.text})")
+            diags.report("E-SYNTAX", span, f"'{operand.text}' is not an operand (a constant is written K{operand.text})")
             return None
         return ast.Instr(mnemonic, operand, span, comments)
 
@@ -346,9 +346,9 @@ class SrcParser(_CachedLineParser):
         # or a typo such as EMM) naming the word; otherwise the line is malformed (E-SYNTAX at the column).
         if first and canonical(word) not in MNEMONICS and not _DIRECTIVE_WORD.fullmatch(word) \
                 and not _CONSTANT_LINE.match(code):
-            diags.error("E-UNSUPPORTED", span, f"'{word[:40]}' is neither a mnemonic, a directive nor a label definition")
+            diags.report("E-UNSUPPORTED", span, f"'{word[:40]}' is neither a mnemonic, a directive nor a label definition")
             return
-        diags.error("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
+        diags.report("E-SYNTAX", Span(span.file, span.line, col), f"cannot parse '{code[:80]}'")
 
 
 _LABEL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -424,23 +424,23 @@ class DefParser(_CachedLineParser):
             parsed = self.parse_line(code)
             if parsed[0] != "ok":
                 if parsed[0] == "range":
-                    diags.error("E-LIT-RANGE", span, f"literal {parsed[1]} does not fit in 32 bits")
+                    diags.report("E-LIT-RANGE", span, f"literal {parsed[1]} does not fit in 32 bits")
                 else:
-                    diags.error("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
+                    diags.report("E-SYNTAX", span, f"cannot parse definition '{code[:80]}'")
                 broken.extend(_DEF_NAME.findall(code)[:1])
                 continue
             result = parsed[1]
             if result[0] == "type":
                 section = result[1]
                 if result[1].lower().startswith("#typedef"):
-                    diags.error("E-UNSUPPORTED", span, "structured symbols (#TYPEDEF) are not supported for this profile")
+                    diags.report("E-UNSUPPORTED", span, "structured symbols (#TYPEDEF) are not supported for this profile")
                 continue
             if result[0] == "define_file":
                 includes.append(ast.DefineFile(result[1], result[2], span, comments))
                 continue
             _, cflag, name, kind, address, constant, alias = result
             if kind == "K" and constant is None:
-                diags.error("E-SYNTAX", span, f"constant {name} needs a value (K 5, K $FF)")
+                diags.report("E-SYNTAX", span, f"constant {name} needs a value (K 5, K $FF)")
                 broken.append(name)
                 continue
             symbols.append(ast.SymbolDef(name, kind, address, constant, alias, cflag, span, comments, section))
@@ -472,7 +472,7 @@ class MpParser:
             try:
                 tree = self._lark.parse(code)
             except (LarkError, RecursionError):
-                diags.error("E-MP-VALUE", span, f"cannot parse machine parameter line '{code[:80]}'")
+                diags.report("E-MP-VALUE", span, f"cannot parse machine parameter line '{code[:80]}'")
                 continue
             tokens = [str(t) for t in tree.children if t is not None]
             number = int(tokens[1])

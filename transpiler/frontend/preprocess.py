@@ -49,7 +49,7 @@ class Defines:
         if name in self.fixed:
             return
         if name in self.values:
-            diags.warning("E-DEF-REDEFINE", span, f"DEFINE {name} redefined (was {self.values[name]!r} at {self.spans[name]})")
+            diags.report("E-DEF-REDEFINE", span, f"DEFINE {name} redefined (was {self.values[name]!r} at {self.spans[name]})")
         self.values[name] = value
         self.spans[name] = span
 
@@ -131,7 +131,7 @@ def resolve_value(raw: tuple, defines: Defines, span: Span, diags: Diagnostics) 
         return value
     if value in defines.values:
         return defines.values[value]
-    diags.warning("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
+    diags.report("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
     return value
 
 
@@ -193,7 +193,7 @@ class Preprocessor:
                 if parsed is None:
                     if active or keyword != "define":       # (a DEFINE in inactive code is not looked at)
                         code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
-                        self.diags.error(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
+                        self.diags.report(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
                     if keyword in ("#if", "#ifdef", "#ifndef"):
                         stack.append(_Frame(active, False, False, span, code.strip(), None))
                         active = False
@@ -218,7 +218,7 @@ class Preprocessor:
                     continue
                 if kind == "else":
                     if not stack or stack[-1].seen_else:
-                        self.diags.error("E-PP-NEST", span, "#else without a matching #if")
+                        self.diags.report("E-PP-NEST", span, "#else without a matching #if")
                         continue
                     frame = stack[-1]
                     frame.seen_else = True
@@ -231,7 +231,7 @@ class Preprocessor:
                     continue
                 if kind == "endif":
                     if not stack:
-                        self.diags.error("E-PP-NEST", span, "#endif without a matching #if")
+                        self.diags.report("E-PP-NEST", span, "#endif without a matching #if")
                         continue
                     frame = stack.pop()
                     self._close_region(display, frame, lineno - 1)
@@ -250,21 +250,21 @@ class Preprocessor:
             inc = _INCLUDE_LINE.match(code) if include else None
             if inc:
                 if len(chain) > 32:
-                    self.diags.error("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested more than 32 files deep")
+                    self.diags.report("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested more than 32 files deep")
                     continue
                 got = include(inc.group(1), span)
                 if got is not None:
                     inc_display, inc_lines = got
                     if inc_display in chain:
                         # a cycle would otherwise be expanded again and again (exponentially with two INCLUDEs)
-                        self.diags.error("E-FILE-INCLUDE-CYCLE", span, f"{inc_display} includes itself "
+                        self.diags.report("E-FILE-INCLUDE-CYCLE", span, f"{inc_display} includes itself "
                                          f"({' -> '.join(chain[chain.index(inc_display):] + (inc_display,))})")
                         continue
                     out.extend(self.run(inc_display, inc_lines, include, star_comments, chain))
                 continue
             out.append(Line(code, comment, span))
         for frame in stack:
-            self.diags.error("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
+            self.diags.report("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
             self._close_region(display, frame, len(lines))
         return out
 
@@ -282,7 +282,7 @@ class Preprocessor:
         if name in self.defines.values:
             left: DefineValue = self.defines.values[name]
         else:
-            self.diags.warning("E-PP-UNDEF", span, f"{name} is not defined; it compares as the empty string")
+            self.diags.report("E-PP-UNDEF", span, f"{name} is not defined; it compares as the empty string")
             left = ""
         right = resolve_value(raw, self.defines, span, self.diags)
         equal = values_equal(left, right)
@@ -302,7 +302,7 @@ def read_config(display: str, lines: tuple[str, ...], defines: Defines, diags: D
     pre = Preprocessor(defines, diags, pp)
     for line in pre.run(display, lines):
         if line.code.strip():
-            diags.warning("E-CFG-SYNTAX", line.span, f"line ignored: {line.code.strip()[:80]}")
+            diags.report("E-CFG-IGNORED", line.span, f"line ignored: {line.code.strip()[:80]}")
 
 
 def initial_defines(overrides: Mapping[str, DefineValue]) -> Defines:

@@ -133,7 +133,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
             tables.broken.update(d.broken)
         for s in entries:
             if _RESERVED.match(s.name):
-                diags.error("E-SYM-RESERVED", s.span, f"symbol name '{s.name}' is literal operand syntax")
+                diags.report("E-SYM-RESERVED", s.span, f"symbol name '{s.name}' is literal operand syntax")
                 continue
             if s.address is not None and not _check_def_address(s, semantics, diags):
                 tables.broken.add(s.name)
@@ -148,7 +148,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
                 # (the same name again is an identical redefinition or the same file read for two owners)
                 if key in addr_owner and not s.cflag and addr_owner[key].kind == s.kind and addr_owner[key].name != s.name:
                     other = addr_owner[key]
-                    diags.warning("E-DEF-DUP-ADDR", s.span, f"{s.name} names {s.kind}{s.address} like {other.name} "
+                    diags.report("E-DEF-DUP-ADDR", s.span, f"{s.name} names {s.kind}{s.address} like {other.name} "
                                   f"({other.span}); mark an intended second use with /c")
                 addr_owner.setdefault(key, s)
             elif s.span in auto_by_definition:
@@ -157,7 +157,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
             else:
                 addr = allocator.allocate(s.kind)
                 if addr is None:
-                    diags.error("E-DEF-POOL", s.span, f"no free {s.kind} operand left for {s.name}")
+                    diags.report("E-DEF-POOL", s.span, f"no free {s.kind} operand left for {s.name}")
                     tables.broken.add(s.name)
                     continue
                 sym = Symbol(s.name, s.kind, addr, s.span, " ".join(s.comments), auto=True, section=s.section)
@@ -174,7 +174,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
                     rest.append(s)
                     continue
                 if target.kind != s.kind:
-                    diags.error("E-DEF-ALIAS", s.span, f"{s.name} is of kind {s.kind} but its alias target "
+                    diags.report("E-DEF-ALIAS", s.span, f"{s.name} is of kind {s.kind} but its alias target "
                                 f"{s.alias} is of kind {target.kind}")
                     tables.broken.add(s.name)
                 else:
@@ -186,7 +186,7 @@ def build_symbols(project: ParsedProject, semantics: Semantics, diags: Diagnosti
                 break
         for s in pending:
             if s.alias not in tables.broken and "*" not in tables.incomplete:   # else reported already
-                diags.error("E-DEF-ALIAS", s.span, f"alias target &{s.alias} of {s.name} is not defined")
+                diags.report("E-DEF-ALIAS", s.span, f"alias target &{s.alias} of {s.name} is not defined")
             tables.broken.add(s.name)
 
     fill(tables.global_, project.global_defs)
@@ -203,7 +203,7 @@ def _add(table: dict[str, Symbol], sym: Symbol, diags: Diagnostics) -> None:
     if old is not None:
         if (old.kind, old.addr) != (sym.kind, sym.addr) or old.auto or sym.auto:
             if not (old.auto and sym.auto and old.span == sym.span):
-                diags.error("E-SYM-DUP", sym.span, f"symbol {sym.name} is already defined at {old.span}")
+                diags.report("E-SYM-DUP", sym.span, f"symbol {sym.name} is already defined at {old.span}")
         return
     table[sym.name] = sym
 
@@ -225,7 +225,7 @@ def _check_case_clashes(symbols: Iterable[Symbol], diags: Diagnostics) -> None:
     for sym in sorted(symbols, key=lambda s: (s.span.file, s.span.line, s.name)):
         other = by_lower.get(sym.name.lower())
         if other is not None and other.name != sym.name:
-            diags.warning("E-SYM-CASE", sym.span, f"{sym.name} differs from {other.name} ({other.span}) only in case")
+            diags.report("E-SYM-CASE", sym.span, f"{sym.name} differs from {other.name} ({other.span}) only in case")
         by_lower.setdefault(sym.name.lower(), sym)
 
 
@@ -240,7 +240,7 @@ def _check_range(kind: str, addr: int, semantics: Semantics, span: Span, diags: 
     if kind in MEM_KINDS:
         size = BYTES[kind]
         if addr % size:
-            diags.error("E-ADDR-ALIGN", span, f"{prefix}{kind}{addr} is not aligned to {size} bytes")
+            diags.report("E-ADDR-ALIGN", span, f"{prefix}{kind}{addr} is not aligned to {size} bytes")
             return False
         ok = (_inside_one_interval(profile.ranges.B, addr, addr + size - 1)
               or all(profile.ranges.contains("B", a) for a in range(addr, addr + size))
@@ -254,7 +254,7 @@ def _check_range(kind: str, addr: int, semantics: Semantics, span: Span, diags: 
         return True
     if not ok:
         extra = f" (and the following {count - 1})" if count > 1 else ""
-        diags.error("E-ADDR-RANGE", span, f"{prefix}{kind}{addr}{extra} is outside the {profile.name} range")
+        diags.report("E-ADDR-RANGE", span, f"{prefix}{kind}{addr}{extra} is outside the {profile.name} range")
     return ok
 
 
@@ -307,7 +307,7 @@ class _FileLowering:
         for stmt in stmts:
             if isinstance(stmt, ast.KField):
                 if stmt.name in self.kfields:
-                    self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
+                    self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
                 self.kfields[stmt.name] = stmt.values
                 kfield_lines.setdefault(stmt.name, stmt.span.line)
         chain_open = False
@@ -334,23 +334,23 @@ class _FileLowering:
                 if brackets and self.semantics["bracket_span"] == "forbidden":
                     brackets[-1].span_faults.append((stmt.span, "LBL inside an open bracket"))
                 if stmt.name in self.labels:
-                    self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} is defined twice in this file")
+                    self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} is defined twice in this file")
                 else:
                     self.labels[stmt.name] = index
                     # KFIELD names live in the label name space of the file (spec 6.17): the later one is the fault
                     if kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
-                        self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
+                        self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
                                          f"KFIELD at line {kfield_lines[stmt.name]}")
                 self.ops.append(Op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=chain_open))
                 chain_open, last_acc = False, "NONE"
                 continue
             if isinstance(stmt, ast.KField):
                 if stmt.name in self.labels:
-                    self.diags.error("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} has the name of a label "
+                    self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} has the name of a label "
                                      "defined above it")
                 prev = next((o for o in reversed(self.ops) if o.code not in ("KFIELD",)), None)
                 if prev is None or prev.mnemonic not in ("EM", "JP"):
-                    self.diags.error("E-KF-PLACEMENT", stmt.span,
+                    self.diags.report("E-KF-PLACEMENT", stmt.span,
                                      f"KFIELD {stmt.name} must follow an unconditional EM or JP")
                 self.ops.append(Op("KFIELD", "KFIELD", stmt.span, comments=stmt.comments, label=stmt.name))
                 chain_open, last_acc = False, "NONE"
@@ -359,11 +359,11 @@ class _FileLowering:
             m = instr.mnemonic
             info = MNEMONICS[m]
             if info.extended and not self.semantics["extended_instructions"]:
-                self.diags.error("E-UNSUPPORTED", instr.span, f"{m} is an extended instruction (A-23), "
+                self.diags.report("E-UNSUPPORTED", instr.span, f"{m} is an extended instruction (A-23), "
                                  f"not enabled for profile {self.semantics.profile.name}")
                 continue
             if m == "=N" and not self.semantics["allow_assign_not"]:
-                self.diags.error("E-UNSUPPORTED", instr.span, "=N is not part of the language (enable allow_assign_not, A-16)")
+                self.diags.report("E-UNSUPPORTED", instr.span, "=N is not part of the language (enable allow_assign_not, A-16)")
                 continue
             if case_open is not None and m not in ("CM", "ENDC"):
                 case_faults.append((instr.span, f"only 'CM label' lines may stand inside CASE ... ENDC, not {m}"))
@@ -403,19 +403,19 @@ class _FileLowering:
                 case_open, case_faults = (index, instr.span), []
             elif m == "ENDC":
                 if case_open is None:
-                    self.diags.error("E-CASE-BODY", instr.span, "ENDC without CASE")
+                    self.diags.report("E-CASE-BODY", instr.span, "ENDC without CASE")
                 for fault_span, message in case_faults:
-                    self.diags.error("E-CASE-BODY", fault_span, message)
+                    self.diags.report("E-CASE-BODY", fault_span, message)
                 case_open, case_faults = None, []
             self.ops.append(op)
         for case_index, notes in self.case_entries.items():
             self.ops[case_index] = dataclasses.replace(self.ops[case_index], case_notes=tuple(notes))
         for frame in brackets:
-            self.diags.error("E-BRACKET-BALANCE", frame.span, f"bracket {frame.op}[ is never closed")
+            self.diags.report("E-BRACKET-BALANCE", frame.span, f"bracket {frame.op}[ is never closed")
         for frame in structs:
-            self.diags.error("E-STRUCT-NEST", self.ops[frame[1]].span, f"{frame[0]} is never closed")
+            self.diags.report("E-STRUCT-NEST", self.ops[frame[1]].span, f"{frame[0]} is never closed")
         if case_open is not None:
-            self.diags.error("E-CASE-BODY", case_open[1], "CASE without ENDC")
+            self.diags.report("E-CASE-BODY", case_open[1], "CASE without ENDC")
 
     # ---- operands
 
@@ -428,15 +428,15 @@ class _FileLowering:
             sym = self.symbols.lookup(self.src.path, str(value), self.semantics["symbol_case"] == "insensitive")
             if sym is None:
                 if str(value) in self.kfields:
-                    self.diags.error("E-OPERAND-KIND", span, f"constant field {value} is read as 'KF {value}[X]'")
+                    self.diags.report("E-OPERAND-KIND", span, f"constant field {value} is read as 'KF {value}[X]'")
                 elif not self.symbols.already_reported(self.src.path, str(value)):
-                    self.diags.error("E-SYM-UNDEF", span, f"unknown symbol '{value}'")
+                    self.diags.report("E-SYM-UNDEF", span, f"unknown symbol '{value}'")
                 return None
             symbol = sym.name
             kind, value = sym.kind, sym.addr
             if kind == "K":
                 if syn.indexed:
-                    self.diags.error("E-OPERAND-KIND", span, f"constant {symbol} cannot be indexed")
+                    self.diags.report("E-OPERAND-KIND", span, f"constant {symbol} cannot be indexed")
                     return None
                 return Operand("K", value, symbol=symbol)
         if kind == "K":
@@ -448,7 +448,7 @@ class _FileLowering:
             letter, number = text[0], int(text[1:])
             limit = 999 if letter == "E" else 4095
             if number > limit:
-                self.diags.error("E-ADDR-RANGE", span, f"S#{letter}{number}: line number above {limit}")
+                self.diags.report("E-ADDR-RANGE", span, f"S#{letter}{number}: line number above {limit}")
                 return None
             return Operand("STR", text=f"{letter}{number:04d}")
         if kind == "SIMM":
@@ -456,14 +456,14 @@ class _FileLowering:
         if kind == "KF":
             values = self.kfields.get(str(value))
             if values is None:
-                self.diags.error("E-SYM-UNDEF", span, f"unknown constant field '{value}'")
+                self.diags.report("E-SYM-UNDEF", span, f"unknown constant field '{value}'")
                 return None
             if not syn.indexed:
-                self.diags.error("E-SYNTAX", span, f"constant field access is written 'KF {value}[X]'")
+                self.diags.report("E-SYNTAX", span, f"constant field access is written 'KF {value}[X]'")
                 return None
             return Operand("KF", indexed=True, kfield=values, text=str(value))
         if kind == "NUM":
-            self.diags.error("E-SYNTAX", span, f"'{value}' is not an operand")
+            self.diags.report("E-SYNTAX", span, f"'{value}' is not an operand")
             return None
         addr = int(value)
         count = BIT_GROUPS.get(instr.mnemonic, 1)
@@ -480,7 +480,7 @@ class _FileLowering:
         if kind == "S" and instr.mnemonic in ("L", "+") + COMPARES:
             return True
         if kind not in info.kinds:
-            self.diags.error("E-OPERAND-KIND", instr.span, f"{instr.mnemonic} does not accept {operand.display()} "
+            self.diags.report("E-OPERAND-KIND", instr.span, f"{instr.mnemonic} does not accept {operand.display()} "
                              f"({_kind_name(operand.kind)})")
             return False
         return True
@@ -537,11 +537,11 @@ class _FileLowering:
             return self._open_bracket(m[:-1], base, index, chain_open, last_acc, brackets)
         if m == "]":
             if not brackets:
-                self.diags.error("E-BRACKET-BALANCE", span, "']' without an opening bracket")
+                self.diags.report("E-BRACKET-BALANCE", span, "']' without an opening bracket")
                 return None, chain_open, last_acc
             frame = brackets.pop()
             for fault_span, message in frame.span_faults:
-                self.diags.error("E-BRACKET-SPAN", fault_span, message)
+                self.diags.report("E-BRACKET-SPAN", fault_span, message)
             bracket = Bracket(frame.op, frame.mode, frame.load)
             logic_result = (frame.op in LOGIC_GATES and frame.mode == "LOGIC") or frame.op in COMPARES
             return (Op("BCLOSE", bracket=bracket, rel=frame.op if frame.op in COMPARES else "", **base),
@@ -564,10 +564,10 @@ class _FileLowering:
             if instr.operand.kind == "NUM":
                 number = int(instr.operand.value)
                 if not 9000 <= number <= 9999:
-                    self.diags.error("E-SYNTAX", span, f"PLC module numbers are 9000-9999, not {number}")
+                    self.diags.report("E-SYNTAX", span, f"PLC module numbers are 9000-9999, not {number}")
                     return None, chain_open, last_acc
                 if number not in MODULES:
-                    self.diags.warning("E-MODULE-UNKNOWN", span, f"PLC module {number} has no model; "
+                    self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} has no model; "
                                        "it runs as a stub without parameters or results (A-46)")
                 return Op(code, call=CallTarget(module=number), **base), False, "NONE"
             self.pending_calls.append((index, _label_text(instr.operand), span))
@@ -591,7 +591,7 @@ class _FileLowering:
             return Op("NOTL", **base), True, "LOGIC"
         if m in ("INCW", "DECW", "INCX", "DECX", "NOTW", "TWOC"):
             return Op(m, **base), chain_open, "WORD"
-        self.diags.error("E-UNSUPPORTED", span, f"{m} is not supported")
+        self.diags.report("E-UNSUPPORTED", span, f"{m} is not supported")
         return None, chain_open, last_acc
 
     def _open_bracket(self, op: str, base: dict, index: int, chain_open: bool, last_acc: str,
@@ -599,19 +599,19 @@ class _FileLowering:
         span = base["span"]
         if len(brackets) >= MAX_NESTING:
             if len(brackets) == MAX_NESTING:     # once per too-deep nest, not for every deeper level
-                self.diags.error("E-BRACKET-DEPTH", span, f"brackets nested deeper than {MAX_NESTING}")
+                self.diags.report("E-BRACKET-DEPTH", span, f"brackets nested deeper than {MAX_NESTING}")
             # Keep a frame so that the matching ']' does not cascade into a second error.
             brackets.append(_Frame(op, "LOGIC" if op in LOGIC_GATES else "WORD", False, index, span))
             return None, chain_open, last_acc
         mode = last_acc
         if mode == "STRING":
-            self.diags.error("E-BRACKET-MODE", span, f"{op}[ after a string instruction")
+            self.diags.report("E-BRACKET-MODE", span, f"{op}[ after a string instruction")
             brackets.append(_Frame(op, "WORD", False, index, span))   # the matching ']' must not cascade
             return None, chain_open, last_acc
         if mode == "NONE":
             mode = "LOGIC" if op in LOGIC_GATES else "WORD"
         if (op in ARITH or op in COMPARES) and mode != "WORD":
-            self.diags.error("E-BRACKET-MODE", span, f"{op}[ needs a word value before it (the previous instruction "
+            self.diags.report("E-BRACKET-MODE", span, f"{op}[ needs a word value before it (the previous instruction "
                              "addressed the logic accumulator)")
             brackets.append(_Frame(op, "WORD", False, index, span))   # the matching ']' must not cascade
             return None, chain_open, last_acc
@@ -625,7 +625,7 @@ class _FileLowering:
         span = base["span"]
         if m in STRUCT_OPEN:
             if len(structs) == MAX_NESTING:      # once per too-deep nest, not for every deeper level
-                self.diags.error("E-STRUCT-NEST", span, f"structured statements nested deeper than {MAX_NESTING}")
+                self.diags.report("E-STRUCT-NEST", span, f"structured statements nested deeper than {MAX_NESTING}")
             structs.append([m, index, None])
             code = {"IFT": "JPF", "IFF": "JPT", "WHILET": "JPF", "WHILEF": "JPT", "REPEAT": "NOP"}[m]
             return Op(code, **base)
@@ -633,7 +633,7 @@ class _FileLowering:
                     "UNTILT": ("REPEAT",), "UNTILF": ("REPEAT",)}[m]
         if not structs or structs[-1][0] not in expected or (m == "ELSE" and structs[-1][2] is not None):
             opener = structs[-1][0] if structs else "nothing"
-            self.diags.error("E-STRUCT-NEST", span, f"{m} does not match the open structure ({opener})")
+            self.diags.report("E-STRUCT-NEST", span, f"{m} does not match the open structure ({opener})")
             # Interleaved structures (IFT WHILET ENDI ENDW): forget the opener this keyword was meant for, so
             # that the inner one still closes normally and the overlap is one error, not three.
             if m != "ELSE":
@@ -712,7 +712,7 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) ->
             if op.code == "LBL":
                 break
             if op.code not in ("KFIELD",):
-                diags.warning("E-MOD-UNREACHABLE", op.span, "statement in a module file before its first LBL is never executed")
+                diags.report("E-MOD-UNREACHABLE", op.span, "statement in a module file before its first LBL is never executed")
                 break
     routines, depth = _call_graph(files, semantics, diags)
     modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
@@ -727,10 +727,10 @@ def _exports(lowerings: list[_FileLowering], diags: Diagnostics) -> dict[str, Ca
         for g in low.globals:
             if g.name not in low.labels:
                 if g.name not in low.src.broken_labels:
-                    diags.error("E-SYM-GLOBAL-UNDEF", g.span, f"GLOBAL {g.name}: no such label in this file")
+                    diags.report("E-SYM-GLOBAL-UNDEF", g.span, f"GLOBAL {g.name}: no such label in this file")
                 continue
             if g.name in exports and exports[g.name].file != low.file_index:
-                diags.error("E-SYM-DUP-GLOBAL", g.span, f"label {g.name} is also exported at {where[g.name]}")
+                diags.report("E-SYM-DUP-GLOBAL", g.span, f"label {g.name} is also exported at {where[g.name]}")
                 continue
             exports[g.name] = CallTarget(low.file_index, low.labels[g.name], g.name)
             where[g.name] = g.span
@@ -760,13 +760,13 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
                 return found
             # (not again when the module that would export it is unreadable, or its LBL line was rejected)
             if not labels_incomplete and not any(name in o.src.broken_labels for o in lowerings):
-                diags.error("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
+                diags.report("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
             return None
         if name in low.src.broken_labels:   # its LBL line was rejected already
             return None
         elsewhere = [o.src.path for o in lowerings if name in o.labels]
         hint = f" (it is defined in {elsewhere[0]}: add GLOBAL there and EXTERN here)" if elsewhere else ""
-        diags.error("E-SYM-UNRESOLVED", span, f"label {name} is not defined in this file{hint}")
+        diags.report("E-SYM-UNRESOLVED", span, f"label {name} is not defined in this file{hint}")
         return None
 
     for index, name, span in low.pending_calls:
@@ -786,7 +786,7 @@ def _link(low: _FileLowering, lowerings: list[_FileLowering], exports: dict[str,
         elif name not in low.src.broken_labels:
             elsewhere = [o.src.path for o in lowerings if name in o.labels]
             where = f"; it is in {elsewhere[0]} (jumps stay inside a file, A-31)" if elsewhere else ""
-            diags.error("E-JUMP-SCOPE", span, f"jump target {name} is not a label of this file{where}")
+            diags.report("E-JUMP-SCOPE", span, f"jump target {name} is not a label of this file{where}")
 
 
 _LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
@@ -837,7 +837,7 @@ def _check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
             elif s not in seen:
                 stack.append(s)
     if falls_off:
-        diags.error("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
+        diags.report("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
                     "a path reaches the end of the file without EM")
 
 
@@ -940,12 +940,12 @@ def _call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagno
             recursive |= members
             span = min(calls, key=lambda t: (t[0], t[1]))[2]
             names = ", ".join(sorted(nodes[k].label if k in nodes else "<main>" for k in comp))
-            diags.error("E-CALL-RECURSION", span, f"recursive calls between {names} (A-29)")
+            diags.report("E-CALL-RECURSION", span, f"recursive calls between {names} (A-29)")
     depth_limit = int(semantics["call_depth"])
     depth = _longest_paths(edges, recursive)
     max_depth = max((depth.get(r.key, 0) for r in roots), default=0)
     if max_depth > depth_limit and not recursive:
-        diags.error("E-CALL-DEPTH", files[0].ops[0].span if files[0].ops else Span(files[0].path, 1, 1),
+        diags.report("E-CALL-DEPTH", files[0].ops[0].span if files[0].ops else Span(files[0].path, 1, 1),
                     f"static call depth {max_depth} exceeds the limit {depth_limit} (A-29)")
     routines = tuple(sorted((n for n in nodes.values()), key=lambda t: (t.file, t.index)))
     return routines, max_depth

@@ -41,11 +41,11 @@ class ProjectFolders:
         """Resolve a file name from a directive; reports E-FILE-ESCAPE / E-FILE-NOT-FOUND."""
         clean = name.strip().strip('"')
         if not clean:
-            diags.error("E-FILE-NOT-FOUND", at, "empty file name")
+            diags.report("E-FILE-NOT-FOUND", at, "empty file name")
             return None
         parts = re.split(r"[\\/]", clean)
         if os.path.isabs(clean) or clean.startswith(("/", "\\")) or re.match(r"^[A-Za-z]:", clean) or ".." in parts:
-            diags.error("E-FILE-ESCAPE", at, f"file name '{clean}' leaves the project folders")
+            diags.report("E-FILE-ESCAPE", at, f"file name '{clean}' leaves the project folders")
             return None
         search = ([relative_to] if relative_to else []) + self.roots
         for root in search:
@@ -54,15 +54,15 @@ class ProjectFolders:
                 escapes = found is not None and not self.inside(found)
             except (OSError, ValueError, RuntimeError) as exc:
                 # The file system rejects the name (too long, NUL byte) or meets a symlink loop: no such file.
-                diags.error("E-FILE-NOT-FOUND", at, f"file '{clean[:120]}' cannot be looked up: "
+                diags.report("E-FILE-NOT-FOUND", at, f"file '{clean[:120]}' cannot be looked up: "
                             f"{getattr(exc, 'strerror', None) or exc}"[:300])
                 return None
             if escapes:
-                diags.error("E-FILE-ESCAPE", at, f"'{clean}' resolves outside the project folders (symlink)")
+                diags.report("E-FILE-ESCAPE", at, f"'{clean}' resolves outside the project folders (symlink)")
                 return None
             if found is not None:
                 return found
-        diags.error("E-FILE-NOT-FOUND", at, f"file '{clean}' not found in {', '.join(map(str, self.roots))}")
+        diags.report("E-FILE-NOT-FOUND", at, f"file '{clean}' not found in {', '.join(map(str, self.roots))}")
         return None
 
 
@@ -89,19 +89,19 @@ def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostic
     """Read a file as Latin-1 (every byte sequence is accepted) and split it into lines."""
     try:
         if not path.exists():
-            diags.error("E-FILE-NOT-FOUND", at, f"file {path} not found")
+            diags.report("E-FILE-NOT-FOUND", at, f"file {path} not found")
             return None
         if not path.is_file():
             # a FIFO or a device (e.g. `--defs /dev/zero`) would block or never end
-            diags.error("E-FILE-READ", at, f"{path} is not a regular file")
+            diags.report("E-FILE-READ", at, f"{path} is not a regular file")
             return None
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:
-            diags.error("E-FILE-READ", at, f"{path.name} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB")
+            diags.report("E-FILE-READ", at, f"{path.name} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB")
             return None
         data = path.read_bytes()
     except OSError as exc:
-        diags.error("E-FILE-READ", at, f"cannot read {path}: {exc.strerror or exc}")
+        diags.report("E-FILE-READ", at, f"cannot read {path}: {exc.strerror or exc}")
         return None
     text = data.decode("latin-1")
     lines = _LINE_SPLIT.split(text)

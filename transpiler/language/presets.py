@@ -42,7 +42,7 @@ def load_presets(mp: Mapping[MpKey, Decimal], semantics: Semantics, cycle_time_m
         if cycles is None:
             span = where.get((number, index), Span("<machine parameters>", 1, 1))
             need = "a whole number of PLC cycles" if unit == "cycles" else "a duration in seconds"
-            diags.error("E-MP-VALUE", span, f"MP{number}.{index} = {value}: expected {need} ≥ 0 "
+            diags.report("E-MP-VALUE", span, f"MP{number}.{index} = {value}: expected {need} ≥ 0 "
                         f"(profile {profile.name}, timer_unit {semantics['timer_unit']})")
             continue
         target[index] = cycles

@@ -379,7 +379,7 @@ class _Tree:
         result: dict = {}
         for key_node, value_node in node.value:
             if not isinstance(key_node, yaml.ScalarNode):
-                self.diags.error("E-SCENARIO", self.span(key_node.start_mark), "a key must be a plain name or number")
+                self.diags.report("E-SCENARIO", self.span(key_node.start_mark), "a key must be a plain name or number")
                 continue
             # an unreadable key (e.g. the merge key '<<') is kept as text: the schema reports it as unknown
             key = self._scalar(key_node, None)
@@ -388,7 +388,7 @@ class _Tree:
             except TypeError:
                 key = key_node.value
             if key in result:
-                self.diags.error("E-SCENARIO", self.span(key_node.start_mark), f"duplicate key '{key_node.value}'")
+                self.diags.report("E-SCENARIO", self.span(key_node.start_mark), f"duplicate key '{key_node.value}'")
                 continue
             sub = path + (key,)
             self.key_spans[sub] = self.span(key_node.start_mark)
@@ -402,7 +402,7 @@ class _Tree:
         except (yaml.YAMLError, ValueError) as exc:
             if path is not None:
                 problem = getattr(exc, "problem", None) or str(exc)
-                self.diags.error("E-SCENARIO", self.span(node.start_mark), f"bad value {node.value!r}: {problem}")
+                self.diags.report("E-SCENARIO", self.span(node.start_mark), f"bad value {node.value!r}: {problem}")
                 self.broken.add(path)
             return node.value
 
@@ -418,13 +418,13 @@ def _compose(text: str, file: str, diags: Diagnostics) -> yaml.Node | None:
         mark = exc.problem_mark or exc.context_mark
         span = Span(file, mark.line + 1, mark.column + 1) if mark else Span(file, 1, 1)
         problem = exc.problem or exc.context or "malformed YAML"
-        diags.error("E-SCENARIO", span, f"YAML syntax error: {problem}")
+        diags.report("E-SCENARIO", span, f"YAML syntax error: {problem}")
     except yaml.reader.ReaderError as exc:
         line = text[:exc.position].count("\n") + 1
         col = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
-        diags.error("E-SCENARIO", Span(file, line, col), f"YAML syntax error: {exc.reason} ({_codepoint(exc.character)})")
+        diags.report("E-SCENARIO", Span(file, line, col), f"YAML syntax error: {exc.reason} ({_codepoint(exc.character)})")
     except yaml.YAMLError as exc:
-        diags.error("E-SCENARIO", Span(file, 1, 1), f"YAML syntax error: {exc}")
+        diags.report("E-SCENARIO", Span(file, 1, 1), f"YAML syntax error: {exc}")
     return None
 
 
@@ -476,16 +476,16 @@ def _convert_mp(data: dict, tree: _Tree) -> None:
         text = tree.key_text.get(path, str(key))
         mp_key = parse_mp_key(text)
         if mp_key is None:
-            tree.diags.error("E-SCENARIO", tree.key_spans.get(path, tree.spans[("mp",)]),
+            tree.diags.report("E-SCENARIO", tree.key_spans.get(path, tree.spans[("mp",)]),
                              f"machine parameter '{text}' is not of the form \"4110.3\"")
             continue
         number = _mp_value(value, tree.scalar_text.get(path))
         if number is None:
-            tree.diags.error("E-SCENARIO", tree.spans.get(path, tree.spans[("mp",)]),
+            tree.diags.report("E-SCENARIO", tree.spans.get(path, tree.spans[("mp",)]),
                              f"machine parameter {text}: {value!r} is not a number")
             continue
         if mp_key in converted:
-            tree.diags.error("E-SCENARIO", tree.key_spans[path], f"machine parameter {text} is given twice")
+            tree.diags.report("E-SCENARIO", tree.key_spans[path], f"machine parameter {text} is given twice")
             continue
         converted[mp_key] = number
         tree.spans[("mp", mp_key)] = tree.spans[path]
@@ -499,7 +499,7 @@ def _resolve_mp_file(data: dict, folder: Path, tree: _Tree) -> None:
         return  # a wrong type is reported by the schema
     resolved = (folder / value).resolve()
     if not resolved.is_file():
-        tree.diags.error("E-SCENARIO", tree.spans[("machine_parameters",)],
+        tree.diags.report("E-SCENARIO", tree.spans[("machine_parameters",)],
                          f"machine-parameter file not found: {resolved}")
     data["machine_parameters"] = resolved
 
@@ -551,19 +551,19 @@ def _schema_diagnostic(err: Mapping[str, Any], tree: _Tree, diags: Diagnostics) 
         if loc[:-1]:
             message += f" in {_where(loc[:-1])}"
         message += f" (did you mean '{hint[0]}'?)" if hint else (f" (allowed: {', '.join(allowed)})" if allowed else "")
-        diags.error("E-SCENARIO", tree.key_spans.get(loc) or _nearest(tree.spans, loc, default), message)
+        diags.report("E-SCENARIO", tree.key_spans.get(loc) or _nearest(tree.spans, loc, default), message)
         return
     if kind == "missing":
         where = f" in {_where(loc[:-1])}" if loc[:-1] else ""
-        diags.error("E-SCENARIO", _nearest(tree.spans, loc[:-1], default), f"missing required key '{loc[-1]}'{where}")
+        diags.report("E-SCENARIO", _nearest(tree.spans, loc[:-1], default), f"missing required key '{loc[-1]}'{where}")
         return
     message = str(err["msg"]).removeprefix("Value error, ")
     if loc and loc[-1] == "[key]":
         loc = loc[:-1]
-        diags.error("E-SCENARIO", tree.key_spans.get(loc) or _nearest(tree.spans, loc, default),
+        diags.report("E-SCENARIO", tree.key_spans.get(loc) or _nearest(tree.spans, loc, default),
                     f"{_where(loc[:-1])}: bad key {loc[-1]!r}: {message}")
         return
-    diags.error("E-SCENARIO", _nearest(tree.spans, loc, default), f"{_where(loc) or 'scenario'}: {message}")
+    diags.report("E-SCENARIO", _nearest(tree.spans, loc, default), f"{_where(loc) or 'scenario'}: {message}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -592,7 +592,7 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
         try:
             ref = names.resolve(name)
         except NameProblem as problem:
-            diags.error("E-SCENARIO", span, str(problem))
+            diags.report("E-SCENARIO", span, str(problem))
             return None
         refs[name] = ref
         return ref
@@ -601,7 +601,7 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
         for name, value in _items(mapping):
             ref = resolve(name, path + (name,), key=True)
             if ref is not None and (problem := check_value(ref, value)) is not None:
-                diags.error("E-SCENARIO", at(path + (name,)), f"{label(name, ref)}: {problem}")
+                diags.report("E-SCENARIO", at(path + (name,)), f"{label(name, ref)}: {problem}")
 
     cycles = data.get("cycles")
     cycles = cycles if isinstance(cycles, int) and not isinstance(cycles, bool) and cycles > 0 else None
@@ -609,7 +609,7 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
     def cycle_in_range(entry: Any, path: tuple, what: str) -> None:
         cycle = entry.get("cycle") if isinstance(entry, dict) else None
         if cycles is not None and isinstance(cycle, int) and not isinstance(cycle, bool) and cycle >= cycles:
-            diags.error("E-SCENARIO", at(path + ("cycle",)),
+            diags.report("E-SCENARIO", at(path + ("cycle",)),
                         f"{what} at cycle {cycle} never happens: the scenario runs cycles 0..{cycles - 1}")
 
     assignments(data.get("initial"), ("initial",))
@@ -629,9 +629,9 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
                 continue  # globs are expanded (and warned about) when the stimulus is built
             ref = resolve(pattern, path, key=False)
             if ref is not None and ref.kind not in BIT_KINDS:
-                diags.error("E-SCENARIO", at(path), f"{label(pattern, ref)} is not a bit operand and cannot toggle")
+                diags.report("E-SCENARIO", at(path), f"{label(pattern, ref)} is not a bit operand and cannot toggle")
             elif ref is not None and pattern in names.non_toggle:
-                diags.warning("E-SCENARIO", at(path), f"'{pattern}' is an alias or constant and is never toggled")
+                diags.report("E-SCENARIO-UNUSED", at(path), f"'{pattern}' is an alias or constant and is never toggled")
     for i, pattern in _entries(data.get("observe")):
         if not (isinstance(pattern, str) and is_glob(pattern)):
             resolve(pattern, ("observe", i), key=False)
@@ -650,17 +650,17 @@ def load_scenario(path: Path, names: NameTable) -> Scenario:
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        diags.error("E-SCENARIO", Span(file, 1, 1), f"cannot read scenario file: {exc}")
+        diags.report("E-SCENARIO", Span(file, 1, 1), f"cannot read scenario file: {exc}")
         raise ScenarioError(diags.items) from None
     node = _compose(text, file, diags)
     if node is None:
         if not diags.has_errors():
-            diags.error("E-SCENARIO", Span(file, 1, 1), "empty scenario file: missing required key 'cycles'")
+            diags.report("E-SCENARIO", Span(file, 1, 1), "empty scenario file: missing required key 'cycles'")
         raise ScenarioError(diags.items)
     tree = _Tree(file, diags)
     data = tree.build(node)
     if not isinstance(data, dict):
-        diags.error("E-SCENARIO", tree.spans[()], "a scenario is a mapping of keys (name, cycles, events, ...)")
+        diags.report("E-SCENARIO", tree.spans[()], "a scenario is a mapping of keys (name, cycles, events, ...)")
         raise ScenarioError(diags.items)
     data.setdefault("name", path.stem)
     _convert_mp(data, tree)

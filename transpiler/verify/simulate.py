@@ -88,7 +88,7 @@ def machine_parameters(scenario: Scenario, diags: Diagnostics) -> tuple[dict[tup
         try:
             lines = tuple(Path(path).read_text(encoding="latin-1").splitlines())
         except OSError as exc:
-            diags.error("E-SCENARIO", scenario.span_of("machine_parameters"), f"cannot read {path}: {exc}")
+            diags.report("E-SCENARIO", scenario.span_of("machine_parameters"), f"cannot read {path}: {exc}")
             lines = ()
         for p in MpParser().parse_lines(str(path), lines, diags):
             mp[(p.number, p.index)] = p.value
@@ -140,7 +140,7 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
     except MachineConfigError:
         raise
     except (UnknownModule, ValueError) as exc:
-        diags.error("E-SCENARIO", scenario.span_of("module_results"), str(exc))
+        diags.report("E-SCENARIO", scenario.span_of("module_results"), str(exc))
         raise CompileFailed(diags.items) from None
 
 
@@ -163,7 +163,7 @@ def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulu
         try:
             report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
         except NcActionError as exc:
-            diags.error("E-SCENARIO", _nc_event_span(scenario, cycle), str(exc))
+            diags.report("E-SCENARIO", _nc_event_span(scenario, cycle), str(exc))
             raise CompileFailed(diags.items) from None
         cycles_run = cycle + 1
         trace.record_canonical(cycle, observed())

@@ -83,9 +83,9 @@ def _expand_random(scenario: Scenario, names: NameTable, diags: Diagnostics) -> 
                   if r is not None and r.kind in BIT_KINDS and n not in names.non_toggle]
         span = scenario.span_of("random", "inputs", i)
         if not matched:
-            diags.warning("E-SCENARIO", span, f"random input pattern '{pattern}' matches no name of the project")
+            diags.report("E-SCENARIO-UNUSED", span, f"random input pattern '{pattern}' matches no name of the project")
         elif not usable:
-            diags.warning("E-SCENARIO", span,
+            diags.report("E-SCENARIO-UNUSED", span,
                           f"random input pattern '{pattern}' matches only aliases, constants or non-bit operands")
         chosen.update(usable)
     expanded: list[tuple[str, OperandRef]] = []
@@ -209,7 +209,7 @@ def observed_operands(scenario: Scenario, names: NameTable, written: Iterable[Op
         matched = names.match(pattern) if is_glob(pattern) else [pattern]
         refs = [r for r in (_resolve_quiet(names, n) for n in matched) if r is not None]
         if not refs and diagnostics is not None:
-            diagnostics.warning("E-SCENARIO", scenario.span_of("observe", i),
+            diagnostics.report("E-SCENARIO-UNUSED", scenario.span_of("observe", i),
                                 f"observe pattern '{pattern}' matches no operand of the project")
         for ref in refs:
             if ref not in seen:

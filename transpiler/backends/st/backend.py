@@ -214,7 +214,7 @@ class StBackend:
             state_machine(info, Executor(ctx))
         except Unsupported as exc:
             self.untranslated.append((file.ops[body[0]].span if body else Span(file.path, 1), str(exc)))
-            self.diags.warning("E-UNSUPPORTED", file.ops[body[0]].span if body else Span(file.path, 1),
+            self.diags.report("E-UNSUPPORTED", file.ops[body[0]].span if body else Span(file.path, 1),
                                f"{pou_name}: not translated: {exc}")
             emitter = Emitter()
             emitter.line(f"(* NOT TRANSLATED: {str(exc).replace('*)', '* )')} *)")

@@ -87,7 +87,7 @@ class Machine:
                 self.sys.set_mp(number, index, value)
             except ValueError as exc:
                 span = (mp_spans or {}).get((number, index), Span("<machine parameters>", 1, 1))
-                diags.error("E-MP-VALUE", span, str(exc))
+                diags.report("E-MP-VALUE", span, str(exc))
         if diags.has_errors():
             raise MachineConfigError(diags.items)
         for number, values in (module_results or {}).items():

@@ -70,7 +70,7 @@ class Compiler:
         return ty, attr
 
     def error(self, span: Optional[Span], message: str) -> None:
-        self.diags.error(ST_CODE, span or Span(self.filename, 1, 1), message)
+        self.diags.report(ST_CODE, span or Span(self.filename, 1, 1), message)
 
     # ================================================================ driver
     def run(self, text: str) -> CompiledProject:

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from typing import Iterable, Optional
 
-from transpiler.diagnostics import CompileFailed, Diagnostic, Severity, Span
+from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 
 ST_CODE = "E-ST-PARSE"
 
 
 def st_diag(span: Span, message: str) -> Diagnostic:
-    return Diagnostic(ST_CODE, Severity.ERROR, span, message)
+    return Diagnostic.of(ST_CODE, span, message)
 
 
 class StError(CompileFailed):
