@@ -1,21 +1,20 @@
-"""The public test vectors of spec section 20 through the front end: compile errors exactly as expected, else clean."""
+"""The language test vectors (tests/data/vectors, from spec section 20) through the front end: compile errors
+exactly as expected, else clean."""
 
 from __future__ import annotations
 
 import pytest
 from test_frontend_support import errors
-from vectors import SKIP_REASON, SPEC, Vector, load_vectors
+from vectors import Vector, VectorDataMissing, load_vectors
 
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 
-VECTORS = load_vectors() if SPEC.exists() else []
+VECTORS = load_vectors()          # raises (a collection error, not a skip) when tests/data/vectors is missing
 
 
 def _params():
-    if not VECTORS:
-        return [pytest.param(None, marks=pytest.mark.skip(reason=SKIP_REASON), id="no-spec")]
     return [pytest.param(v, id=v.id) for v in VECTORS]
 
 
@@ -26,8 +25,6 @@ def _compile(vector: Vector, tmp_path):
 
 
 def test_the_spec_has_vectors_of_both_kinds():
-    if not VECTORS:
-        pytest.skip(SKIP_REASON)
     compile_errors = [v for v in VECTORS if (v.expect_error or {}).get("phase") == "compile"]
     assert len(VECTORS) >= 80
     assert compile_errors, "the spec should contain vectors with an expected compile-time error"
@@ -50,8 +47,6 @@ def test_vector_compiles_as_expected(vector: Vector, tmp_path):
 
 def test_every_vector_compiles_the_same_twice(tmp_path):
     """Determinism: two runs over the same files give the same diagnostics, ops, symbols and auto-assigned addresses."""
-    if not VECTORS:
-        pytest.skip(SKIP_REASON)
     for vector in VECTORS:
         folder = tmp_path / vector.id
         first = _compile(vector, folder)
@@ -61,3 +56,12 @@ def test_every_vector_compiles_the_same_twice(tmp_path):
             assert first.program.files == second.program.files, vector.id
             assert first.program.symbols == second.program.symbols, vector.id
             assert first.program.auto_assigned == second.program.auto_assigned, vector.id
+
+
+def test_missing_or_empty_vector_folder_is_an_error_not_a_skip(tmp_path):
+    """A checkout without tests/data/vectors must fail loudly, never run zero vector tests."""
+    with pytest.raises(VectorDataMissing, match="restore them"):
+        load_vectors(tmp_path / "absent")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(VectorDataMissing):
+        load_vectors(tmp_path / "empty")
