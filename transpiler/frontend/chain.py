@@ -1,0 +1,233 @@
+"""Chain state: lowers one instruction to its op, tracking the open logic chain, the last accumulator used and the brackets."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.frontend import ast
+from transpiler.frontend.opcodes import (ARITH, BIT_GROUPS, COMPARES, GATE_AS_LOAD, LOGIC_GATES, MAX_NESTING, STRUCT_ALL,
+                                         WORD_GATES)
+from transpiler.frontend.operands import label_text
+from transpiler.frontend.structure import StructureMatcher
+from transpiler.ir import Bracket, CallTarget, Op, Operand
+from transpiler.language.modules import MODULES
+from transpiler.language.semantics import Semantics
+
+Lowered = tuple[Op | None, bool, str]        # the op (None: rejected), then chain_open and last_acc after it
+
+
+@dataclasses.dataclass
+class BracketFrame:
+    op: str
+    mode: str
+    load: bool
+    index: int
+    span: Span
+    # E-BRACKET-SPAN faults inside this bracket; reported when it closes. A bracket that is never closed
+    # reports only E-BRACKET-BALANCE: the missing ']' is the root fault, not the EM after it.
+    span_faults: list[tuple[Span, str]] = dataclasses.field(default_factory=list)
+
+
+class _Step(NamedTuple):
+    """One instruction being lowered, with the chain state before it."""
+
+    m: str
+    instr: ast.Instr
+    operand: Operand | None
+    base: dict
+    index: int
+    chain_open: bool
+    last_acc: str
+    is_bit: bool
+    is_str: bool
+
+
+class ChainLowering:
+    """Lowers the instructions of one file; jumps and calls are queued in `pending_jumps`/`pending_calls` for linking."""
+
+    def __init__(self, semantics: Semantics, diags: Diagnostics, structure: StructureMatcher,
+                 pending_jumps: list[tuple[int, str, Span]], pending_calls: list[tuple[int, str, Span]]):
+        self.semantics = semantics
+        self.diags = diags
+        self.structure = structure
+        self.pending_jumps = pending_jumps
+        self.pending_calls = pending_calls
+        self.brackets: list[BracketFrame] = []
+
+    def lower(self, instr: ast.Instr, operand: Operand | None, index: int, chain_open: bool, last_acc: str) -> Lowered:
+        m = instr.mnemonic
+        base = dict(mnemonic=m, span=instr.span, operand=operand, comments=instr.comments, chain_open=chain_open)
+        is_bit = operand is not None and operand.is_bit
+        is_str = operand is not None and operand.kind in ("S", "STR")
+        step = _Step(m, instr, operand, base, index, chain_open, last_acc, is_bit, is_str)
+        # (the groups take disjoint mnemonics; each answers None for a mnemonic that is not its own)
+        for group in (self._load_store, self._logic_word, self._bracket_stack, self._control, self._extended):
+            lowered = group(step)
+            if lowered is not None:
+                return lowered
+        self.diags.report("E-UNSUPPORTED", instr.span, f"{m} is not supported")
+        return None, chain_open, last_acc
+
+    def report_unclosed(self) -> None:
+        for frame in self.brackets:
+            self.diags.report("E-BRACKET-BALANCE", frame.span, f"bracket {frame.op}[ is never closed")
+
+    # ---- instruction groups
+
+    def _load_store(self, s: _Step) -> Lowered | None:
+        m, base, chain_open = s.m, s.base, s.chain_open
+        if m in ("L", "LN"):
+            if s.is_bit:
+                return Op("LD" if m == "L" else "LDN", **base), True, "LOGIC"
+            if s.is_str:
+                return Op("SLD", **base), chain_open, "STRING"
+            return Op("WLD" if m == "L" else "WLDN", **base), chain_open, "WORD"
+        if m == "L-":
+            return Op("WNEG", **base), chain_open, "WORD"
+        if m in ("LB", "LW", "LD"):
+            return Op("LDBITS", nbits=BIT_GROUPS[m], **base), chain_open, "WORD"
+        if m in ("=", "=N", "S", "R", "SN", "RN"):
+            if s.is_bit:
+                code = {"=": "ST", "=N": "STN", "S": "SET", "R": "RES", "SN": "SETN", "RN": "RESN"}[m]
+                return Op(code, **base), False, "LOGIC"
+            if s.operand.kind == "S":
+                return Op("SST", **base), False, "STRING"
+            return Op("WST", **base), False, "WORD"
+        if m in ("B=", "W=", "D="):
+            return Op("STBITS", nbits=BIT_GROUPS[m], **base), False, "WORD"
+        return None
+
+    def _logic_word(self, s: _Step) -> Lowered | None:
+        m, base, chain_open = s.m, s.base, s.chain_open
+        if m in LOGIC_GATES:
+            if s.is_bit:
+                if chain_open or self.semantics["chain_model"] == "dynamic":
+                    return Op(LOGIC_GATES[m], **base), True, "LOGIC"
+                return Op(GATE_AS_LOAD[m], **base), True, "LOGIC"
+            if not chain_open and self.semantics["word_gate_at_chain_start"] == "load":
+                return Op("WLD" if GATE_AS_LOAD[m] == "LD" else "WLDN", **base), chain_open, "WORD"
+            return Op(WORD_GATES[m], **base), chain_open, "WORD"
+        if m in ARITH:
+            if s.is_str and m == "+":
+                return Op("SCAT", **base), chain_open, "STRING"
+            return Op(ARITH[m], **base), chain_open, "WORD"
+        if m in COMPARES:
+            return Op("SCMP" if s.is_str else "CMP", rel=m, **base), True, "LOGIC"
+        if m in ("<<", ">>"):
+            return Op("SHL" if m == "<<" else "SHR", **base), chain_open, "WORD"
+        if m in ("BS", "BC"):
+            return Op(m, **base), chain_open, "WORD"
+        if m == "BT":
+            return Op("BT", **base), True, "LOGIC"
+        return None
+
+    def _bracket_stack(self, s: _Step) -> Lowered | None:
+        m, base, chain_open = s.m, s.base, s.chain_open
+        if m.endswith("[") and m != "[":
+            return self._open_bracket(m[:-1], base, s.index, chain_open, s.last_acc)
+        if m == "]":
+            return self._close_bracket(base, chain_open, s.last_acc)
+        if m == "PS":
+            return Op("PUSH", **base), chain_open, "NONE"
+        if m == "PL":
+            return Op("POP", **base), chain_open, "NONE"
+        if m in ("PSW", "PLW", "PSX", "PLX"):
+            return Op(m, **base), chain_open, "WORD"
+        if m == "PSL":
+            return Op("PSL", **base), chain_open, "LOGIC"
+        if m == "PLL":
+            return Op("PLL", **base), True, "LOGIC"
+        return None
+
+    def _control(self, s: _Step) -> Lowered | None:
+        m, base, chain_open = s.m, s.base, s.chain_open
+        span = base["span"]
+        if m in ("JP", "JPT", "JPF"):
+            self.pending_jumps.append((s.index, label_text(s.instr.operand), span))
+            return Op(m, **base), False, "NONE"
+        if m in ("CM", "CMT", "CMF"):
+            return self._call(s)
+        if m == "SUBM":
+            self.pending_calls.append((s.index, label_text(s.instr.operand), span))
+            return Op("SUBM", **base), False, "WORD"
+        if m in ("RPLY", "CAN"):
+            return Op(m, **base), chain_open, "WORD" if m == "RPLY" else "NONE"
+        if m in ("EM", "EMT", "EMF"):
+            return Op(m, **base), False, "NONE"
+        if m == "CASE":
+            return Op("CASE", **base), False, "NONE"
+        if m == "ENDC":
+            return Op("NOP", **base), False, "NONE"
+        if m in STRUCT_ALL:
+            return self.structure.lower(m, base, s.index), False, "NONE"
+        return None
+
+    def _call(self, s: _Step) -> Lowered:
+        """CM/CMT/CMF: a PLC module by number, or a label linked later."""
+        base = s.base
+        span = base["span"]
+        code = {"CM": "CALL", "CMT": "CALLT", "CMF": "CALLF"}[s.m]
+        if s.instr.operand.kind == "NUM":
+            number = int(s.instr.operand.value)
+            if not 9000 <= number <= 9999:
+                self.diags.report("E-SYNTAX", span, f"PLC module numbers are 9000-9999, not {number}")
+                return None, s.chain_open, s.last_acc
+            if number not in MODULES:
+                self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} has no model; "
+                                   "it runs as a stub without parameters or results (A-46)")
+            return Op(code, call=CallTarget(module=number), **base), False, "NONE"
+        self.pending_calls.append((s.index, label_text(s.instr.operand), span))
+        return Op(code, **base), False, "NONE"
+
+    def _extended(self, s: _Step) -> Lowered | None:
+        m, base, chain_open = s.m, s.base, s.chain_open
+        if m in ("INC", "DEC"):
+            return Op(m, **base), chain_open, "LOGIC" if s.is_bit else "NONE"
+        if m == "NOTL":
+            return Op("NOTL", **base), True, "LOGIC"
+        if m in ("INCW", "DECW", "INCX", "DECX", "NOTW", "TWOC"):
+            return Op(m, **base), chain_open, "WORD"
+        return None
+
+    # ---- brackets
+
+    def _open_bracket(self, op: str, base: dict, index: int, chain_open: bool, last_acc: str) -> Lowered:
+        brackets = self.brackets
+        span = base["span"]
+        if len(brackets) >= MAX_NESTING:
+            if len(brackets) == MAX_NESTING:     # once per too-deep nest, not for every deeper level
+                self.diags.report("E-BRACKET-DEPTH", span, f"brackets nested deeper than {MAX_NESTING}")
+            # Keep a frame so that the matching ']' does not cascade into a second error.
+            brackets.append(BracketFrame(op, "LOGIC" if op in LOGIC_GATES else "WORD", False, index, span))
+            return None, chain_open, last_acc
+        mode = last_acc
+        if mode == "STRING":
+            self.diags.report("E-BRACKET-MODE", span, f"{op}[ after a string instruction")
+            brackets.append(BracketFrame(op, "WORD", False, index, span))   # the matching ']' must not cascade
+            return None, chain_open, last_acc
+        if mode == "NONE":
+            mode = "LOGIC" if op in LOGIC_GATES else "WORD"
+        if (op in ARITH or op in COMPARES) and mode != "WORD":
+            self.diags.report("E-BRACKET-MODE", span, f"{op}[ needs a word value before it (the previous instruction "
+                             "addressed the logic accumulator)")
+            brackets.append(BracketFrame(op, "WORD", False, index, span))   # the matching ']' must not cascade
+            return None, chain_open, last_acc
+        load = (mode == "LOGIC" and op in LOGIC_GATES and not chain_open
+                and self.semantics["bracket_at_chain_start"] == "load")
+        brackets.append(BracketFrame(op, mode, load, index, span))
+        new_chain = False if (mode == "LOGIC" or op in COMPARES) else chain_open
+        return Op("BOPEN", bracket=Bracket(op, mode, load), rel=op if op in COMPARES else "", **base), new_chain, mode
+
+    def _close_bracket(self, base: dict, chain_open: bool, last_acc: str) -> Lowered:
+        if not self.brackets:
+            self.diags.report("E-BRACKET-BALANCE", base["span"], "']' without an opening bracket")
+            return None, chain_open, last_acc
+        frame = self.brackets.pop()
+        for fault_span, message in frame.span_faults:
+            self.diags.report("E-BRACKET-SPAN", fault_span, message)
+        bracket = Bracket(frame.op, frame.mode, frame.load)
+        logic_result = (frame.op in LOGIC_GATES and frame.mode == "LOGIC") or frame.op in COMPARES
+        return (Op("BCLOSE", bracket=bracket, rel=frame.op if frame.op in COMPARES else "", **base),
+                True if logic_result else chain_open, "LOGIC" if logic_result else "WORD")

@@ -1,0 +1,87 @@
+"""Control-flow checks of each file: static successors, subprogram bodies, paths that run off the end, unreachable module code."""
+
+from __future__ import annotations
+
+from transpiler.diagnostics import Diagnostics, Span
+from transpiler.frontend import ast
+from transpiler.frontend.lowering import FileLowering
+from transpiler.frontend.opcodes import STRUCT_ALL
+from transpiler.ir import CallTarget, FileCode, Op
+
+LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
+                             "E-FILE-NOT-FOUND", "E-FILE-ESCAPE", "E-FILE-READ", "E-FILE-INCLUDE-CYCLE"})
+_FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
+
+
+def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
+    """False when an earlier error removed a line (in one of `lost_lines`' files) or a control statement of the
+    file: a path that then seems to run off the end is a consequence of that error, not a second fault."""
+    files = {low.src.path} | {stmt.span.file for stmt in low.src.statements}
+    if not lost_lines.isdisjoint(files):
+        return False
+    lowered = {op.span for op in low.ops}
+    return all(stmt.span in lowered for stmt in low.src.statements
+               if isinstance(stmt, ast.Instr) and stmt.mnemonic in _FLOW_MNEMONICS)
+
+
+def successors(ops: tuple[Op, ...], i: int) -> list[int]:
+    """Static successors of op i inside its file (calls return to i+1)."""
+    op = ops[i]
+    if op.code == "EM":
+        return []
+    if op.code == "JP":
+        return [op.target] if op.target is not None else []
+    if op.code in ("JPT", "JPF"):
+        return [i + 1] + ([op.target] if op.target is not None else [])
+    return [i + 1]
+
+
+def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
+    ops = f.ops
+    entries = [0] if file_index == 0 else []
+    entries += list(f.labels.values())
+    seen: set[int] = set()
+    stack = [e for e in entries if e < len(ops)]
+    falls_off = file_index == 0 and not ops
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        seen.add(i)
+        if ops[i].code == "KFIELD":
+            continue
+        for s in successors(ops, i):
+            if s >= len(ops):
+                falls_off = True
+            elif s not in seen:
+                stack.append(s)
+    if falls_off:
+        diags.report("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
+                    "a path reaches the end of the file without EM")
+
+
+def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
+    """Op indices reachable from an entry until EM (the body of a subprogram, spec 7.3)."""
+    ops = files[entry.file].ops
+    seen: set[int] = set()
+    stack = [entry.index]
+    while stack:
+        i = stack.pop()
+        if i in seen or i >= len(ops):
+            continue
+        seen.add(i)
+        stack.extend(s for s in successors(ops, i) if s not in seen)
+    return sorted(seen)
+
+
+def check_module_starts(files: tuple[FileCode, ...], lowerings: list[FileLowering], diags: Diagnostics) -> None:
+    """A module file runs from its labels only: a statement before its first LBL is never executed."""
+    for i, low in enumerate(lowerings[1:], start=1):
+        if low.src.broken_labels:            # the first LBL may be the line that was rejected
+            continue
+        for op in files[i].ops:
+            if op.code == "LBL":
+                break
+            if op.code not in ("KFIELD",):
+                diags.report("E-MOD-UNREACHABLE", op.span, "statement in a module file before its first LBL is never executed")
+                break
