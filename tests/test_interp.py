@@ -834,3 +834,200 @@ def test_random_programs_run_the_same_in_fast_and_exact_code(tmp_path: Path, sou
         assert outcomes[0] == outcomes[1], source
         if fast.halted:
             break
+
+
+# ---------------------------------------------------------------------------------------------
+# the fast code against hand-computed values (not against the exact code): each expected value follows from the
+# rules of the language description by hand, and the comment says which wrong implementation it rules out.
+
+
+def fast_machine(folder: Path, program: str, **kwargs: Any) -> Machine:
+    m = machine(folder, program, **kwargs)
+    assert not m._primary.exact, "this test is about the fast (compiled) code path"
+    return m
+
+
+def fast_trace(m: Machine, count: int, names: tuple[str, ...], inputs: Mapping[str, list] | None = None) -> dict:
+    trace: dict[str, list] = {n: [] for n in names}
+    for c in range(count):
+        report = m.run_cycle(c, [(*ref(n), v[c]) for n, v in (inputs or {}).items() if c < len(v)])
+        assert not report.faults, report.faults
+        for n in names:
+            trace[n].append(m.read(*ref(n)))
+    return trace
+
+
+def test_fast_code_word_arithmetic_wraps_and_sets_the_flags_by_hand(tmp_path: Path) -> None:
+    m = fast_machine(tmp_path, """
+        L   D0
+        +   K1
+        =   D4
+        L   K65536
+        x   K65536
+        =   D8
+        L   M4200
+        =   O1
+        L   K-7
+        /   K2
+        =   D12
+        L   M4201
+        =   O2
+        L   K5
+        /   K0
+        =   D16
+        L   M4201
+        =   O3
+        L   K-7
+        MOD K2
+        =   D20
+        L   D0
+        -   K-1
+        x   K1
+        =   D24
+        L   M4200
+        =   O4
+        L   K300
+        =   B28
+        EM
+    """, given={"D0": 2147483647})
+    cycles(m, 1)
+    assert values(m, "D4", "D8", "O1", "D12", "O2", "D16", "O3", "D20", "D24", "O4", "B28") == {
+        "D4": -2147483648,  # 2^31-1 + 1 wraps mod 2^32 (6.5, no flag); saturation gives 2^31-1, Python ints 2^31
+        "D8": 0,            # 65536*65536 = 2^32: low 32 bits are 0 (6.5, A-10); saturation gives 2^31-1
+        "O1": 1,            # ... and MUL_ERR (M4200) is set because 2^32 is outside int32
+        "D12": -3,          # -7/2 truncates toward zero (A-11); floor division gives -4
+        "O2": 0,            # a division that succeeds resets DIV_ERR (M4201)
+        "D16": 5,           # division by zero leaves WA unchanged (A-11): 0 or an exception would be wrong
+        "O3": 1,            # ... and sets DIV_ERR
+        "D20": -1,          # MOD takes the sign of the dividend: -7 - 2*trunc(-7/2) = -1; Python's % gives 1
+        "D24": -2147483648,  # (2^31-1) - (-1) wraps to -2^31; x K1 of an int32 value fits
+        "O4": 0,            # so the second x resets MUL_ERR: the flag is written by every execution
+        "B28": 44,          # 300 stored into a byte keeps the low 8 bits (A-08): 300 - 256 = 44, not 300 or 127
+    }
+
+
+def test_fast_code_byte_word_overlap_is_little_endian_by_hand(tmp_path: Path) -> None:
+    m = fast_machine(tmp_path, """
+        L   K$1234
+        =   W30
+        L   K$12345678
+        =   D40
+        L   K-1
+        =   B50
+        L   K0
+        =   B51
+        L   B60
+        =   D64
+        L   W50
+        =   D68
+        EM
+    """, given={"B60": 0x80})
+    cycles(m, 1)
+    assert values(m, "B30", "B31", "W40", "W42", "B43", "W50", "D64", "D68") == {
+        "B30": 0x34, "B31": 0x12,   # a word's low byte is at its own address (5.2, little-endian `tv`): not $12/$34
+        "W40": 0x5678, "W42": 0x1234, "B43": 0x12,  # the same for the words and bytes inside D40
+        "W50": 255,     # B50 = $FF and B51 = $00 make W50 = $00FF = 255: separate byte and word stores give -1 or 0
+        "D64": -128,    # L B60 sign-extends $80 (A-06): -128; zero extension gives 128
+        "D68": 255,     # L W50 sign-extends from bit 15, which is 0 here: 255, not -1
+    }
+
+
+def test_fast_code_shifts_by_hand(tmp_path: Path) -> None:
+    m = fast_machine(tmp_path, """
+        L   K$3E
+        <<  K4
+        =   D0
+        L   K-16
+        >>  K2
+        =   D4
+        L   K1
+        <<  K33
+        =   D8
+        L   K$40000000
+        <<  K1
+        =   D12
+        L   K$7FFFFFFF
+        <<  K4
+        =   D16
+        EM
+    """)
+    cycles(m, 1)
+    assert values(m, "D0", "D4", "D8", "D12", "D16") == {
+        "D0": 0x3E0,         # the description's own example (6.7)
+        "D4": -4,            # >> is arithmetic: -16 >> 2 = -4; a logical shift gives 1073741820
+        "D8": 2,             # the count is taken mod 32 (6.7): << 33 is << 1; a 64-bit shift gives 0 or 2^33
+        "D12": -2147483648,  # the result is the low 32 bits as int32: $80000000; an unbounded int gives 2^31
+        "D16": -16,          # $7FFFFFFF << 4 = $7FFFFFFF0, low 32 bits $FFFFFFF0 = -16; saturation gives 2^31-1
+    }
+
+
+def test_fast_code_brackets_by_hand(tmp_path: Path) -> None:
+    m = fast_machine(tmp_path, """
+        L   I1
+        A[
+        L   I2
+        O   I3
+        ]
+        =   O1
+        L   K15000
+        -[
+        L   K4000
+        +   K6000
+        ]
+        =   W0
+        L   D12
+        ==[
+        L   K100
+        x   D16
+        ]
+        =   O15
+        L   K$FF00
+        A[
+        L   K$0FF0
+        ]
+        =   W2
+        L   K10
+        -[
+        L   K1
+        +[
+        L   K2
+        x   K3
+        ]
+        ]
+        =   W4
+        EM
+    """, given={"I1": 0, "I2": 0, "I3": 1, "D12": 500, "D16": 5})
+    cycles(m, 1)
+    assert values(m, "O1", "W0", "O15", "W2", "W4") == {
+        "O1": 0,        # 0 AND (0 OR 1) = 0: a bracket that drops the saved LA (I1) gives 1
+        "W0": 5000,     # 15000 - (4000 + 6000) (6.9 example): reversed operands give -5000, no bracket 10000
+        "O15": 1,       # 500 == 100 * 5 (6.9 example): the saved WA is the left side of the comparison
+        "W2": 0x0F00,   # word-mode A[ ANDs saved $FF00 with inner $0FF0 over 32 bits (A-18); no bracket gives $0FF0
+        "W4": 3,        # nested: 10 - (1 + (2 * 3)) = 3; flattening the brackets gives 10 - 1 + 6 or 6
+    }
+
+
+def test_fast_code_timer_runs_exactly_its_preset_by_hand(tmp_path: Path) -> None:
+    m = fast_machine(tmp_path, """
+        L   I1
+        =   T2
+        L   T50
+        =   O1
+        L   T2
+        =   O2
+        L   I1
+        =   T3
+        L   T51
+        =   O3
+        EM
+    """, mp={"4110.2": 2, "4110.3": 0})
+    trace = fast_trace(m, 5, ("O1", "O2", "O3"), {"I1": [1, 0, 0, 0, 0]})
+    assert trace == {
+        # T2 is set in cycle 0; the service of cycles 1..P (P = MP4110.2 = 2 cycles in `tv`) keeps T50 at 1 (9.2):
+        # a timer that starts in the cycle it is set gives [1, 1, 0, ...], one that counts P+1 gives [0, 1, 1, 1, 0]
+        "O1": [0, 1, 1, 0, 0],
+        # the start operand reads back as 1 in the cycle the program set it and is then consumed (9.2)
+        "O2": [1, 0, 0, 0, 0],
+        # preset 0: the running operand never becomes 1 (9.2)
+        "O3": [0, 0, 0, 0, 0],
+    }
