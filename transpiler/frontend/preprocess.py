@@ -185,88 +185,100 @@ class Preprocessor:
             text = _normalise_dashes(raw)
             directive = _PP_LINE.match(text)
             if directive:
-                stripped = text.lstrip()
-                span = Span(display, lineno, len(text) - len(stripped) + 1)
-                code, _ = split_comment(text)
-                parsed = self.pp.parse(code)
-                keyword = directive.group(1).lower()
-                if parsed is None:
-                    if active or keyword != "define":       # (a DEFINE in inactive code is not looked at)
-                        code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
-                        self.diags.report(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
-                    if keyword in ("#if", "#ifdef", "#ifndef"):
-                        stack.append(_Frame(active, False, False, span, code.strip(), None))
-                        active = False
-                        continue
-                    if keyword not in ("#else", "#endif"):
-                        continue
-                    # "#endif junk": still closes its block, so that the #if above does not cascade into E-PP-NEST
-                    parsed = (keyword[1:],)
-                kind = parsed[0]
-                if kind == "define":
-                    if active:
-                        self.defines.define(parsed[1], resolve_value(parsed[2], self.defines, span, self.diags), span, self.diags)
+                handled, active = self._directive(display, lineno, text, directive.group(1).lower(), stack, active)
+                if handled:
                     continue
-                if kind in ("if", "ifdef", "ifndef"):
-                    # Any depth is allowed (spec 3.2); the stack is a list, so depth costs no recursion.
-                    taking = self._condition(parsed, span) if active else False
-                    frame = _Frame(active, taking, False, span, code.strip(), None)
-                    stack.append(frame)
-                    if active and not taking:
-                        frame.region_start = lineno + 1
-                    active = active and taking
-                    continue
-                if kind == "else":
-                    if not stack or stack[-1].seen_else:
-                        self.diags.report("E-PP-NEST", span, "#else without a matching #if")
-                        continue
-                    frame = stack[-1]
-                    frame.seen_else = True
-                    if frame.active_before:
-                        if frame.taking:
-                            frame.region_start = lineno + 1
-                        else:
-                            self._close_region(display, frame, lineno - 1)
-                    active = frame.active_before and not frame.taking
-                    continue
-                if kind == "endif":
-                    if not stack:
-                        self.diags.report("E-PP-NEST", span, "#endif without a matching #if")
-                        continue
-                    frame = stack.pop()
-                    self._close_region(display, frame, lineno - 1)
-                    active = frame.active_before
-                    continue
-            if not active:
-                continue
-            stripped = text.lstrip()
-            if not stripped:
-                continue                   # blank: nothing to parse and no comment to attach
-            span = Span(display, lineno, len(text) - len(stripped) + 1)
-            if star_comments and stripped.startswith("*"):
-                out.append(Line("", stripped[1:], span))
-                continue
-            code, comment = split_comment(text)
-            inc = _INCLUDE_LINE.match(code) if include else None
-            if inc:
-                if len(chain) > 32:
-                    self.diags.report("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested more than 32 files deep")
-                    continue
-                got = include(inc.group(1), span)
-                if got is not None:
-                    inc_display, inc_lines = got
-                    if inc_display in chain:
-                        # a cycle would otherwise be expanded again and again (exponentially with two INCLUDEs)
-                        self.diags.report("E-FILE-INCLUDE-CYCLE", span, f"{inc_display} includes itself "
-                                         f"({' -> '.join(chain[chain.index(inc_display):] + (inc_display,))})")
-                        continue
-                    out.extend(self.run(inc_display, inc_lines, include, star_comments, chain))
-                continue
-            out.append(Line(code, comment, span))
+            if active:
+                self._code_line(display, lineno, text, out, include, star_comments, chain)
         for frame in stack:
             self.diags.report("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
             self._close_region(display, frame, len(lines))
         return out
+
+    def _directive(self, display: str, lineno: int, text: str, keyword: str, stack: list[_Frame],
+                   active: bool) -> tuple[bool, bool]:
+        """One DEFINE or #if/#ifdef/#ifndef/#else/#endif line: (whether it was handled, whether code is active after it)."""
+        stripped = text.lstrip()
+        span = Span(display, lineno, len(text) - len(stripped) + 1)
+        code, _ = split_comment(text)
+        parsed = self.pp.parse(code)
+        if parsed is None:
+            if active or keyword != "define":       # (a DEFINE in inactive code is not looked at)
+                code_name = "E-CFG-SYNTAX" if keyword == "define" else "E-PP-SYNTAX"
+                self.diags.report(code_name, span, f"malformed {keyword} line: {code.strip()[:80]}")
+            if keyword in ("#if", "#ifdef", "#ifndef"):
+                stack.append(_Frame(active, False, False, span, code.strip(), None))
+                return True, False
+            if keyword not in ("#else", "#endif"):
+                return True, active
+            # "#endif junk": still closes its block, so that the #if above does not cascade into E-PP-NEST
+            parsed = (keyword[1:],)
+        kind = parsed[0]
+        if kind == "define":
+            if active:
+                self.defines.define(parsed[1], resolve_value(parsed[2], self.defines, span, self.diags), span, self.diags)
+            return True, active
+        if kind in ("if", "ifdef", "ifndef"):
+            # Any depth is allowed (spec 3.2); the stack is a list, so depth costs no recursion.
+            taking = self._condition(parsed, span) if active else False
+            frame = _Frame(active, taking, False, span, code.strip(), None)
+            stack.append(frame)
+            if active and not taking:
+                frame.region_start = lineno + 1
+            return True, active and taking
+        if kind == "else":
+            return True, self._else(display, lineno, span, stack, active)
+        if kind == "endif":
+            if not stack:
+                self.diags.report("E-PP-NEST", span, "#endif without a matching #if")
+                return True, active
+            frame = stack.pop()
+            self._close_region(display, frame, lineno - 1)
+            return True, frame.active_before
+        return False, active
+
+    def _else(self, display: str, lineno: int, span: Span, stack: list[_Frame], active: bool) -> bool:
+        """An #else line: whether code is active after it."""
+        if not stack or stack[-1].seen_else:
+            self.diags.report("E-PP-NEST", span, "#else without a matching #if")
+            return active
+        frame = stack[-1]
+        frame.seen_else = True
+        if frame.active_before:
+            if frame.taking:
+                frame.region_start = lineno + 1
+            else:
+                self._close_region(display, frame, lineno - 1)
+        return frame.active_before and not frame.taking
+
+    def _code_line(self, display: str, lineno: int, text: str, out: list[Line],
+                   include: Callable[[str, Span], tuple[str, tuple[str, ...]] | None] | None, star_comments: bool,
+                   chain: tuple[str, ...]) -> None:
+        """An active line that is not a directive: a `*` comment, an INCLUDE (expanded in place) or code."""
+        stripped = text.lstrip()
+        if not stripped:
+            return                         # blank: nothing to parse and no comment to attach
+        span = Span(display, lineno, len(text) - len(stripped) + 1)
+        if star_comments and stripped.startswith("*"):
+            out.append(Line("", stripped[1:], span))
+            return
+        code, comment = split_comment(text)
+        inc = _INCLUDE_LINE.match(code) if include else None
+        if inc:
+            if len(chain) > 32:
+                self.diags.report("E-FILE-INCLUDE-CYCLE", span, "INCLUDE nested more than 32 files deep")
+                return
+            got = include(inc.group(1), span)
+            if got is not None:
+                inc_display, inc_lines = got
+                if inc_display in chain:
+                    # a cycle would otherwise be expanded again and again (exponentially with two INCLUDEs)
+                    self.diags.report("E-FILE-INCLUDE-CYCLE", span, f"{inc_display} includes itself "
+                                     f"({' -> '.join(chain[chain.index(inc_display):] + (inc_display,))})")
+                    return
+                out.extend(self.run(inc_display, inc_lines, include, star_comments, chain))
+            return
+        out.append(Line(code, comment, span))
 
     def _close_region(self, display: str, frame: _Frame, last: int) -> None:
         """Record the frame's open inactive region (if any) as ending at line `last`."""
