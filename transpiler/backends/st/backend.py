@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import re
 from decimal import Decimal
+from types import MappingProxyType
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
@@ -18,13 +19,14 @@ from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.names import TEMP_PREFIX, NameTable
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
-from transpiler.backends.st.symbolic import Emitter, Executor, RoutineContext, Unsupported, REG_TYPES
+from transpiler.backends.st.routine import REG_TYPES, Emitter, RoutineContext, Unsupported
+from transpiler.backends.st.symbolic import Executor
 
-GROUP_TITLES = {"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
+GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
                 "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
                 "memory": "Byte memory: bytes, words, double words", "string": "Strings",
                 "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
-                "register": "Accumulators, index register, data stack"}
+                "register": "Accumulators, index register, data stack"})
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
 
@@ -167,6 +169,7 @@ class StBackend:
 
     def _routine(self, key: tuple[int, int], file_entries: dict[int, CallTarget]) -> Pou:
         """One POU; `file_entries` are the routine entries of the routine's file (by op index)."""
+        # Kept whole (~80 lines): the closures below share this routine's temporaries, callees and accessors.
         program = self.program
         is_main = key == (0, 0)
         entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)

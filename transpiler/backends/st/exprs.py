@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+from types import MappingProxyType
 
 INT32 = (-(2 ** 31), 2 ** 31 - 1)
-RANGES = {"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)}
+RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)})
 
 # Operator precedence of IEC 61131-3 ST (higher binds tighter).
 PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_EQ, PREC_AND, PREC_XOR, PREC_OR = 10, 9, 8, 7, 6, 5, 4, 3, 2

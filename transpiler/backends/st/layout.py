@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections import defaultdict
+from types import MappingProxyType
 
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.names import NameTable
 
-MEM_TYPE = {"B": "SINT", "W": "INT", "D": "DINT"}
+MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
 STRING_ARRAY_TYPE = "T_HH_STRINGS"

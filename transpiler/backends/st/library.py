@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 from transpiler.backends.iec_model import IecVar, Pou, VarSection
 from transpiler.language.semantics import Semantics
 
@@ -106,7 +108,7 @@ def helper_pous() -> dict[str, Pou]:
     return {p.name: p for p in pous}
 
 
-HELPER_DEPENDENCIES = {"HH_DIV": ("HH_SUB",)}
+HELPER_DEPENDENCIES = MappingProxyType({"HH_DIV": ("HH_SUB",)})
 
 
 def timer_fb(semantics: Semantics) -> Pou:

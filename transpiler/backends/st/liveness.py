@@ -8,13 +8,13 @@ from transpiler.ir import CallTarget, Op, Program
 from transpiler.frontend.resolve import routine_body, successors
 
 REGS = ("LA", "WA", "SA", "X")
-_LA_USE = {"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",
-           "JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF", "PSL", "NOTL"}
-_LA_DEF = {"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "CMP", "SCMP", "BT", "PLL", "NOTL"}
-_WA_USE = {"WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL", "DIV", "MOD",
-           "CMP", "SHL", "SHR", "BS", "BC", "BT", "PSW", "INCW", "DECW", "NOTW", "TWOC"}
-_WA_DEF = {"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL",
-           "DIV", "MOD", "SHL", "SHR", "BS", "BC", "PLW", "INCW", "DECW", "NOTW", "TWOC", "SUBM", "RPLY"}
+_LA_USE = frozenset({"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",
+                     "JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF", "PSL", "NOTL"})
+_LA_DEF = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "CMP", "SCMP", "BT", "PLL", "NOTL"})
+_WA_USE = frozenset({"WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL", "DIV", "MOD",
+                     "CMP", "SHL", "SHR", "BS", "BC", "BT", "PSW", "INCW", "DECW", "NOTW", "TWOC"})
+_WA_DEF = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL",
+                     "DIV", "MOD", "SHL", "SHR", "BS", "BC", "PLW", "INCW", "DECW", "NOTW", "TWOC", "SUBM", "RPLY"})
 
 
 def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:

@@ -9,7 +9,8 @@ from transpiler.backends.iec_model import st_comment
 from transpiler.ir import CallTarget, FileCode, Op
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.liveness import REGS
-from transpiler.backends.st.symbolic import Executor, Unsupported
+from transpiler.backends.st.routine import Unsupported
+from transpiler.backends.st.symbolic import Executor
 
 JUMPS = ("JP", "JPT", "JPF")
 

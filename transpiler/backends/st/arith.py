@@ -1,0 +1,140 @@
+"""Word arithmetic on expressions: wrap-around add/sub/negate, MUL/DIV/MOD with error markers, comparisons, gates."""
+
+from __future__ import annotations
+
+from types import MappingProxyType
+
+from transpiler.ir import Operand
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.exprs import Expr
+from transpiler.backends.st.routine import ExecutorPart
+
+REL = MappingProxyType({"==": "=", "<>": "<>", "<": "<", ">": ">", "<=": "<=", ">=": ">="})
+WIDTH_TYPE = MappingProxyType({8: "SINT", 16: "INT", 32: "DINT"})
+
+
+class ArithmeticMixin(ExecutorPart):
+    """Builds the expression of an arithmetic result, using plain ST where the value ranges allow and HH_* helpers elsewhere."""
+
+    def _fn(self, name: str, args: list[Expr], typ: str = "DINT", lo: int | None = None, hi: int | None = None) -> Expr:
+        self.ctx.helper(name)
+        return E.call(name, args, typ, lo, hi)
+
+    def _add(self, a: Expr, b: Expr, sub: bool = False) -> Expr:
+        a, b = E.to_dint(a), E.to_dint(b)
+        lo = a.lo - b.hi if sub else a.lo + b.lo
+        hi = a.hi - b.lo if sub else a.hi + b.hi
+        if a.const is not None and b.const is not None:
+            return E.int_const(wrap32(a.const - b.const if sub else a.const + b.const))
+        if E.INT32[0] <= lo and hi <= E.INT32[1]:
+            return E.binop("-" if sub else "+", a, b, "DINT", E.PREC_ADD, lo, hi)
+        return self._fn("HH_SUB" if sub else "HH_ADD", [a, b])
+
+    def _neg(self, a: Expr) -> Expr:
+        a = E.to_dint(a)
+        if a.const is not None:
+            return E.int_const(wrap32(-a.const))
+        if a.lo > E.INT32[0]:
+            return E.Expr(f"-{a.wrap(E.PREC_UNARY + 1)}", "DINT", a.deps, -a.hi, -a.lo, E.PREC_UNARY)
+        return self._fn("HH_SUB", [E.int_const(0), a])
+
+    def _not_word(self, a: Expr) -> Expr:
+        a = E.to_dint(a)
+        if a.const is not None:
+            return E.int_const(~a.const)
+        return E.binop("-", E.int_const(-1), a, "DINT", E.PREC_ADD, -1 - a.hi, -1 - a.lo)
+
+    def _flag(self, marker: int, value: Expr) -> None:
+        self.store(lambda: self.ctx.layout.bit_lvalue(Operand("M", marker)), lambda: value, frozenset())
+
+    def _mul(self, a: Expr, b: Expr) -> Expr:
+        a, b = E.to_dint(a), E.to_dint(b)
+        products = [a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi]
+        flag = self.ctx.flag_markers.mul_err
+        if E.INT32[0] <= min(products) and max(products) <= E.INT32[1]:
+            self._flag(flag, E.bool_const(False))
+            if a.const is not None and b.const is not None:
+                return E.int_const(a.const * b.const)
+            return E.binop("*", a, b, "DINT", E.PREC_MUL, min(products), max(products))
+        a = self._stable(a)
+        b = self._stable(b)
+        self._flag(flag, self._fn("HH_MULOVF", [a, b], "BOOL", 0, 1))
+        return self._fn("HH_MUL", [a, b])
+
+    def _divmod(self, a: Expr, b: Expr, mod: bool) -> Expr:
+        """Division or MOD with the spec's zero rule: result = a unchanged, error marker set."""
+        a, b = E.to_dint(a), E.to_dint(b)
+        flag = self.ctx.flag_markers.mod_err if mod else self.ctx.flag_markers.div_err
+        fn = "HH_MOD" if mod else "HH_DIV"
+        if b.const is not None and b.const != 0:
+            self._flag(flag, E.bool_const(False))
+            if b.const == -1 and a.lo == E.INT32[0]:
+                return self._fn(fn, [a, b])
+            if a.const is not None:
+                q = abs(a.const) // abs(b.const) * (1 if (a.const >= 0) == (b.const >= 0) else -1)
+                return E.int_const(a.const - b.const * q if mod else q)
+            lo, hi = (min(-abs(b.const) + 1, 0) if a.lo < 0 else 0, abs(b.const) - 1) if mod else (
+                min(a.lo // abs(b.const), -(a.hi // abs(b.const))), max(a.hi // abs(b.const), -(a.lo // abs(b.const))))
+            return E.binop("MOD" if mod else "/", a, b, "DINT", E.PREC_MUL, lo, hi)
+        if b.const == 0:
+            self._flag(flag, E.bool_const(True))
+            return a
+        return self._divmod_checked(a, b, flag, fn)
+
+    def _divmod_checked(self, a: Expr, b: Expr, flag: int, fn: str) -> Expr:
+        """Division or MOD by a divisor known only at run time: WA keeps `a` and the marker is set when it is 0."""
+        # Unknown divisor: keep WA and set the marker when it is 0 (spec 6.5, 17b.4).
+        result_var = self.ctx.register("WA")
+        if not b.simple or result_var.upper() in b.deps:
+            b = self._temp_copy(b)
+        self.s.regs["WA"] = None
+        self.prepare_write(result_var.upper())
+        if a.var is None or a.var.upper() != result_var.upper():
+            self.ctx.out.line(f"{result_var} := {a.text};")
+        a_text = result_var
+        marker = self.ctx.layout.bit_lvalue(Operand("M", flag))
+        self.prepare_write(E.base_name(marker.text))
+        self.ctx.helper(fn)
+        out = self.ctx.out
+        out.line(f"IF {b.wrap(E.PREC_EQ)} <> 0 THEN")
+        out.indent += 1
+        out.line(f"{result_var} := {fn}({a_text}, {b.text});")
+        out.line(f"{marker.text} := FALSE;")
+        out.indent -= 1
+        out.line("ELSE")
+        out.indent += 1
+        out.line(f"{marker.text} := TRUE;")
+        out.indent -= 1
+        out.line("END_IF;")
+        return E.var(result_var, "DINT")
+
+    def _sext(self, a: Expr, width: int) -> Expr:
+        if width == 32:
+            return a
+        typ = WIDTH_TYPE[width]
+        if E.fits(a, *E.RANGES[typ]):
+            return a
+        return self._fn(f"HH_SEXT{width}", [E.to_dint(a)], "DINT", *E.RANGES[typ])
+
+    def _compare(self, rel: str, a: Expr, b: Expr, width: int) -> Expr:
+        a = self._sext(E.to_dint(a), width)
+        b = E.to_dint(b)
+        # Compare the narrow values themselves where both sides allow it, so that comparisons read like the source.
+        narrow_a, narrow_b = E.unwiden(a), E.unwiden(b)
+        if narrow_a is not None and narrow_b is not None and narrow_a.typ == narrow_b.typ:
+            a, b = narrow_a, narrow_b
+        elif narrow_a is not None and b.const is not None and E.fits(b, *E.RANGES[narrow_a.typ]):
+            a = narrow_a
+        elif narrow_b is not None and a.const is not None and E.fits(a, *E.RANGES[narrow_b.typ]):
+            b = narrow_b
+        prec = E.PREC_EQ if rel in ("==", "<>") else E.PREC_CMP
+        return E.binop(REL[rel], a, b, "BOOL", prec, 0, 1)
+
+    def _gate(self, kind: str, a: Expr, b: Expr, width: int) -> Expr:
+        fn = {"A": "HH_WAND", "O": "HH_WOR", "X": "HH_WXOR"}[kind]
+        return self._fn(fn, [E.to_dint(a), E.to_dint(b), E.int_const(width)])
+
+
+def wrap32(v: int) -> int:
+    v &= 0xFFFFFFFF
+    return v - 2 ** 32 if v >= 2 ** 31 else v

@@ -1,0 +1,99 @@
+"""The frame of one routine's symbolic execution: emitted lines, symbolic register state, what the backend provides."""
+
+from __future__ import annotations
+
+import dataclasses
+from types import MappingProxyType
+from typing import Callable
+
+from transpiler.backends.iec_model import st_comment
+from transpiler.ir import Op, Operand
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.exprs import Expr
+from transpiler.backends.st.layout import Layout
+from transpiler.backends.st.liveness import REGS
+
+REG_TYPES = MappingProxyType({
+    "LA": ("BOOL", "HH_LA", "logic accumulator"), "WA": ("DINT", "HH_WA", "word accumulator"),
+    "SA": ("STRING", "HH_SA", "string accumulator"), "X": ("DINT", "HH_X", "index register")})
+
+
+class Unsupported(Exception):
+    """An op the ST backend cannot translate; the routine reports it and continues."""
+
+
+@dataclasses.dataclass
+class Frame:
+    op: Op
+    saved: Expr
+
+
+
+class Emitter:
+    """Collects ST lines with indentation and pending source comments."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.indent = 0
+        self.pending_comments: list[str] = []
+
+    def comment(self, text: str) -> None:
+        self.pending_comments.append(text)
+
+    def flush_comments(self) -> None:
+        for text in self.pending_comments:
+            self.lines.append("    " * self.indent + st_comment(text))
+        self.pending_comments = []
+
+    def line(self, text: str) -> None:
+        self.flush_comments()
+        self.lines.append("    " * self.indent + text)
+
+
+class SymbolicState:
+    """Accumulators (None = the value sits in its global register variable), data stack and bracket frames."""
+
+    def __init__(self, gen: "RoutineContext"):
+        self.gen = gen
+        self.regs: dict[str, Expr | None] = dict.fromkeys(REGS)
+        self.stack: list[tuple[str, Expr]] = []
+        self.frames: list[Frame] = []
+
+    def reg(self, name: str) -> Expr:
+        value = self.regs[name]
+        if value is not None:
+            return value
+        return E.var(self.gen.register(name), REG_TYPES[name][0])
+
+    def set(self, name: str, value: Expr) -> None:
+        self.regs[name] = value
+
+
+class RoutineContext:
+    """What the symbolic executor needs from the backend: layout, register names, helper registry, liveness."""
+
+    def __init__(self, layout: Layout, emitter: Emitter, live_after: Callable[[int], frozenset[str]],
+                 register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
+                 kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
+                 module_call: Callable[[int], str], semantics, bit_accessor: Callable[[str], str]):
+        self.layout = layout
+        self.out = emitter
+        self.live_after = live_after
+        self.register = register
+        self.helper = helper
+        self.temp = temp
+        self.kfield = kfield
+        self.stack_names = stack_names
+        self.module_call = module_call
+        self.semantics = semantics
+        self.bit_accessor = bit_accessor
+        self.flag_markers = semantics.profile.interface
+
+
+
+class ExecutorPart:
+    """What every part of the executor shares: set by Executor.__init__ (symbolic.py)."""
+
+    ctx: RoutineContext
+    s: SymbolicState
+    index: int                      # op index being executed (liveness is read after it)
