@@ -23,8 +23,8 @@ shim:
 
 test: venv shim
 	$(MAKE) -C runtime_shim test
-	-$(VENV)/bin/hh2iec fetch-schema
-	$(PY) -m pytest -q
+	$(VENV)/bin/hh2iec fetch-schema
+	HH2IEC_REQUIRE_SCHEMA=1 HH2IEC_SKIP_ALLOWANCE_FILE=tests/skip_allowance.txt $(PY) -m pytest -q
 
 demo: venv shim
 	-$(VENV)/bin/hh2iec fetch-schema

