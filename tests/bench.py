@@ -102,7 +102,9 @@ def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
     from transpiler.verify.equiv import random_scenario
     from transpiler.verify.simulate import project_names
     from transpiler.backends.st.check import find_iec2c
-    from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program
+    from transpiler.backends.report.report import io_map_of
+    from transpiler.frontend.mpfile import read_mp_file
+    from transpiler.backends.transpile import transpile_program
     result = compile_project(ProjectOptions(main=SAMPLE), make_semantics("itnc530", {}))
     diags = Diagnostics()
     out = transpile_program(result.program, diags, read_mp_file(SAMPLE.parent / "MP_data.mp", diags), {"st"})

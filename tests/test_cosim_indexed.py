@@ -21,7 +21,8 @@ from transpiler.verify.scenario import load_scenario
 from transpiler.language.semantics import make_semantics
 from transpiler.verify.simulate import project_names
 from transpiler.backends.st.check import find_iec2c
-from transpiler.backends.transpile import io_map_of, transpile_program
+from transpiler.backends.report.report import io_map_of
+from transpiler.backends.transpile import transpile_program
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -28,7 +28,7 @@ from transpiler.frontend.pipeline import compile_project  # noqa: E402
 from transpiler.verify.scenario import OperandRef  # noqa: E402
 from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
 from transpiler.verify.stimulus import Write  # noqa: E402
-from transpiler.backends.transpile import read_mp_file  # noqa: E402
+from transpiler.frontend.mpfile import read_mp_file  # noqa: E402
 
 COVERAGE_SEEDS = range(1, 101)
 

@@ -15,7 +15,7 @@ from transpiler.verify.cosim import builtin_side_factory, cosimulate
 from transpiler.verify.equiv import random_scenario, shrink
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import project_names
-from transpiler.backends.transpile import io_map_of
+from transpiler.backends.report.report import io_map_of
 
 from test_st_backend import SAMPLE, transpile_sample, transpile_vector
 from vectors import SKIP_REASON, SPEC, load_vectors, vector_scenario_yaml

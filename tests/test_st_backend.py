@@ -21,7 +21,9 @@ from transpiler.language.semantics import make_semantics
 from transpiler.verify.simulate import project_names
 from transpiler.backends.st.check import check_blark, check_tree_sitter, compile_with_matiec, find_iec2c
 from transpiler.backends.st.writer import extract_pou_bodies
-from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program
+from transpiler.backends.report.report import io_map_of
+from transpiler.frontend.mpfile import read_mp_file
+from transpiler.backends.transpile import transpile_program
 from transpiler.backends.plcopen.xsd import schema_path, validate_xml
 
 from vectors import SKIP_REASON, SPEC, load_vectors

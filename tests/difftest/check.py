@@ -21,7 +21,9 @@ from transpiler.verify.simulate import build_machine, project_names
 from transpiler.verify.simulate import run_scenario as simulate
 from transpiler.backends.st.check import find_iec2c
 from transpiler.exec.stexec.typesys import STR_MAX
-from transpiler.backends.transpile import Transpiled, io_map_of, read_mp_file, transpile_program
+from transpiler.backends.transpile import Transpiled, transpile_program
+from transpiler.backends.report.report import io_map_of
+from transpiler.frontend.mpfile import read_mp_file
 
 # Verdicts. "invalid" means the project is not a well-defined program (front-end errors or a runtime fault of the
 # reference interpreter): the generator is to blame, not the translator.

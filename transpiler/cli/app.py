@@ -1,4 +1,4 @@
-"""The `hh2iec` command line: check, transpile, simulate, equiv, explain (contract: shared spec cli.md)."""
+"""The `hh2iec` command line: the parser with every subcommand, and `check`, `explain`, `assumptions`."""
 
 from __future__ import annotations
 
@@ -6,105 +6,35 @@ import argparse
 import json
 import os
 import sys
-from pathlib import Path
 from typing import Sequence
 
-from transpiler.diagnostics import CompileFailed, Diagnostics, NO_SPAN, explain
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import CompileResult, compile_project
-from transpiler.frontend.preprocess import parse_define_value
-from transpiler.language.semantics import ASSUMPTION_BY_KEY, PROFILES, SemanticsError, make_semantics
+from transpiler import api
+from transpiler.cli import equiv, simulate, transpile
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
+                                   options_from_args, print_diagnostics, semantics_from_args)
+from transpiler.diagnostics import NO_SPAN, CompileFailed, explain
+from transpiler.frontend.pipeline import CompileResult
+from transpiler.language.semantics import ASSUMPTION_BY_KEY, PROFILES
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
-
-
-class UsageError(Exception):
-    pass
-
-
-class _ArgumentParser(argparse.ArgumentParser):
-    """argparse that reports bad usage as an E-USAGE diagnostic (exit 2) instead of its own error format."""
-
-    def error(self, message: str):
-        raise UsageError(f"{message} (see '{self.prog} --help')")
-
-
-def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("main", type=Path, help="main program (.src) of the HEIDENHAIN project")
-    p.add_argument("--cfg", type=Path, help="configuration file with DEFINE lines (default: OEM.cfg beside MAIN)")
-    p.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE", help="override a DEFINE")
-    p.add_argument("-I", dest="include_dirs", action="append", default=[], type=Path, metavar="DIR",
-                   help="extra folder to search for modules and definition files")
-    p.add_argument("--profile", choices=sorted(PROFILES), help="control profile (default itnc530)")
-    p.add_argument("-S", "--semantics", dest="semantic_overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override one semantic choice (see `hh2iec assumptions`)")
-    p.add_argument("--defs", dest="extra_defs", action="append", default=[], type=Path, metavar="FILE",
-                   help="extra global definition file (as if loaded with #define /g)")
-
-
-# Modules of the later stages; each has `register(subparsers, common)`. Imported lazily so that
-# `check` does not load the interpreter, the C shim or the ST executor.
-SUBCOMMAND_MODULES = ("cli.transpile", "verify.simulate", "verify.equiv")
+# Each module registers its own subcommands; listed here so that the parser's contents are visible in one place.
+SUBCOMMAND_MODULES = (transpile, simulate, equiv)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    import importlib
-    parser = _ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
+    parser = ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check", help="preprocess, parse and resolve a project; print a summary")
-    _common(check)
+    add_project_arguments(check)
     check.add_argument("--json", action="store_true", help="print the summary as JSON")
+    check.set_defaults(handler=cmd_check)
     ex = sub.add_parser("explain", help="explain a diagnostic code")
     ex.add_argument("code")
-    sub.add_parser("assumptions", help="list every semantic choice with its default per profile")
-    for name in SUBCOMMAND_MODULES:
-        importlib.import_module(f"transpiler.{name}").register(sub, _common)
+    ex.set_defaults(handler=cmd_explain)
+    sub.add_parser("assumptions", help="list every semantic choice with its default per profile").set_defaults(
+        handler=cmd_assumptions)
+    for module in SUBCOMMAND_MODULES:
+        module.register(sub, add_project_arguments)
     return parser
-
-
-def options_from_args(args: argparse.Namespace) -> ProjectOptions:
-    defines = {}
-    for item in args.defines:
-        if "=" not in item:
-            raise UsageError(f"-D expects NAME=VALUE, got '{item}'")
-        name, value = item.split("=", 1)
-        defines[name.strip()] = parse_define_value(value)
-    main = args.main
-    if not main.is_file():
-        raise UsageError(f"main program '{main}' does not exist")
-    if args.cfg is not None and not args.cfg.is_file():
-        raise UsageError(f"configuration file '{args.cfg}' does not exist")
-    for d in args.include_dirs:
-        if not d.is_dir():
-            raise UsageError(f"-I folder '{d}' does not exist")
-    return ProjectOptions(main=main, cfg=args.cfg, defines=defines, include_dirs=tuple(args.include_dirs),
-                          extra_global_defs=tuple(args.extra_defs))
-
-
-def semantics_from_args(args: argparse.Namespace, scenario_profile: str | None = None, extra: dict | None = None):
-    overrides = dict(extra or {})
-    for item in args.semantic_overrides:
-        if "=" not in item:
-            raise UsageError(f"-S expects KEY=VALUE, got '{item}'")
-        key, value = item.split("=", 1)
-        overrides[key.strip()] = value.strip()
-    profile = args.profile or scenario_profile or "itnc530"
-    try:
-        return make_semantics(profile, overrides)
-    except SemanticsError as exc:
-        raise UsageError(str(exc)) from None
-
-
-def print_diagnostics(diags: Diagnostics, stream=None) -> None:
-    stream = stream or sys.stderr
-    for d in diags.items:
-        print(d.render(), file=stream)
-
-
-def compile_from_args(args: argparse.Namespace, scenario_profile: str | None = None, semantic_extra: dict | None = None) -> CompileResult:
-    options = options_from_args(args)
-    semantics = semantics_from_args(args, scenario_profile, semantic_extra)
-    return compile_project(options, semantics)
 
 
 def summary(result: CompileResult) -> dict:
@@ -123,8 +53,8 @@ def summary(result: CompileResult) -> dict:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    result = compile_from_args(args)
-    print_diagnostics(result.diagnostics)
+    result = api.check_project(options_from_args(args), semantics_from_args(args))
+    print_diagnostics(result.diagnostics.items)
     data = summary(result)
     if args.json:
         print(json.dumps(data, indent=2, sort_keys=True))
@@ -165,11 +95,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except SystemExit as exc:
         return EXIT_BAD_INPUT if exc.code not in (0, None) else EXIT_OK
-    handler = {"check": cmd_check, "explain": cmd_explain, "assumptions": cmd_assumptions}.get(args.command)
-    if handler is None:
-        handler = getattr(args, "handler")
     try:
-        return handler(args)
+        return args.handler(args)
     except UsageError as exc:
         print(f"{NO_SPAN}: error[E-USAGE]: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -6,10 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from transpiler.atomic import write_files_atomically
-from transpiler.cli.app import (EXIT_BAD_INPUT, EXIT_OK, UsageError, compile_from_args, print_diagnostics)
+from transpiler import api
+from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_OK, UsageError, print_diagnostics, project_from_args
 from transpiler.diagnostics import NO_SPAN
-from transpiler.backends.transpile import find_mp_file, read_mp_file, transpile_program, user_pous
 
 
 def register(sub, common) -> None:
@@ -28,39 +27,19 @@ def cmd_transpile(args: argparse.Namespace) -> int:
     formats = {f.strip().lower() for f in args.format.split(",") if f.strip()}
     if not formats or formats - {"st", "xml"}:
         raise UsageError(f"--format takes st, xml or st,xml, not '{args.format}'")
-    result = compile_from_args(args)
-    diags = result.diagnostics
-    if not result.ok:
-        print_diagnostics(diags)
-        return EXIT_BAD_INPUT
-    mp_path = args.mp or find_mp_file(args.main)
-    if args.mp is not None and not args.mp.is_file():
-        raise UsageError(f"machine-parameter file '{args.mp}' does not exist")
-    mp = read_mp_file(mp_path, diags) if mp_path else {}
-    if diags.has_errors():
-        print_diagnostics(diags)
-        return EXIT_BAD_INPUT
-    out = transpile_program(result.program, diags, mp, formats)
-    if "xml" in formats:
-        from transpiler.backends.plcopen.xsd import FETCH_HINT, schema_path, validate_xml
-        if schema_path() is None:
-            print(f"note: the PLCopen schema is not cached, project.xml was not validated. {FETCH_HINT}", file=sys.stderr)
-        else:
-            problems = validate_xml(out.files["project.xml"])
-            if problems:
-                for p in problems:
-                    print(p, file=sys.stderr)
-                print(f"{NO_SPAN}: error[E-XSD]: project.xml does not validate against the TC6 schema "
-                      "(a bug in hh2iec; nothing was written)", file=sys.stderr)
-                return EXIT_BAD_INPUT
+    project = project_from_args(args)
+    out = api.transpile(project, formats=formats, mp_file=args.mp)
+    if "xml" in formats and not out.xml_validated:
+        from transpiler.backends.plcopen.xsd import FETCH_HINT
+        print(f"note: the PLCopen schema is not cached, project.xml was not validated. {FETCH_HINT}", file=sys.stderr)
     try:
-        write_files_atomically({args.out / name: data for name, data in out.files.items()})
+        out.write(args.out)
     except OSError as exc:
         print(f"{args.out}:1:1: error[E-TOOL]: cannot write output: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    print_diagnostics(diags)
+    print_diagnostics(project.diagnostics + out.diagnostics)
     print(f"hh2iec transpile: wrote {', '.join(sorted(out.files))} to {args.out} "
-          f"({len(user_pous(out.result))} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
+          f"({out.pou_count} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
           f"{len(out.result.untranslated)} not translated)")
     return EXIT_OK
 
@@ -74,5 +53,3 @@ def cmd_fetch_schema(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     print(f"PLCopen TC6 v2.01 schema verified at {path}")
     return EXIT_OK
-
-

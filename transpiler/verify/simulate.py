@@ -1,10 +1,8 @@
-"""`hh2iec simulate`: runs the original program on the reference interpreter against a scenario, with traces and expectations."""
+"""Simulation: runs the original program on the reference interpreter against a scenario, with traces and expectations."""
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import sys
 import time
 from decimal import Decimal
 from pathlib import Path
@@ -12,19 +10,16 @@ from typing import Any, Callable
 
 import yaml
 
-from transpiler.cli.app import UsageError, options_from_args
-from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
+from transpiler.diagnostics import CompileFailed, Diagnostics, Span
 from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
-from transpiler.frontend.pipeline import compile_project
-from transpiler.verify.scenario import NameTable, OperandRef, Scenario, ScenarioError, load_scenario
-from transpiler.language.semantics import Semantics, PROFILES, SemanticsError, make_semantics
-from transpiler.exec.compiled.shim import NcActionError, ShimUnavailable, UnknownModule
+from transpiler.verify.scenario import NameTable, OperandRef, Scenario
+from transpiler.language.semantics import PROFILES
+from transpiler.exec.compiled.shim import NcActionError, UnknownModule
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
 from transpiler.verify.traces import TraceRecorder
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 _WRITES = {"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "WST", "POP", "INC", "DEC", "SST"}
 _NAMED_KINDS = frozenset("MIOTCBWDS")
 
@@ -186,20 +181,7 @@ def _nc_event_span(scenario: Scenario, cycle: int) -> Span:
     return scenario.span_of("events", best, "nc") if best is not None else scenario.span_of()
 
 
-# ---------------------------------------------------------------------------------------------
-# command line
-
-
-def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
-    p = sub.add_parser("simulate", help="run the original program on the reference interpreter against a scenario")
-    common(p)
-    p.add_argument("--scenario", type=Path, required=True, help="scenario file (YAML, see scenario-format.md)")
-    p.add_argument("--trace", type=Path, metavar="OUT.csv", help="write one row per cycle with the observed values")
-    p.add_argument("--vcd", type=Path, metavar="OUT.vcd", help="write the trace as a value-change dump (GTKWave)")
-    p.set_defaults(handler=cmd_simulate)
-
-
-def _peek(path: Path) -> tuple[str | None, dict, Span | None]:
+def scenario_settings(path: Path) -> tuple[str | None, dict, Span | None]:
     """The scenario's `profile` and `semantics` (needed before compiling), and where `semantics` is written."""
     try:
         node = yaml.compose(path.read_text(encoding="utf-8"), Loader=yaml.SafeLoader)
@@ -217,106 +199,3 @@ def _peek(path: Path) -> tuple[str | None, dict, Span | None]:
                 data = yaml.safe_load(yaml.serialize(value))
                 semantics = data if isinstance(data, dict) else {}
     return profile, semantics, where
-
-
-def _print(items: list[Diagnostic], stream: Any = None) -> None:
-    for d in items:
-        print(d.render(), file=stream or sys.stderr)
-
-
-def scenario_semantics(args: argparse.Namespace, path: Path | None) -> Semantics | None:
-    """Profile and semantic choices: the scenario's `profile`/`semantics`, overridden by --profile and -S.
-
-    Prints the error and returns None when a setting is unknown or invalid."""
-    scenario_profile, overrides, sem_span = _peek(path) if path is not None else (None, {}, None)
-    overrides = {str(k): v for k, v in overrides.items()}
-    for item in args.semantic_overrides:
-        if "=" not in item:
-            raise UsageError(f"-S expects KEY=VALUE, got '{item}'")
-        key, value = item.split("=", 1)
-        overrides[key.strip()] = value.strip()
-    try:
-        return make_semantics(args.profile or scenario_profile or "itnc530", overrides)
-    except SemanticsError as exc:
-        where = sem_span or Span(str(path or "<command line>"), 1, 1)
-        print(f"{where}: error[E-SCENARIO]: {exc}", file=sys.stderr)
-        return None
-
-
-def cmd_simulate(args: argparse.Namespace) -> int:
-    path: Path = args.scenario
-    if not path.is_file():
-        raise UsageError(f"scenario file '{path}' does not exist")
-    semantics = scenario_semantics(args, path)
-    if semantics is None:
-        return EXIT_BAD_INPUT
-    result = compile_project(options_from_args(args), semantics)
-    _print(result.diagnostics.items)
-    if not result.ok:
-        return EXIT_BAD_INPUT
-    program = result.program
-    names = project_names(program)
-    diags = Diagnostics()
-    try:
-        scenario = load_scenario(path, names)
-        _print(list(scenario.warnings))
-        stimulus = build_stimulus(scenario, names)
-        _print(list(stimulus.diagnostics))
-        sim = run_scenario(program, scenario, names, stimulus, diags=diags)
-    except ScenarioError as exc:
-        _print(exc.diagnostics)
-        return EXIT_BAD_INPUT
-    except CompileFailed as exc:
-        _print(exc.diagnostics)
-        return EXIT_BAD_INPUT
-    except ShimUnavailable as exc:
-        print(f"{Span(str(path), 1, 1)}: error[E-TOOL]: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    _print(diags.items)
-    return _report(args, scenario, sim)
-
-
-def _report(args: argparse.Namespace, scenario: Scenario, sim: SimulationResult) -> int:
-    try:
-        if args.trace is not None:
-            sim.trace.write_csv(args.trace)
-        if args.vcd is not None:
-            sim.trace.write_vcd(args.vcd, sim.machine.cycle_time_ms)
-    except OSError as exc:
-        print(f"{Span(str(args.trace or args.vcd), 1, 1)}: error[E-USAGE]: cannot write the trace: {exc}",
-              file=sys.stderr)
-        return EXIT_BAD_INPUT
-    _print_warnings(sim.warnings)
-    first_marker = sim.machine.profile.interface.error_markers[0]
-    for marker, cycle in sorted(sim.machine.error_messages.items()):
-        print(f"note: PLC error message {marker - first_marker} (M{marker}) was set, first after cycle {cycle}",
-              file=sys.stderr)
-    for number, count in sorted(sim.machine.unknown_modules.items()):
-        print(f"note: PLC module {number} ran {count} time(s) as a stub without a simulation model (A-46)",
-              file=sys.stderr)
-    for failure in sim.failures:
-        where = failure.span or scenario.span_of("expect")
-        print(f"{where}: expectation failed: cycle {failure.cycle}: {failure.name}: expected {failure.expected!r}, "
-              f"actual {failure.actual!r}", file=sys.stderr)
-    rate = sim.instructions / sim.seconds if sim.seconds > 0 else 0.0
-    checked = sum(len(e.values) for e in scenario.expect if e.cycle < sim.cycles_run)
-    print(f"hh2iec simulate: {scenario.name}: {sim.cycles_run} of {scenario.cycles} cycles, "
-          f"{sim.instructions} instructions ({rate / 1e6:.2f} M/s), {checked} expected values checked, "
-          f"{len(sim.failures)} failed")
-    if sim.fault is not None:
-        print(sim.fault.render(sim.fault_span), file=sys.stderr)
-        return EXIT_BAD_INPUT
-    return EXIT_FAILED if sim.failures else EXIT_OK
-
-
-def _print_warnings(warnings: list[RuntimeFault]) -> None:
-    """Each distinct runtime warning once, with its first cycle and how often it occurred."""
-    seen: dict[tuple, list[RuntimeFault]] = {}
-    for w in warnings:
-        seen.setdefault((w.code, w.span, w.job), []).append(w)
-    for group in seen.values():
-        first = group[0]
-        extra = f"; {len(group)} times in total" if len(group) > 1 else ""
-        print(first.render() + extra, file=sys.stderr)
-
-

@@ -1,0 +1,267 @@
+"""The public API of hh2iec: load a project, transpile it, simulate it, check its equivalence.
+
+Every function returns a typed result and raises one exception type, `HH2IECError`
+(`transpiler.diagnostics.CompileFailed`), whose `diagnostics` list every problem found (errors and
+the warnings collected before them), each rendering as `file:line:col: error[CODE]: message`.
+The `hh2iec` command line is a thin layer over these functions; see docs/api.md for a script that
+runs the equivalence check over many OEM variants.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from decimal import Decimal
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Iterable, Mapping
+
+from transpiler.atomic import write_files_atomically
+from transpiler.backends.report.iomap import IoMap
+from transpiler.backends.report.report import io_map_of, user_pous
+from transpiler.backends.st.backend import StResult
+from transpiler.backends.transpile import transpile_program
+from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.mpfile import find_mp_file, read_mp_file
+from transpiler.frontend.pipeline import CompileResult, compile_project
+from transpiler.frontend.preprocess import parse_define_value
+from transpiler.ir import Program
+from transpiler.language.semantics import Semantics, SemanticsError, make_semantics
+
+if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
+    from transpiler.verify.equiv import EquivalenceResult
+    from transpiler.verify.scenario import Scenario
+    from transpiler.verify.simulate import SimulationResult
+
+HH2IECError = CompileFailed
+DEFAULT_PROFILE = "itnc530"
+
+
+def _usage(message: str, diags: Diagnostics | None = None) -> CompileFailed:
+    items = list(diags.items) if diags is not None else []
+    return CompileFailed(items + [Diagnostic.of("E-USAGE", NO_SPAN, message)])
+
+
+# ---------------------------------------------------------------------------------------------
+# loading
+
+
+def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | None = None,
+                  scenario: Path | None = None) -> Semantics:
+    """The control profile and semantic choices: `scenario`'s `profile`/`semantics` keys, overridden by `profile`
+    and `overrides`; the default profile is itnc530. Raises HH2IECError on an unknown profile or setting."""
+    from transpiler.verify.simulate import scenario_settings
+    scenario_profile, settings, where = scenario_settings(scenario) if scenario is not None else (None, {}, None)
+    merged = {str(k): v for k, v in settings.items()}
+    merged.update({str(k): v for k, v in (overrides or {}).items()})
+    try:
+        return make_semantics(profile or scenario_profile or DEFAULT_PROFILE, merged)
+    except SemanticsError as exc:
+        if scenario is None:
+            raise _usage(str(exc)) from None
+        span = where or Span(str(scenario), 1, 1)
+        raise CompileFailed([Diagnostic.of("E-SCENARIO", span, str(exc))]) from None
+
+
+def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str, str] | None = None,
+                    include_dirs: Iterable[Path] = (), extra_defs: Iterable[Path] = ()) -> ProjectOptions:
+    """Where the project is and how to configure it; DEFINE values are written as in OEM.cfg. Raises
+    HH2IECError (E-USAGE) when a named file or folder does not exist."""
+    main = Path(main)
+    if not main.is_file():
+        raise _usage(f"main program '{main}' does not exist")
+    if cfg is not None and not Path(cfg).is_file():
+        raise _usage(f"configuration file '{cfg}' does not exist")
+    include_dirs = tuple(Path(d) for d in include_dirs)
+    for d in include_dirs:
+        if not d.is_dir():
+            raise _usage(f"-I folder '{d}' does not exist")
+    values = {name.strip(): parse_define_value(str(value)) for name, value in (defines or {}).items()}
+    return ProjectOptions(main=main, cfg=Path(cfg) if cfg is not None else None, defines=values,
+                          include_dirs=include_dirs, extra_global_defs=tuple(Path(p) for p in extra_defs))
+
+
+@dataclasses.dataclass(frozen=True)
+class Project:
+    """A loaded project: the resolved program (the IR every later stage reads) and the warnings of loading."""
+
+    options: ProjectOptions
+    semantics: Semantics
+    program: Program
+    diagnostics: tuple[Diagnostic, ...]
+
+    @property
+    def main(self) -> Path:
+        return self.options.main
+
+
+def check_project(options: ProjectOptions, semantics: Semantics | None = None) -> CompileResult:
+    """Preprocess, parse and resolve; never raises for bad input (the result carries every diagnostic)."""
+    return compile_project(options, semantics or semantics_for())
+
+
+def load_project(options: ProjectOptions, semantics: Semantics | None = None) -> Project:
+    """Preprocess, parse and resolve the project; raises HH2IECError if anything is wrong with it."""
+    semantics = semantics or semantics_for()
+    result = compile_project(options, semantics)
+    if not result.ok:
+        raise CompileFailed(result.diagnostics.items)
+    return Project(options, semantics, result.program, tuple(result.diagnostics.items))
+
+
+# ---------------------------------------------------------------------------------------------
+# transpiling
+
+
+@dataclasses.dataclass(frozen=True)
+class Transpilation:
+    """The translated project: file name -> content, the ST text, and what the back end decided."""
+
+    files: dict[str, bytes]
+    st_text: str
+    result: StResult
+    mp_file: Path | None
+    diagnostics: tuple[Diagnostic, ...]
+    xml_validated: bool = False
+
+    @property
+    def io_map(self) -> IoMap:
+        return io_map_of(self.result)
+
+    @property
+    def pou_count(self) -> int:
+        return len(user_pous(self.result))
+
+    def write(self, out_dir: Path) -> None:
+        """Write every file into `out_dir` all-or-nothing (OSError when the folder cannot be written)."""
+        write_files_atomically({Path(out_dir) / name: data for name, data in self.files.items()})
+
+
+def machine_parameters_of(project: Project, mp_file: Path | None = None
+                          ) -> tuple[Path | None, dict[tuple[int, int], Decimal], Diagnostics]:
+    """`mp_file`, else the one *.mp file beside the main program, read into values."""
+    diags = Diagnostics()
+    if mp_file is not None and not Path(mp_file).is_file():
+        raise _usage(f"machine-parameter file '{mp_file}' does not exist")
+    path = Path(mp_file) if mp_file is not None else find_mp_file(project.main)
+    values = read_mp_file(path, diags) if path is not None else {}
+    return path, values, diags
+
+
+def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_file: Path | None = None,
+              validate_xml: bool = True) -> Transpilation:
+    """Translate to ST / PLCopen XML plus report.md and io_map.csv. Raises HH2IECError on bad machine
+    parameters or when the XML does not validate against the cached TC6 schema (a bug in hh2iec)."""
+    formats = {f.strip().lower() for f in formats if f.strip()}
+    if not formats or formats - {"st", "xml"}:
+        raise _usage(f"formats are st, xml or both, not '{','.join(sorted(formats))}'")
+    path, mp, diags = machine_parameters_of(project, mp_file)
+    diags.raise_if_errors()
+    out = transpile_program(project.program, diags, mp, formats)
+    diags.raise_if_errors()
+    validated = False
+    if "xml" in formats and validate_xml:
+        from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
+        if schema_path() is not None:
+            problems = validate(out.files["project.xml"])
+            if problems:
+                raise CompileFailed(list(diags.items) + [Diagnostic.of(
+                    "E-XSD", NO_SPAN, "project.xml does not validate against the TC6 schema (a bug in hh2iec; "
+                    "nothing was written)", *problems)])
+            validated = True
+    return Transpilation(out.files, out.st_text, out.result, path, tuple(diags.items), validated)
+
+
+# ---------------------------------------------------------------------------------------------
+# simulating and co-simulating
+
+
+@dataclasses.dataclass(frozen=True)
+class Simulation:
+    """One scenario run on the reference interpreter, with the scenario's own warnings."""
+
+    scenario: Scenario
+    run: SimulationResult
+    diagnostics: tuple[Diagnostic, ...]
+
+
+def simulate(project: Project, scenario: Path) -> Simulation:
+    """Run the original program under a scenario file (expectations checked, trace kept)."""
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import project_names, run_scenario
+    from transpiler.verify.stimulus import build_stimulus
+    scenario = Path(scenario)
+    if not scenario.is_file():
+        raise _usage(f"scenario file '{scenario}' does not exist")
+    names = project_names(project.program)
+    diags = Diagnostics()
+    loaded = load_scenario(scenario, names)
+    diags.extend(loaded.warnings)
+    stimulus = build_stimulus(loaded, names)
+    diags.extend(stimulus.diagnostics)
+    try:
+        run = run_scenario(project.program, loaded, names, stimulus, diags=diags)
+    except ShimUnavailable as exc:
+        raise CompileFailed(list(diags.items) + [Diagnostic.of("E-TOOL", Span(str(scenario), 1, 1), str(exc))]) from None
+    return Simulation(loaded, run, tuple(diags.items))
+
+
+@dataclasses.dataclass(frozen=True)
+class Equivalence:
+    """The equivalence check: every run's outcome, the verdict, and how the ST side was chosen."""
+
+    result: EquivalenceResult
+    st_name: str
+    backend_note: str
+    diagnostics: tuple[Diagnostic, ...]
+
+    @property
+    def equivalent(self) -> bool:
+        return self.result.equivalent
+
+
+def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                      backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                      mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
+                      progress: Callable[[str], Callable[[int, int], None]] | None = None) -> Equivalence:
+    """Co-simulate the original program and its translation (or `st_file`) under each scenario and
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk."""
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify.equiv import choose_backend, random_scenario, run_equivalence
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import project_names
+    scenarios = [Path(p) for p in scenarios]
+    if not scenarios and random_cycles <= 0:
+        raise _usage("equiv needs at least one --scenario or --random-cycles N")
+    for path in scenarios:
+        if not path.is_file():
+            raise _usage(f"scenario file '{path}' does not exist")
+    if st_file is not None and not Path(st_file).is_file():
+        raise _usage(f"ST file '{st_file}' does not exist")
+    mp_path, mp, diags = machine_parameters_of(project, mp_file)
+    transpiled = transpile_program(project.program, diags, mp, {"st"})
+    diags.raise_if_errors()         # a partial translation is never compared as if it were whole
+    st_text, st_name = transpiled.st_text, "project.st"
+    iomap = io_map_of(transpiled.result)
+    if st_file is not None:
+        st_file = Path(st_file)
+        st_text, st_name = st_file.read_text(encoding="utf-8", errors="replace"), str(st_file)
+        map_path = Path(io_map_file) if io_map_file is not None else st_file.parent / "io_map.csv"
+        if map_path.is_file():
+            try:
+                iomap = IoMap.from_csv(map_path.read_text(encoding="utf-8"))
+            except ValueError as exc:
+                raise CompileFailed([Diagnostic.of("E-USAGE", Span(str(map_path), 1, 1), str(exc))]) from None
+    chosen = choose_backend(backend, st_text, st_name, transpiled.result.project)
+    if chosen.factory is None:
+        raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
+    names = project_names(project.program)
+    loaded = [load_scenario(path, names) for path in scenarios]
+    if random_cycles > 0:
+        loaded.append(random_scenario(project.program, names, random_cycles, seed, mp_path))
+    try:
+        result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
+                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress)
+    except ShimUnavailable as exc:
+        raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
+    return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -1,0 +1,112 @@
+"""The `equiv` subcommand: co-simulation of the original and the translated program, verdict and reports."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Callable
+
+from transpiler import api
+from transpiler.atomic import write_files_atomically
+from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.diagnostics import NO_SPAN
+
+
+def register(sub: argparse._SubParsersAction, common) -> None:
+    p = sub.add_parser("equiv", help="co-simulate the original and the translated program and compare every cycle")
+    common(p)
+    p.add_argument("--scenario", type=Path, action="append", default=[], help="scenario file (repeatable)")
+    p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto")
+    p.add_argument("--st", type=Path, help="use this ST file instead of transpiling afresh")
+    p.add_argument("--io-map", type=Path, help="io_map.csv of the --st file (default: io_map.csv beside it, "
+                   "else the map of a fresh transpilation)")
+    p.add_argument("--random-cycles", type=int, default=0, metavar="N", help="also run N cycles of random stimulus")
+    p.add_argument("--seed", type=int, default=1, metavar="S", help="seed of the random stimulus")
+    p.add_argument("--report", type=Path, metavar="OUT.json")
+    p.add_argument("--junit", type=Path, metavar="OUT.xml")
+    p.add_argument("--vcd", type=Path, metavar="DIR", help="write both traces of each run as value-change dumps")
+    p.add_argument("--mp", type=Path, help="machine-parameter file used for the transpilation's preset defaults")
+    p.add_argument("--no-shrink", action="store_true", help="do not shrink a divergent stimulus")
+    p.set_defaults(handler=cmd_equiv)
+
+
+def cmd_equiv(args: argparse.Namespace) -> int:
+    from transpiler.verify.equiv import report_json, report_junit
+    if not args.scenario and args.random_cycles <= 0:
+        raise UsageError("equiv needs at least one --scenario or --random-cycles N")
+    for path in args.scenario:
+        if not path.is_file():
+            raise UsageError(f"scenario file '{path}' does not exist")
+    if args.st is not None and not args.st.is_file():
+        raise UsageError(f"ST file '{args.st}' does not exist")
+    project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
+    print_diagnostics(project.diagnostics)
+    check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
+                                  backend=args.backend, st_file=args.st, io_map_file=args.io_map, mp_file=args.mp,
+                                  shrink=not args.no_shrink, vcd_dir=args.vcd, progress=_progress_printer)
+    print_diagnostics(check.diagnostics)
+    if check.backend_note:
+        print(f"note: {check.backend_note}", file=sys.stderr)
+    result = check.result
+    _print_outcomes(result)
+    files = {}
+    if args.report:
+        files[args.report] = report_json(result)
+    if args.junit:
+        files[args.junit] = report_junit(result)
+    write_files_atomically(files)
+    if result.errors:
+        return EXIT_BAD_INPUT
+    return EXIT_FAILED if result.divergent else EXIT_OK
+
+
+def _progress_printer(label: str) -> Callable[[int, int], None]:
+    start = time.perf_counter()
+    state = {"last": start}
+
+    def show(done: int, total: int) -> None:
+        now = time.perf_counter()
+        if now - start > 3 and now - state["last"] > 1 and sys.stderr.isatty():
+            state["last"] = now
+            print(f"\r{label}: cycle {done}/{total} ({done / (now - start):.0f} cycles/s)", end="", file=sys.stderr)
+        if done == total and now - start > 3 and sys.stderr.isatty():
+            print(file=sys.stderr)
+    return show
+
+
+def _pct(a: int, b: int) -> str:
+    return f"{100.0 * a / b:.1f}%" if b else "n/a"
+
+
+def _compared_text(r) -> str:
+    """The operands compared per cycle; addresses the program stored to through the index register are counted
+    apart because they join the comparison only from their first indexed store on (see cosim.cosimulate)."""
+    text = f"{r.compared} operands compared per cycle"
+    if r.compared_indexed:
+        text += f" + {r.compared_indexed} indexed addresses from their first indexed store"
+    return text
+
+
+def _print_outcomes(result) -> None:
+    from transpiler.verify.stimulus import scenario_to_yaml
+    for o in result.outcomes:
+        r = o.result
+        if r.error:
+            print(f"{NO_SPAN}: error[E-TOOL]: {r.scenario}: {r.error}", file=sys.stderr)
+        elif r.divergence:
+            d = r.divergence
+            print(f"DIVERGENCE in {r.scenario} at cycle {d.cycle}: {d.name} ({d.operand}): original {d.original!r}, "
+                  f"translated {d.translated!r}")
+            if o.shrunk is not None:
+                print(f"shortest input trace found ({o.shrunk.cycles} cycles, {len(o.shrunk.events)} events, "
+                      f"{o.shrink_runs} runs); rerun it with --scenario:")
+                print(scenario_to_yaml(o.shrunk))
+        else:
+            print(f"equivalent: {r.scenario}: {r.cycles_run} cycles, {_compared_text(r)} ({r.seconds:.2f} s)")
+    c = result.coverage
+    print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
+          f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
+          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
+    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, backend {result.backend})")
