@@ -1,0 +1,112 @@
+"""Control flow in the generated code: jumps, calls with the call-depth check, EM, CASE tables and submit jobs."""
+
+from __future__ import annotations
+
+from transpiler.ir import Op
+
+
+class FlowCode:
+    """Mixin of the code generator: JP JPT JPF, CALL CALLT CALLF, EM EMT EMF, CASE, SUBM RPLY CAN; uses `out`,
+    `sem`, `coverage`, `depth_limit`, `seg_maps`, `case_tables` and the operand access of AccessCode."""
+
+    # control flow
+
+    def _cover(self, ind: int, opid: int, outcome: str) -> None:
+        if self.coverage:
+            self.out(ind, f"_branch(({opid}, {outcome}))", opid)
+
+    def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
+        self.out(ind, f"b = {seg_of[op.target]}", opid)
+        self.out(ind, "continue", opid)
+
+    def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> None:
+        self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
+        self._cover(ind + 1, opid, "1")
+        self.out(ind + 1, f"b = {seg_of[op.target]}", opid)
+        self.out(ind + 1, "continue", opid)
+        self._cover(ind, opid, "0")
+
+    def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
+        self._op_JPT(op, opid, ind, f, seg_of, negate=True)
+
+    def _call(self, op: Op, opid: int, ind: int) -> None:
+        call = op.call
+        if call is None or (not call.is_module and call.file < 0):
+            self.out(ind, "_falloff()", opid)       # unresolved target: the front end reported it
+            return
+        if call.is_module:
+            self.out(ind, f"_module({call.module}, {opid})", opid)
+            return
+        self._nested(ind, opid, f"F{call.file}({self.seg_maps[call.file][call.index]})")
+
+    def _nested(self, ind: int, opid: int, *call: str) -> None:
+        """A call one level deeper (CM and CASE), checked against call_depth (A-29)."""
+        self.out(ind, "d += 1", opid)
+        self.out(ind, f"if d > {self.depth_limit}: _depth_fault(d)", opid)
+        for line in call:
+            self.out(ind, line, opid)
+        self.out(ind, "d -= 1", opid)
+
+    def _op_CALL(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self._call(op, opid, ind)
+
+    def _op_CALLT(self, op: Op, opid: int, ind: int, *_: object, negate: bool = False) -> None:
+        self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
+        self._cover(ind + 1, opid, "1")
+        self._call(op, opid, ind + 1)
+        if self.coverage:
+            self.out(ind, "else:", opid)
+            self._cover(ind + 1, opid, "0")
+
+    def _op_CALLF(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self._op_CALLT(op, opid, ind, negate=True)
+
+    def _op_EM(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self.out(ind, f"_em = {opid}", opid)
+        self.out(ind, "return", opid)
+
+    def _op_EMT(self, op: Op, opid: int, ind: int, *_: object, negate: bool = False) -> None:
+        self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
+        self._cover(ind + 1, opid, "1")
+        self.out(ind + 1, f"_em = {opid}", opid)
+        self.out(ind + 1, "return", opid)
+        self._cover(ind, opid, "0")
+
+    def _op_EMF(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self._op_EMT(op, opid, ind, negate=True)
+
+    def _op_CASE(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        targets = []
+        for t in op.case_targets:
+            if t is None or t.file < 0:
+                targets.append("None")
+            else:
+                targets.append(f"(F{t.file}, {self.seg_maps[t.file][t.index]})")
+        table = f"_CT{opid}"
+        self.case_tables.append(f"{table} = ({', '.join(targets)}{',' if targets else ''})")
+        count = len(targets)
+        self.out(ind, f"_s = {self.value(op.operand)}", opid)
+        self.out(ind, f"if 0 <= _s < {count}:", opid)
+        self._cover(ind + 1, opid, "_s")
+        self._nested(ind + 1, opid, f"_f, _g = {table}[_s]", "_f(_g)")
+        if self.coverage or self.sem["case_out_of_range"] == "fault":
+            self.out(ind, "else:", opid)
+            self._cover(ind + 1, opid, "-1")
+            if self.sem["case_out_of_range"] == "fault":
+                self.out(ind + 1, f"_case_fault(_s, {count})", opid)
+
+    # submit jobs (section 15, A-45)
+
+    def _op_SUBM(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        call = op.call
+        if call is None or call.file < 0:
+            self.out(ind, "_falloff()", opid)
+            return
+        seg = self.seg_maps[call.file][call.index]
+        self.out(ind, f"WA = _subm(F{call.file}, {seg}, {call.label!r})", opid)
+
+    def _op_RPLY(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self.out(ind, f"WA = _rply({self.value(op.operand)})", opid)
+
+    def _op_CAN(self, op: Op, opid: int, ind: int, *_: object) -> None:
+        self.out(ind, f"_can({self.value(op.operand)})", opid)
