@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 SAMPLE := samples/basic_program
 OUT := out/basic_program
 
-.PHONY: all venv shim test demo bench fuzz mutants difftest clean
+.PHONY: all venv shim test test-matiec demo bench fuzz mutants difftest clean
 
 all: test
 
@@ -51,3 +51,12 @@ difftest: venv shim
 
 clean:
 	rm -rf out build runtime_shim/build .pytest_cache
+
+# matiec's own verdicts (needs MATIEC_HOME: the folder holding iec2c and its lib/). Runs every test file that
+# uses iec2c; a skip for lack of iec2c fails the target.
+MATIEC_TESTS = $(shell grep -rl find_iec2c tests --include='test_*.py' | sort)
+test-matiec: venv shim
+	@test -x "$(MATIEC_HOME)/iec2c" || { echo "test-matiec: MATIEC_HOME must name the folder holding iec2c and its lib/ (\$$MATIEC_HOME/iec2c not found: '$(MATIEC_HOME)/iec2c')" >&2; exit 1; }
+	@log=$$(mktemp); MATIEC_HOME="$(MATIEC_HOME)" $(PY) -m pytest -q -rs $(MATIEC_TESTS) >$$log 2>&1; rc=$$?; cat $$log; \
+	if grep -qi "SKIPPED.*iec2c" $$log; then echo "test-matiec: some tests skipped for lack of iec2c" >&2; rc=1; fi; \
+	rm -f $$log; exit $$rc

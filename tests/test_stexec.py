@@ -187,6 +187,13 @@ def test_case_labels_ranges_lists_else(sel, expected):
     assert rt.get("inst.r") == expected
 
 
+@pytest.mark.parametrize("sel,expected", [(2, 1), (3, 1), (4, 3), (1, 1)])
+def test_overlapping_case_labels_are_legal_and_the_first_branch_wins(sel, expected):
+    # matiec accepts overlaps (a warning) and tests the branches in order, like an IF/ELSIF chain
+    rt = run("CASE k OF 1..3: r := 1; 2: r := 2; 3, 4: r := 3; END_CASE;", f"k : INT := {sel}; r : INT;")
+    assert rt.get("inst.r") == expected
+
+
 def test_case_over_enum_and_no_match_without_else():
     before = "TYPE Mode : (Idle, Run, Stop); END_TYPE"
     body = "CASE m OF Idle: r := 1; Run, Stop: r := 2; END_CASE; CASE n OF 7: r := 100; END_CASE; m := Mode#Stop;"
@@ -282,15 +289,15 @@ def test_array_initialisers_with_repetition():
 def test_function_block_with_var_external_reads_and_writes_globals():
     before = """
     FUNCTION_BLOCK Acc
-      VAR_INPUT step : DINT; END_VAR
+      VAR_INPUT stp : DINT; END_VAR
       VAR_OUTPUT seen : DINT; END_VAR
       VAR_EXTERNAL G_SUM : DINT; G_LIMIT : DINT; END_VAR
       VAR_EXTERNAL CONSTANT G_K : DINT; END_VAR
       seen := G_SUM;
-      IF G_SUM < G_LIMIT THEN G_SUM := G_SUM + step * G_K; END_IF;
+      IF G_SUM < G_LIMIT THEN G_SUM := G_SUM + stp * G_K; END_IF;
     END_FUNCTION_BLOCK
     """
-    rt = load_st(source("a(step := 3, seen => s);", "a : Acc; s : DINT;", before=before,
+    rt = load_st(source("a(stp := 3, seen => s);", "a : Acc; s : DINT;", before=before,
                         globals_="G_SUM : DINT; G_LIMIT : DINT := 20;")
                  .replace("VAR_GLOBAL", "VAR_GLOBAL CONSTANT G_K : DINT := 2; END_VAR VAR_GLOBAL"), "t.st").instantiate()
     for _ in range(3):
@@ -306,11 +313,11 @@ def test_function_block_with_var_external_reads_and_writes_globals():
 def test_function_with_var_in_out_and_outputs():
     before = """
     FUNCTION Bump : INT
-      VAR_INPUT by : INT; END_VAR
+      VAR_INPUT inc : INT; END_VAR
       VAR_IN_OUT acc : INT; END_VAR
       VAR_OUTPUT old : INT; END_VAR
       old := acc;
-      acc := acc + by;
+      acc := acc + inc;
       Bump := acc * 2;
     END_FUNCTION
     FUNCTION Fill : BOOL
@@ -322,7 +329,7 @@ def test_function_with_var_in_out_and_outputs():
     END_FUNCTION
     """
     before = "TYPE TA : ARRAY[0..3] OF INT; END_TYPE\n" + before
-    body = "r := Bump(by := 5, acc := n, old => o); ok := Fill(9, a); r2 := Bump(1, n);"
+    body = "r := Bump(inc := 5, acc := n, old => o); ok := Fill(9, a); r2 := Bump(1, n);"
     rt = run(body, "n : INT := 10; r, r2, o : INT; a : TA; ok : BOOL;", before=before)
     assert rt.get("inst.o") == 10
     assert rt.get("inst.r") == 30
@@ -588,7 +595,6 @@ def test_long_and_chains_compile():
     ("b := x;", "b : BOOL; x : INT;", "INT where BOOL"),
     ("IF x THEN x := 1; END_IF;", "x : INT;", "must be BOOL"),
     ("CASE w OF 1: x := 1; END_CASE;", "w : WORD; x : INT;", "CASE"),
-    ("CASE x OF 1..3: x := 1; 2: x := 0; END_CASE;", "x : INT;", "overlaps"),
     ("x := undefined_var;", "x : INT;", "undeclared"),
     ("w := SHL(w, b);", "w : WORD; b : BYTE;", "shift count"),
     ("s := s + 'a';", "s : STRING;", "not a number"),
@@ -620,6 +626,11 @@ def test_declaration_errors():
     assert any("external variable(s) declaration in function" in x.message for x in diags)
     d = errors(source("x := F(1);", "x : INT;") + "\nFUNCTION F : INT VAR_INPUT a : INT; END_VAR F := a; END_FUNCTION")[0]
     assert "before its declaration" in d.message
+    # keywords cannot name anything (matiec: "invalid located variable declaration."); IL operators can
+    diags = errors(source("step := 1; by := 2;", "step : INT; by : INT; ld : INT;"))
+    assert [x.message for x in diags if "reserved word" in x.message] == [
+        "'step' is a reserved word of IEC 61131-3 and cannot be a variable name",
+        "'by' is a reserved word of IEC 61131-3 and cannot be a variable name"]
 
 
 def test_assignment_to_constant_and_fb_output_is_rejected():
@@ -696,24 +707,24 @@ def test_external_overrides_function_and_function_block():
 
 def test_external_function_results_are_completed_and_checked():
     before = """
-    FUNCTION Step : INT
+    FUNCTION Stepper : INT
       VAR_INPUT k : INT; END_VAR
       VAR_IN_OUT acc : INT; END_VAR
       VAR_OUTPUT flag : BOOL; END_VAR
-      Step := k; acc := acc + k; flag := TRUE;
+      Stepper := k; acc := acc + k; flag := TRUE;
     END_FUNCTION
     """
-    body = "r := Step(k := 2, acc := n, flag => f);"
+    body = "r := Stepper(k := 2, acc := n, flag => f);"
     text = source(body, "r : INT; n : INT := 5; f : BOOL := TRUE;", before=before)
     # a bare result: wrapped to INT; the missing in-out stays unchanged, the missing output gets its default
-    rt = load_st(text, "t.st").instantiate({"step": lambda k, acc: 70000})
+    rt = load_st(text, "t.st").instantiate({"stepper": lambda k, acc: 70000})
     rt.run_cycle()
     assert (rt.get("inst.r"), rt.get("inst.n"), rt.get("inst.f")) == (70000 - 65536, 5, False)
     # an output value that does not fit its type is a runtime error at the call
-    rt = load_st(text, "t.st").instantiate({"step": lambda k, acc: (1, {"FLAG": 7})})
+    rt = load_st(text, "t.st").instantiate({"stepper": lambda k, acc: (1, {"FLAG": 7})})
     with pytest.raises(StRuntimeError) as info:
         rt.run_cycle()
-    assert "Step.flag: BOOL needs True/False, got 7" in info.value.message
+    assert "Stepper.flag: BOOL needs True/False, got 7" in info.value.message
     assert info.value.span is not None and info.value.span.line == line_of(text, body)
 
 

@@ -810,7 +810,6 @@ class PouCompiler:
         var = self.temp("_c")
         self.flush_pre()
         self.emit(f"{var} = {sel.code}")
-        seen: list[tuple[int, int, Span]] = []
         kw = "if"
         for labels, body in s.elems:
             conds = []
@@ -819,12 +818,9 @@ class PouCompiler:
                 rng = self.case_label(lab, sel.ty, is_enum)
                 if rng is None:
                     continue
+                # Overlapping labels are legal for matiec (a warning only); like its if/else-if chain, the first
+                # matching branch wins.
                 lo, hi = rng
-                for (a, b2, sp) in seen:
-                    if lo <= b2 and a <= hi:
-                        self.err(lab.span, f"CASE label overlaps the label at line {sp.line}")
-                        break
-                seen.append((lo, hi, lab.span))
                 if lo == hi:
                     singles.append(lo)
                 else:

@@ -12,6 +12,7 @@ from transpiler.exec.stexec import typesys as T
 from transpiler.exec.stexec.codegen import (Context, Ex, PouCompiler, default_code, location_attr, normalise_address,
                                        storage_attr)
 from transpiler.exec.stexec.errors import ST_CODE, StError
+from transpiler.exec.stexec.keywords import is_reserved_word
 from transpiler.exec.stexec.model import CompiledProject, PouInfo, ProgramInstance, TaskInfo, VarInfo
 from transpiler.exec.stexec.parser import parse
 from transpiler.exec.stexec.prelude import prelude_text
@@ -127,6 +128,9 @@ class Compiler:
             return True
         if "__" in key or key.endswith("_"):
             self.error(span, f"invalid {what} name '{name}': IEC identifiers have no double or trailing underscore")
+            return False
+        if is_reserved_word(key):
+            self.error(span, f"'{name}' is a reserved word of IEC 61131-3 and cannot be a {what} name")
             return False
         if is_standard_name(key) or key in self.prelude_keys or key in ("en", "eno"):
             self.error(span, f"'{name}' is the name of a standard function or function block and cannot be a "
