@@ -5,13 +5,16 @@ Usage: python -m tests.mutants [--count 150] [--seed 1] [--backend auto|builtin|
 Each mutant changes one place in the body of one translated POU (the emitted HH_* library is left alone):
 AND<->OR, a negation dropped or TRUE<->FALSE, an integer constant +-1, a comparison operator replaced, a
 statement dropped, two CASE branches swapped. Every mutant is co-simulated against the reference interpreter,
-shortest scenario first, until a divergence or a runtime fault of the translated program shows it: the sample's
+shortest scenario first, until a divergence shows it (only a divergence kills a mutant): the sample's
 scenarios, 2 000 random cycles, and scenarios aimed at boundaries (the hand-written ones from dirty memory, a short
 power-on per boundary value of the program's constants, the hand-written ones with one NC job moved to an edge of
 its range, long runs of random NC jobs on a healthy and on a toggling machine). The output lists how many were
-detected per operator and every survivor, so that each can be judged (a survivor is either a gap in the scenarios
-or a mutation that cannot change behaviour).
-Exit 0 when at least 90 % are detected, 1 otherwise, 2 on a usage or setup problem.
+killed per operator and every mutant that was not, so that each can be judged (a survivor is either a gap in the scenarios
+or a mutation that cannot change behaviour). A mutant whose ST the executor rejects is "invalid" (excluded from
+the rate); one that only ever ends in an exception (executor fault, handshake timeout, loop watchdog, harness
+crash) is an "error": both are listed with their message and never counted as killed.
+Exit 0 when at least 90 % of the valid mutants (killed + survived + error) are killed, 1 otherwise, 2 on a usage or
+setup problem.
 """
 
 from __future__ import annotations
@@ -189,12 +192,27 @@ def choose(mutants: list[Mutant], count: int, seed: int) -> list[Mutant]:
     return sorted(chosen, key=lambda m: (m.line, m.operator, m.description))
 
 
+KILLED, SURVIVED, INVALID, ERROR = "killed", "survived", "invalid", "error"
+OUTCOMES = (KILLED, SURVIVED, INVALID, ERROR)
+
+
 @dataclasses.dataclass(frozen=True)
 class Verdict:
     mutant: Mutant
-    detected: bool
-    by: str                      # scenario that showed it, or why it could not be run
+    outcome: str                 # KILLED (a scenario diverged), SURVIVED, INVALID (ST rejected), ERROR (exceptions only)
+    by: str                      # the diverging scenario, or the message of the rejection or first exception
     seconds: float
+
+    @property
+    def detected(self) -> bool:
+        """Only a reported divergence kills a mutant."""
+        return self.outcome == KILLED
+
+
+def _message(exc: BaseException) -> str:
+    """An exception as one short line: its type and the first line of its message."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0][:200]}" if text else type(exc).__name__
 
 
 class Harness:
@@ -349,27 +367,39 @@ class Harness:
         return builtin_side_factory(st_text)
 
     def judge(self, mutant: Mutant) -> Verdict:
+        """KILLED by the first scenario that diverges; a scenario that ends in an exception (a fault of the
+        translated side, or one raised by the co-simulation) shows nothing, so the next one runs; ERROR when
+        exceptions were all there was, INVALID when the mutated ST is not a program the executor accepts."""
         start = time.perf_counter()
         try:
             factory = self.side_factory(mutant.text)
-        except CompileFailed:
-            return Verdict(mutant, True, "rejected by the ST executor's compiler", time.perf_counter() - start)
-        except Exception as exc:  # noqa: BLE001 - a build failure of the mutant is a detection by the compiler
-            return Verdict(mutant, True, f"rejected: {type(exc).__name__}", time.perf_counter() - start)
+        except CompileFailed as exc:
+            return Verdict(mutant, INVALID, f"rejected by the ST executor's compiler: {_message(exc)}",
+                           time.perf_counter() - start)
+        except Exception as exc:  # noqa: BLE001 - a mutant that cannot be built is invalid, with its message
+            return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
+        first_error = None
         for scenario in self.scenarios:
-            result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled)
-            if not result.equivalent:
-                how = (f"{result.divergence.name} at cycle {result.divergence.cycle}" if result.divergence
-                       else (result.error or "error"))
-                return Verdict(mutant, True, f"{scenario.name}: {how}", time.perf_counter() - start)
-        return Verdict(mutant, False, "", time.perf_counter() - start)
+            try:
+                result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled)
+            except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
+                first_error = first_error or f"{scenario.name}: {_message(exc)}"
+                continue
+            if result.divergence is not None:
+                how = f"{result.divergence.name} at cycle {result.divergence.cycle}"
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start)
+            if result.error is not None:
+                first_error = first_error or f"{scenario.name}: {result.error}"
+        if first_error is not None:
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start)
+        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start)
 
 
 def _worker(harness: Harness, mutants: list[Mutant], tasks, results) -> None:
     """A forked process: judges mutants by index until it takes the end marker."""
     while (index := tasks.get()) is not None:
         verdict = harness.judge(mutants[index])
-        results.put((index, verdict.detected, verdict.by, verdict.seconds))
+        results.put((index, verdict.outcome, verdict.by, verdict.seconds))
 
 
 def judge_all(harness: Harness, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
@@ -389,8 +419,8 @@ def judge_all(harness: Harness, mutants: list[Mutant], jobs: int) -> Iterator[Ve
     for w in workers:
         w.start()
     for _ in mutants:
-        index, detected, by, seconds = results.get()
-        yield Verdict(mutants[index], detected, by, seconds)
+        index, outcome, by, seconds = results.get()
+        yield Verdict(mutants[index], outcome, by, seconds)
     for w in workers:
         w.join()
 
@@ -445,21 +475,29 @@ def _progress(done: int, total: int, start: float) -> None:
 
 
 def report(verdicts: list[Verdict], seconds: float) -> int:
+    """The table per operator and outcome, the kill rate over the valid mutants, then every mutant that was not
+    killed by category: survivors, errors and invalid mutants (with their messages)."""
     verdicts = sorted(verdicts, key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
-    detected = sum(v.detected for v in verdicts)
-    print(f"{'operator':<16}{'mutants':>8}{'detected':>10}")
+    count = {o: sum(1 for v in verdicts if v.outcome == o) for o in OUTCOMES}
+    print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>10}" for o in OUTCOMES))
     for op in OPERATORS:
         mine = [v for v in verdicts if v.mutant.operator == op]
-        print(f"{op:<16}{len(mine):>8}{sum(v.detected for v in mine):>10}")
-    share = detected / len(verdicts) if verdicts else 0.0
+        print(f"{op:<16}{len(mine):>8}" + "".join(f"{sum(1 for v in mine if v.outcome == o):>10}" for o in OUTCOMES))
+    # Invalid mutants are no programs and say nothing about the scenarios; errors ran but showed no divergence.
+    valid = count[KILLED] + count[SURVIVED] + count[ERROR]
+    share = count[KILLED] / valid if valid else 0.0
     verdict = "met" if share >= TARGET else "MISSED"
-    print(f"detected {detected} of {len(verdicts)} mutants = {100 * share:.1f} % in {seconds:.0f} s "
-          f"(target >= {100 * TARGET:.0f} %: {verdict})")
-    survivors = [v for v in verdicts if not v.detected]
-    if survivors:
-        print("survivors (project.st line, POU, mutation):")
-        for v in survivors:
-            print(f"  line {v.mutant.line} in {v.mutant.pou}: {v.mutant.operator}: {v.mutant.description}")
+    print(f"killed {count[KILLED]} of {valid} valid mutants = {100 * share:.1f} % in {seconds:.0f} s "
+          f"(target >= {100 * TARGET:.0f} %: {verdict}); errors {count[ERROR]} (not killed), "
+          f"invalid {count[INVALID]} (excluded)")
+    for outcome, title in ((SURVIVED, "survivors"), (ERROR, "errors: only exceptions, no divergence"),
+                           (INVALID, "invalid mutants: the mutated ST was rejected")):
+        mine = [v for v in verdicts if v.outcome == outcome]
+        if mine:
+            print(f"{title} (project.st line, POU, mutation{'' if outcome == SURVIVED else ': message'}):")
+            for v in mine:
+                why = f": {v.by}" if v.by else ""
+                print(f"  line {v.mutant.line} in {v.mutant.pou}: {v.mutant.operator}: {v.mutant.description}{why}")
     return 0 if share >= TARGET else 1
 
 
