@@ -70,8 +70,9 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
+from transpiler.diagnostics import Span
 from transpiler.exec.stexec.compiler import compile_st
-from transpiler.exec.stexec.errors import StError, StRuntimeError
+from transpiler.exec.stexec.errors import StError, StRuntimeError, st_diag
 from transpiler.exec.stexec.model import CompiledProject
 from transpiler.exec.stexec.runtime import Runtime
 
@@ -98,7 +99,5 @@ def load_st(text: str, filename: str = "project.st", *, loop_limit: int = 1_000_
     try:
         compiled = compile_st(text, filename, loop_limit)
     except RecursionError:
-        from transpiler.exec.stexec.errors import st_diag
-        from transpiler.diagnostics import Span
         raise StError([st_diag(Span(filename, 1, 1), "expression nesting too deep for the built-in executor")]) from None
     return StProject(compiled)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import pathlib
+from types import MappingProxyType
 from typing import Any
 
 from lark import Lark, Token, Transformer, v_args
@@ -329,13 +330,13 @@ class _ToNodes(Transformer):
         return n.Arg(None, items[0], None, False, self._span(meta))
 
 
-_TOKEN_TEXT = {
+_TOKEN_TEXT = MappingProxyType({
     "SEMICOLON": "';'", "COLON": "':'", "COMMA": "','", "LPAR": "'('", "RPAR": "')'", "LSQB": "'['",
     "RSQB": "']'", "EQUAL": "'='", "LESSTHAN": "'<'", "MORETHAN": "'>'", "PLUS": "'+'", "MINUS": "'-'",
     "STAR": "'*'", "SLASH": "'/'", "DOT": "'.'", "AMPERSAND": "'&'", "IDENT": "a name", "INTEGER": "an integer",
     "REAL_LIT": "a real literal", "BASED_INT": "a based integer", "TYPED_LITERAL": "a typed literal",
     "STRING_LIT": "a string", "DIRECT_ADDR": "a direct address", "ENUM_LABEL": "a CASE label", "$END": "end of file",
-}
+})
 
 
 def _describe(name: str) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import re
 import struct
+from types import MappingProxyType
 
 from transpiler.exec.stexec.errors import Trap
 from transpiler.exec.stexec.typesys import STR_MAX
@@ -316,7 +317,7 @@ def aset(dst: list, src: list) -> None:
         d._set(s)
 
 
-HELPERS = {
+HELPERS = MappingProxyType({
     "_f32": f32, "_idiv": idiv, "_imod": imod, "_div_fn": div_fn, "_mod_fn": mod_fn, "_fdiv": fdiv,
     "_fpow": fpow, "_fmath": fmath, "_real_to_int": real_to_int, "_trunc": trunc, "_limit": limit, "_mux": mux,
     "_rol": rol, "_ror": ror, "_bcd_to_int": bcd_to_int, "_int_to_bcd": int_to_bcd, "_oob": oob,
@@ -327,4 +328,4 @@ HELPERS = {
     "_time_to_string": time_to_string, "_string_to_int": string_to_int, "_string_to_real": string_to_real,
     "_string_to_bool": string_to_bool, "_string_to_time": string_to_time, "_sinit": sinit,
     "_aset": aset, "_math": math,
-}
+})

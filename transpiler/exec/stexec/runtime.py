@@ -9,10 +9,10 @@ from typing import Any, Callable, Optional
 
 from transpiler.diagnostics import Span
 from transpiler.exec.stexec import typesys as T
-from transpiler.exec.stexec.codegen import normalise_address, storage_attr
 from transpiler.exec.stexec.compiler import base_tick
 from transpiler.exec.stexec.errors import StError, StRuntimeError, Trap, st_diag
 from transpiler.exec.stexec.model import CompiledProject, PouInfo, VarInfo
+from transpiler.exec.stexec.pycode import normalise_address, storage_attr
 from transpiler.exec.stexec.rtlib import HELPERS, f32, wrap_int
 
 _PATH_TOKEN = re.compile(r"\s*(?:(%[A-Za-z]+[0-9.]*[0-9])|([A-Za-z_][A-Za-z0-9_]*)|\.|\[([^\]]*)\])")

@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Optional
 
 from transpiler.diagnostics import Span
 from transpiler.exec.stexec import nodes as n
 from transpiler.exec.stexec import typesys as T
-from transpiler.exec.stexec.codegen import (ERR_EX, P_ADD, P_ATOM, P_BAND, P_CMP, P_COND, Ex, PouCompiler, const_ex,
-                                       paren)
 from transpiler.exec.stexec.model import PouInfo
+from transpiler.exec.stexec.pou_base import PouCompilerApi
+from transpiler.exec.stexec.pycode import ERR_EX, P_ADD, P_ATOM, P_BAND, P_CMP, P_COND, Ex, const_ex, paren
 from transpiler.exec.stexec.rtlib import real_to_int, time_to_secs
 
 # Standard function name -> formal parameter names (a trailing "..." means more numbered inputs may follow).
-_SIGNATURES: dict[str, tuple[str, ...]] = {
+_SIGNATURES: Mapping[str, tuple[str, ...]] = MappingProxyType({
     "abs": ("IN",), "sqrt": ("IN",), "ln": ("IN",), "log": ("IN",), "exp": ("IN",), "sin": ("IN",),
     "cos": ("IN",), "tan": ("IN",), "asin": ("IN",), "acos": ("IN",), "atan": ("IN",), "trunc": ("IN",),
     "move": ("IN",), "len": ("IN",), "expt": ("IN1", "IN2"),
@@ -26,13 +28,19 @@ _SIGNATURES: dict[str, tuple[str, ...]] = {
     "left": ("IN", "L"), "right": ("IN", "L"), "mid": ("IN", "L", "P"), "concat": ("IN1", "IN2", "..."),
     "insert": ("IN1", "IN2", "P"), "delete": ("IN", "L", "P"), "replace": ("IN1", "IN2", "L", "P"),
     "find": ("IN1", "IN2"),
-}
-_BCD = {"byte_bcd_to_usint": (T.BYTE, T.USINT), "word_bcd_to_uint": (T.WORD, T.UINT),
-        "dword_bcd_to_udint": (T.DWORD, T.UDINT), "lword_bcd_to_ulint": (T.LWORD, T.ULINT),
-        "usint_to_bcd_byte": (T.USINT, T.BYTE), "uint_to_bcd_word": (T.UINT, T.WORD),
-        "udint_to_bcd_dword": (T.UDINT, T.DWORD), "ulint_to_bcd_lword": (T.ULINT, T.LWORD)}
-_MATH = {"sqrt": "sqrt", "ln": "log", "log": "log10", "exp": "exp", "sin": "sin", "cos": "cos", "tan": "tan",
-         "asin": "asin", "acos": "acos", "atan": "atan"}
+})
+_BCD = MappingProxyType({"byte_bcd_to_usint": (T.BYTE, T.USINT), "word_bcd_to_uint": (T.WORD, T.UINT),
+                        "dword_bcd_to_udint": (T.DWORD, T.UDINT), "lword_bcd_to_ulint": (T.LWORD, T.ULINT),
+                        "usint_to_bcd_byte": (T.USINT, T.BYTE), "uint_to_bcd_word": (T.UINT, T.WORD),
+                        "udint_to_bcd_dword": (T.UDINT, T.DWORD), "ulint_to_bcd_lword": (T.ULINT, T.LWORD)})
+_MATH = MappingProxyType({"sqrt": "sqrt", "ln": "log", "log": "log10", "exp": "exp", "sin": "sin", "cos": "cos",
+                          "tan": "tan", "asin": "asin", "acos": "acos", "atan": "atan"})
+
+
+# Which helper compiles which standard function (the others: shifts, then string functions).
+_MATH_KEYS = frozenset({"abs", "expt", "trunc", "move"} | set(_MATH))
+_ARITH_KEYS = frozenset({"add", "mul", "sub", "div", "mod", "gt", "ge", "eq", "le", "lt", "ne"})
+_SELECT_KEYS = frozenset({"min", "max", "limit", "sel", "mux"})
 
 
 def conversion_types(key: str) -> Optional[tuple[T.Elem, T.Elem]]:
@@ -53,7 +61,7 @@ def is_standard_name(key: str) -> bool:
 
 # ====================================================================== argument binding
 
-def _positional(pc: PouCompiler, node: n.Call, formals: tuple[str, ...]) -> Optional[list[n.Expr]]:
+def _positional(pc: PouCompilerApi, node: n.Call, formals: tuple[str, ...]) -> Optional[list[n.Expr]]:
     """Actual arguments of a standard function in formal order (named arguments are reordered)."""
     args = node.args
     if any(a.target is not None for a in args):
@@ -99,7 +107,7 @@ def _positional(pc: PouCompiler, node: n.Call, formals: tuple[str, ...]) -> Opti
     return values
 
 
-def _unify_all(pc: PouCompiler, exs: list[Ex], span: Span, fname: str) -> Optional[tuple[list[Ex], T.Type]]:
+def _unify_all(pc: PouCompilerApi, exs: list[Ex], span: Span, fname: str) -> Optional[tuple[list[Ex], T.Type]]:
     typed = [e for e in exs if not isinstance(e.ty, T.LitType)]
     if not typed:
         cats = {e.ty for e in exs}
@@ -118,14 +126,14 @@ def _unify_all(pc: PouCompiler, exs: list[Ex], span: Span, fname: str) -> Option
     return out, ty
 
 
-def _int_arg(pc: PouCompiler, e: Ex, span: Span, what: str) -> Optional[Ex]:
+def _int_arg(pc: PouCompilerApi, e: Ex, span: Span, what: str) -> Optional[Ex]:
     if T.is_int(e.ty) or (isinstance(e.ty, T.LitType) and e.ty.cat == "int"):
         return pc.val(e)
     pc.err(span, f"{what} must be an integer (INT, DINT, ...), not {e.ty}")
     return None
 
 
-def _string_arg(pc: PouCompiler, e: Ex, span: Span, what: str) -> Optional[Ex]:
+def _string_arg(pc: PouCompilerApi, e: Ex, span: Span, what: str) -> Optional[Ex]:
     if T.base(e.ty) is T.STRING:
         return e
     pc.err(span, f"{what} must be a STRING, not {e.ty}")
@@ -134,7 +142,7 @@ def _string_arg(pc: PouCompiler, e: Ex, span: Span, what: str) -> Optional[Ex]:
 
 # ====================================================================== standard functions
 
-def _std(pc: PouCompiler, key: str, node: n.Call) -> Ex:
+def _std(pc: PouCompilerApi, key: str, node: n.Call) -> Ex:
     nodes_ = _positional(pc, node, _SIGNATURES[key])
     if nodes_ is None:
         return ERR_EX
@@ -143,6 +151,19 @@ def _std(pc: PouCompiler, key: str, node: n.Call) -> Ex:
         return ERR_EX
     span = node.span
     name = key.upper()
+    if key in _MATH_KEYS:
+        return _math_fn(pc, key, exs, span, name)
+    if key in _ARITH_KEYS:
+        return _arith_fn(pc, key, exs, span, name)
+    if key in _SELECT_KEYS:
+        return _select_fn(pc, key, exs, span, name)
+    if key in ("shl", "shr", "rol", "ror"):
+        return _shift(pc, key, exs, span)
+    return _string_fn(pc, key, exs, span)
+
+
+def _math_fn(pc: PouCompilerApi, key: str, exs: list[Ex], span: Span, name: str) -> Ex:
+    """ABS, the REAL math functions, EXPT, TRUNC and MOVE."""
     if key == "abs":
         x = exs[0]
         b = T.base(x.ty)
@@ -167,6 +188,11 @@ def _std(pc: PouCompiler, key: str, node: n.Call) -> Ex:
         return Ex(f"_trunc({x.code})", T.ANY_INT_LIT, P_ATOM, False)
     if key == "move":
         return exs[0]
+    raise AssertionError(key)
+
+
+def _arith_fn(pc: PouCompilerApi, key: str, exs: list[Ex], span: Span, name: str) -> Ex:
+    """ADD, MUL, SUB, DIV, MOD and the comparison functions GT ... NE, typed like their operators."""
     if key in ("add", "mul", "sub"):
         op = {"add": "+", "mul": "*", "sub": "-"}[key]
         acc = exs[0]
@@ -199,6 +225,11 @@ def _std(pc: PouCompiler, key: str, node: n.Call) -> Ex:
         if len(parts) == 1:
             return parts[0]
         return Ex(" & ".join(f"({p.code})" for p in parts), T.BOOL, P_BAND)
+    raise AssertionError(key)
+
+
+def _select_fn(pc: PouCompilerApi, key: str, exs: list[Ex], span: Span, name: str) -> Ex:
+    """MIN, MAX, LIMIT, SEL and MUX."""
     if key in ("min", "max"):
         u = _unify_all(pc, exs, span, name)
         if u is None:
@@ -232,12 +263,10 @@ def _std(pc: PouCompiler, key: str, node: n.Call) -> Ex:
             return ERR_EX
         vals, ty = u
         return Ex(f"_mux({k.code}, {', '.join(v.code for v in vals)})", ty)
-    if key in ("shl", "shr", "rol", "ror"):
-        return _shift(pc, key, exs, span)
-    return _string_fn(pc, key, exs, span)
+    raise AssertionError(key)
 
 
-def _shift(pc: PouCompiler, key: str, exs: list[Ex], span: Span) -> Ex:
+def _shift(pc: PouCompilerApi, key: str, exs: list[Ex], span: Span) -> Ex:
     x, cnt = exs
     if T.is_int(cnt.ty) or cnt.ty is T.ANY_INT_LIT:
         cnt = pc.val(cnt)
@@ -258,7 +287,7 @@ def _shift(pc: PouCompiler, key: str, exs: list[Ex], span: Span) -> Ex:
     return Ex(f"_{key}({x.code}, {cnt.code}, {b.bits})", x.ty)
 
 
-def _string_fn(pc: PouCompiler, key: str, exs: list[Ex], span: Span) -> Ex:
+def _string_fn(pc: PouCompilerApi, key: str, exs: list[Ex], span: Span) -> Ex:
     name = key.upper()
     kinds = {"len": "s", "left": "si", "right": "si", "mid": "sii", "concat": "s" * len(exs),
              "insert": "ssi", "delete": "sii", "replace": "ssii", "find": "ss"}[key]
@@ -280,7 +309,7 @@ def _string_fn(pc: PouCompiler, key: str, exs: list[Ex], span: Span) -> Ex:
 
 # ====================================================================== conversions
 
-def _conversion(pc: PouCompiler, key: str, node: n.Call, src: T.Elem, dst: T.Elem) -> Ex:
+def _conversion(pc: PouCompilerApi, key: str, node: n.Call, src: T.Elem, dst: T.Elem) -> Ex:
     nodes_ = _positional(pc, node, ("IN",))
     if nodes_ is None:
         return ERR_EX
@@ -369,7 +398,7 @@ def convert_code(src: T.Elem, dst: T.Elem, x: Ex) -> tuple[tuple[str, int], bool
 
 # ====================================================================== user functions
 
-def _bind(pc: PouCompiler, pou: PouInfo, args: list[n.Arg], span: Span) -> Optional[dict[str, n.Arg]]:
+def _bind(pc: PouCompilerApi, pou: PouInfo, args: list[n.Arg], span: Span) -> Optional[dict[str, n.Arg]]:
     named = [a.name is not None for a in args]
     if any(named) and not all(named):
         pc.err(span, "positional and named arguments cannot be mixed in one call")
@@ -402,7 +431,7 @@ def _bind(pc: PouCompiler, pou: PouInfo, args: list[n.Arg], span: Span) -> Optio
     return bound
 
 
-def _inout_actual(pc: PouCompiler, pou: PouInfo, v, a: Optional[n.Arg], span: Span, is_fb: bool) -> Optional[Ex]:
+def _inout_actual(pc: PouCompilerApi, pou: PouInfo, v, a: Optional[n.Arg], span: Span, is_fb: bool) -> Optional[Ex]:
     if a is None:
         pc.err(span, f"VAR_IN_OUT '{v.name}' of {pou.name} must be given")
         return None
@@ -424,7 +453,7 @@ def _inout_actual(pc: PouCompiler, pou: PouInfo, v, a: Optional[n.Arg], span: Sp
     return ex
 
 
-def _user_function(pc: PouCompiler, pou: PouInfo, node: n.Call) -> Ex:
+def _user_function(pc: PouCompilerApi, pou: PouInfo, node: n.Call) -> Ex:
     bound = _bind(pc, pou, node.args, node.span)
     if bound is None:
         return ERR_EX
@@ -475,7 +504,7 @@ def _user_function(pc: PouCompiler, pou: PouInfo, node: n.Call) -> Ex:
     return Ex(f"{t}[0]", pou.result)
 
 
-def compile_call(pc: PouCompiler, node: n.Call) -> Ex:
+def compile_call(pc: PouCompilerApi, node: n.Call) -> Ex:
     key = node.name.lower()
     pou = pc.ctx.pous.get(key)
     if pou is not None and pou.ordinal < pc.ordinal:
@@ -499,7 +528,7 @@ def compile_call(pc: PouCompiler, node: n.Call) -> Ex:
 
 # ====================================================================== FB calls (statements)
 
-def compile_call_stmt(pc: PouCompiler, s: n.CallStmt) -> None:
+def compile_call_stmt(pc: PouCompilerApi, s: n.CallStmt) -> None:
     key = s.name.lower()
     v = pc.lookup(key)
     if v is None:

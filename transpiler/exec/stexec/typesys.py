@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any, Optional
 
 STR_MAX = 126   # matiec's STR_MAX_LEN: longest STRING value
@@ -58,9 +60,10 @@ LREAL = Elem("LREAL", "real", 64)
 TIME = Elem("TIME", "time", 64, True)
 STRING = Elem("STRING", "string")
 
-ELEMENTARY: dict[str, Elem] = {t.name.lower(): t for t in (
-    BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT, BYTE, WORD, DWORD, LWORD, REAL, LREAL, TIME, STRING)}
-UNSUPPORTED_ELEMENTARY = {"date", "tod", "time_of_day", "dt", "date_and_time", "wstring", "char", "wchar", "ltime"}
+ELEMENTARY: Mapping[str, Elem] = MappingProxyType({t.name.lower(): t for t in (
+    BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT, BYTE, WORD, DWORD, LWORD, REAL, LREAL, TIME, STRING)})
+UNSUPPORTED_ELEMENTARY = frozenset({"date", "tod", "time_of_day", "dt", "date_and_time", "wstring", "char", "wchar",
+                                    "ltime"})
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
