@@ -45,7 +45,9 @@ from transpiler.verify.scenario import Event, NcAction, RandomStimulus, Scenario
 from transpiler.language.semantics import make_semantics  # noqa: E402
 from transpiler.verify.simulate import program_operands, project_names  # noqa: E402
 from transpiler.backends.st.check import find_iec2c  # noqa: E402
-from transpiler.backends.transpile import io_map_of, read_mp_file, transpile_program  # noqa: E402
+from transpiler.backends.report.report import io_map_of  # noqa: E402
+from transpiler.frontend.mpfile import read_mp_file  # noqa: E402
+from transpiler.backends.transpile import transpile_program  # noqa: E402
 
 SAMPLE = ROOT / "samples" / "basic_program"
 TARGET = 0.90

@@ -53,7 +53,7 @@ def transpile_sample(cfg: str = "OEM.cfg"):
     assert result.ok, [d.render() for d in result.diagnostics.items]
     diags = Diagnostics()
     mp = read_mp_file(SAMPLE / "MP_data.mp", diags)
-    return result.program, transpile_program(result.program, diags, mp, {"st", "xml"})
+    return result.program, transpile_program(result.program, diags, mp, {"st", "xml"}, mp_file=SAMPLE / "MP_data.mp")
 
 
 def check_containers(out, name: str) -> None:

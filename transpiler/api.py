@@ -21,7 +21,7 @@ from transpiler.backends.st.backend import StResult
 from transpiler.backends.transpile import transpile_program
 from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.mpfile import find_mp_file, read_mp_file
+from transpiler.frontend.mpfile import mp_candidates, read_mp_file
 from transpiler.frontend.pipeline import CompileResult, compile_project
 from transpiler.frontend.preprocess import parse_define_value
 from transpiler.ir import Program
@@ -125,7 +125,7 @@ class Transpilation:
 
     @property
     def io_map(self) -> IoMap:
-        return io_map_of(self.result)
+        return io_map_of(self.result, self.mp_file.name if self.mp_file is not None else None)
 
     @property
     def pou_count(self) -> int:
@@ -136,28 +136,51 @@ class Transpilation:
         write_files_atomically({Path(out_dir) / name: data for name, data in self.files.items()})
 
 
-def machine_parameters_of(project: Project, mp_file: Path | None = None
+def machine_parameters_of(project: Project, mp_file: Path | None = None, *, allowed: Iterable[str] = ()
                           ) -> tuple[Path | None, dict[tuple[int, int], Decimal], Diagnostics]:
-    """`mp_file`, else the one *.mp file beside the main program, read into values."""
-    diags = Diagnostics()
+    """The machine parameters a translation is made with, chosen once: `mp_file`, else the one *.mp file beside
+    the main program. Two or more candidates and no `mp_file` is an error (E-MP-AMBIGUOUS): the presets in the
+    ST would depend on which file happened to be found. The returned collector allows the codes in `allowed`."""
+    diags = Diagnostics(allowed=allowed)
     if mp_file is not None and not Path(mp_file).is_file():
         raise _usage(f"machine-parameter file '{mp_file}' does not exist")
-    path = Path(mp_file) if mp_file is not None else find_mp_file(project.main)
+    if mp_file is not None:
+        path: Path | None = Path(mp_file)
+    else:
+        candidates = mp_candidates(project.main)
+        if len(candidates) > 1:
+            diags.report("E-MP-AMBIGUOUS", Span(str(project.main), 1, 1),
+                         f"{len(candidates)} machine-parameter files beside the main program "
+                         f"({', '.join(p.name for p in candidates)}): choose one with --mp")
+        path = candidates[0] if len(candidates) == 1 else None
     values = read_mp_file(path, diags) if path is not None else {}
     return path, values, diags
 
 
+def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool):
+    """Run the back ends with the project's machine parameters; raises on any error."""
+    allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
+    path, mp, diags = machine_parameters_of(project, mp_file, allowed=allowed)
+    diags.raise_if_errors()
+    out = transpile_program(project.program, diags, mp, formats, mp_file=path)
+    if path is None and out.result.preset_vars:
+        diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
+                     "no machine-parameter file (*.mp) beside the main program and no --mp: the timer and counter "
+                     "presets of the translation are 0")
+    diags.raise_if_errors()    # a partial translation is never written or compared as if it were whole
+    return path, mp, out, diags
+
+
 def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_file: Path | None = None,
-              validate_xml: bool = True) -> Transpilation:
+              validate_xml: bool = True, allow_untranslated: bool = False) -> Transpilation:
     """Translate to ST / PLCopen XML plus report.md and io_map.csv. Raises HH2IECError on bad machine
-    parameters or when the XML does not validate against the cached TC6 schema (a bug in hh2iec)."""
+    parameters, on code the back end cannot translate (E-UNSUPPORTED, unless `allow_untranslated`: then each
+    is a warning and report.md opens with the list), or when the XML does not validate against the cached TC6
+    schema (a bug in hh2iec)."""
     formats = {f.strip().lower() for f in formats if f.strip()}
     if not formats or formats - {"st", "xml"}:
         raise _usage(f"formats are st, xml or both, not '{','.join(sorted(formats))}'")
-    path, mp, diags = machine_parameters_of(project, mp_file)
-    diags.raise_if_errors()
-    out = transpile_program(project.program, diags, mp, formats)
-    diags.raise_if_errors()
+    path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated)
     validated = False
     if "xml" in formats and validate_xml:
         from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
@@ -223,9 +246,13 @@ class Equivalence:
 def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
                       mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
-                      progress: Callable[[str], Callable[[int, int], None]] | None = None) -> Equivalence:
+                      progress: Callable[[str], Callable[[int, int], None]] | None = None,
+                      allow_untranslated: bool = False) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
-    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk."""
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
+    as written, with the presets of the machine parameters it was made with; a scenario whose own machine
+    parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
+    code out is co-simulated but its verdict is at best NOT PROVEN."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify.equiv import choose_backend, random_scenario, run_equivalence
     from transpiler.verify.scenario import load_scenario
@@ -238,9 +265,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
             raise _usage(f"scenario file '{path}' does not exist")
     if st_file is not None and not Path(st_file).is_file():
         raise _usage(f"ST file '{st_file}' does not exist")
-    mp_path, mp, diags = machine_parameters_of(project, mp_file)
-    transpiled = transpile_program(project.program, diags, mp, {"st"})
-    diags.raise_if_errors()         # a partial translation is never compared as if it were whole
+    mp_path, mp, transpiled, diags = _translate(project, {"st"}, mp_file, allow_untranslated)
     st_text, st_name = transpiled.st_text, "project.st"
     iomap = io_map_of(transpiled.result)
     if st_file is not None:
@@ -261,7 +286,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         loaded.append(random_scenario(project.program, names, random_cycles, seed, mp_path))
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
-                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress)
+                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
+                                 untranslated=tuple(transpiled.result.untranslated))
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -67,6 +67,10 @@ CODES: dict[str, CodeInfo] = {
         _c("E-CFG-IGNORED", "warning", "a configuration line that is neither a DEFINE nor a directive is ignored",
            "this line is free text"),
         _c("E-MP-VALUE", "error", "malformed machine-parameter line or value", "MP4110.0 : fast"),
+        _c("E-MP-AMBIGUOUS", "error", "more than one machine-parameter file beside the main program: name the one "
+           "the translation is made with (--mp)", "; Main.src beside MP_mill.mp and MP_lathe.mp"),
+        _c("E-MP-NONE", "warning", "the program uses timers or counters but no machine-parameter file was found: "
+           "every preset is 0 in the translation", "; Main.src uses T0, and no *.mp file is beside it"),
         # files
         _c("E-FILE-NOT-FOUND", "error", "a file named by the command line, USES, #define or INCLUDE does not exist",
            "USES missing_module.src"),

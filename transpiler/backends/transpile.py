@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from decimal import Decimal
+from pathlib import Path
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics
@@ -21,10 +22,12 @@ class Transpiled:
 
 
 def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
-                      formats: set[str]) -> Transpiled:
+                      formats: set[str], mp_file: Path | None = None) -> Transpiled:
+    """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv."""
     from transpiler.backends.plcopen.writer import render_xml
     from transpiler.backends.st.writer import render_st
-    result = StBackend(program, diags, mp).build()
+    mp_name = mp_file.name if mp_file is not None else None
+    result = StBackend(program, diags, mp, mp_file=mp_name).build()
     project = result.project
     files: dict[str, bytes] = {}
     st_text = render_st(project)
@@ -32,6 +35,6 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         files["project.st"] = st_text.encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_xml(project)
-    files["report.md"] = render_report(program, result, diags).encode("utf-8")
-    files["io_map.csv"] = render_io_map(result).encode("utf-8")
+    files["report.md"] = render_report(program, result, diags, mp_name).encode("utf-8")
+    files["io_map.csv"] = render_io_map(result, mp_name).encode("utf-8")
     return Transpiled(result, st_text, files)

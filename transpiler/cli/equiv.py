@@ -29,6 +29,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--vcd", type=Path, metavar="DIR", help="write both traces of each run as value-change dumps")
     p.add_argument("--mp", type=Path, help="machine-parameter file used for the transpilation's preset defaults")
     p.add_argument("--no-shrink", action="store_true", help="do not shrink a divergent stimulus")
+    p.add_argument("--allow-untranslated", action="store_true",
+                   help="co-simulate a translation that left code out; the verdict is then at best NOT PROVEN")
     p.set_defaults(handler=cmd_equiv)
 
 
@@ -45,7 +47,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     print_diagnostics(project.diagnostics)
     check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
                                   backend=args.backend, st_file=args.st, io_map_file=args.io_map, mp_file=args.mp,
-                                  shrink=not args.no_shrink, vcd_dir=args.vcd, progress=_progress_printer)
+                                  shrink=not args.no_shrink, vcd_dir=args.vcd, progress=_progress_printer,
+                                  allow_untranslated=args.allow_untranslated)
     print_diagnostics(check.diagnostics)
     if check.backend_note:
         print(f"note: {check.backend_note}", file=sys.stderr)
@@ -59,7 +62,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     write_files_atomically(files)
     if result.errors:
         return EXIT_BAD_INPUT
-    return EXIT_FAILED if result.divergent else EXIT_OK
+    return EXIT_OK if result.equivalent else EXIT_FAILED
 
 
 def _progress_printer(label: str) -> Callable[[int, int], None]:
@@ -93,7 +96,9 @@ def _print_outcomes(result) -> None:
     from transpiler.verify.stimulus import scenario_to_yaml
     for o in result.outcomes:
         r = o.result
-        if r.error:
+        if r.error and r.error_side == "translated":
+            print(f"FAULT OF THE TRANSLATION in {r.scenario}: {r.error}")
+        elif r.error:
             print(f"{NO_SPAN}: error[E-TOOL]: {r.scenario}: {r.error}", file=sys.stderr)
         elif r.divergence:
             d = r.divergence
@@ -103,8 +108,19 @@ def _print_outcomes(result) -> None:
                 print(f"shortest input trace found ({o.shrunk.cycles} cycles, {len(o.shrunk.events)} events, "
                       f"{o.shrink_runs} runs); rerun it with --scenario:")
                 print(scenario_to_yaml(o.shrunk))
+        elif r.missing:
+            print(f"NOT EQUIVALENT: {r.scenario}: {len(r.missing)} operands the original writes are missing in the "
+                  f"translation; {r.cycles_run} cycles, {_compared_text(r)} equal ({r.seconds:.2f} s)")
         else:
             print(f"equivalent: {r.scenario}: {r.cycles_run} cycles, {_compared_text(r)} ({r.seconds:.2f} s)")
+        for m in r.missing:
+            print(f"MISSING in the translation ({r.scenario}): {m.render()}")
+        for f in r.expectation_failures:
+            where = f.span or "<scenario>"
+            print(f"{where}: expectation failed: cycle {f.cycle}: {f.name}: expected {f.expected!r}, "
+                  f"actual {f.actual!r}", file=sys.stderr)
+    for span, text in result.untranslated:
+        print(f"NOT TRANSLATED: {span}: {text}")
     c = result.coverage
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "

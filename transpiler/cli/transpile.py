@@ -18,6 +18,9 @@ def register(sub, common) -> None:
     p.add_argument("--format", default="st,xml", help="which of st,xml to write (default both)")
     p.add_argument("--mp", type=Path, help="machine-parameter file for timer/counter presets "
                    "(default: the one *.mp file beside MAIN)")
+    p.add_argument("--allow-untranslated", action="store_true",
+                   help="write the output even where code cannot be translated (a warning per place; report.md "
+                   "opens with the list)")
     p.set_defaults(handler=cmd_transpile)
     f = sub.add_parser("fetch-schema", help="download and verify the official PLCopen TC6 v2.01 schema")
     f.set_defaults(handler=cmd_fetch_schema)
@@ -28,7 +31,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
     if not formats or formats - {"st", "xml"}:
         raise UsageError(f"--format takes st, xml or st,xml, not '{args.format}'")
     project = project_from_args(args)
-    out = api.transpile(project, formats=formats, mp_file=args.mp)
+    out = api.transpile(project, formats=formats, mp_file=args.mp, allow_untranslated=args.allow_untranslated)
     if "xml" in formats and not out.xml_validated:
         from transpiler.backends.plcopen.xsd import FETCH_HINT
         print(f"note: the PLCopen schema is not cached, project.xml was not validated. {FETCH_HINT}", file=sys.stderr)

@@ -10,12 +10,17 @@ from transpiler.frontend.parse import MpParser
 from transpiler.frontend.sources import ProjectFolders, read_source
 
 
+def mp_candidates(main: Path) -> list[Path]:
+    """Every machine-parameter file (*.mp) beside the main program."""
+    try:
+        return sorted(p for p in main.parent.iterdir() if p.suffix.lower() == ".mp" and p.is_file())
+    except OSError:
+        return []
+
+
 def find_mp_file(main: Path) -> Path | None:
     """The one machine-parameter file beside the main program, if there is exactly one."""
-    try:
-        found = sorted(p for p in main.parent.iterdir() if p.suffix.lower() == ".mp" and p.is_file())
-    except OSError:
-        return None
+    found = mp_candidates(main)
     return found[0] if len(found) == 1 else None
 
 

@@ -4,19 +4,20 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Callable, Iterable, Protocol, Sequence
+from typing import Callable, Iterable, Mapping, Protocol, Sequence
 
 from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.interp.machine import Machine
 from transpiler.exec.interp.state import byte_cells
+from transpiler.exec.st_lines import st_origin
 from transpiler.language.presets import load_presets
-from transpiler.diagnostics import Diagnostics
+from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.report.iomap import Accessor, IoMap
 from transpiler.ir import Program
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
-from transpiler.verify.simulate import build_machine, machine_parameters, program_operands
-from transpiler.verify.stimulus import Stimulus, build_stimulus
+from transpiler.verify.simulate import build_machine, machine_parameters, operand_writers, program_operands
+from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations
 
 
 class StSide(Protocol):
@@ -39,6 +40,20 @@ class Divergence:
     translated: int | str
 
 
+@dataclasses.dataclass(frozen=True)
+class MissingOperand:
+    """An operand the original program writes that the translation does not hold: a divergence of its own kind."""
+
+    operand: str
+    name: str
+    written_at: tuple[Span, ...]
+
+    def render(self) -> str:
+        where = ", ".join(str(s) for s in self.written_at[:3])
+        more = f" and {len(self.written_at) - 3} more" if len(self.written_at) > 3 else ""
+        return f"{self.name} ({self.operand}) is written by the original at {where}{more} but missing in the translation"
+
+
 @dataclasses.dataclass
 class CosimResult:
     scenario: str
@@ -51,10 +66,14 @@ class CosimResult:
     seconds: float = 0.0
     machine: Machine | None = None
     compared_indexed: int = 0           # addresses added because the program stored to them through the index
+    compared_operands: tuple[str, ...] = ()                 # the static columns, by operand
+    missing: tuple[MissingOperand, ...] = ()                # written by the original, not held by the translation
+    excluded: tuple[tuple[str, str], ...] = ()              # (operand, reason) written by the original, not compared
+    expectation_failures: tuple[ExpectationFailure, ...] = ()   # the scenario's `expect` entries, on the original
 
     @property
     def equivalent(self) -> bool:
-        return self.divergence is None and self.error is None
+        return self.divergence is None and self.error is None and not self.missing
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,6 +82,10 @@ class Comparison:
 
     columns: tuple[tuple[str, OperandRef], ...]
     inputs: tuple[OperandRef, ...]
+    missing: tuple[MissingOperand, ...] = ()
+    # (operand, reason) of operands the original writes that are deliberately not compared; none today: an operand
+    # the translation lacks is `missing`, never excluded.
+    excluded: tuple[tuple[str, str], ...] = ()
 
 
 def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
@@ -79,10 +102,13 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
             refs.add(r)
         if r.kind == "C" and prof.counter_running[0] <= r.addr <= prof.counter_running[1]:
             refs.add(r)
-    cols = [(names.display_name(r), r) for r in sorted(refs, key=lambda r: ("IOMTCBWDS".index(r.kind), r.addr))
-            if iomap.accessor(str(r)) is not None]
+    ordered = sorted(refs, key=lambda r: ("IOMTCBWDS".index(r.kind), r.addr))
+    cols = [(names.display_name(r), r) for r in ordered if iomap.accessor(str(r)) is not None]
+    writers = operand_writers(program)
+    missing = tuple(MissingOperand(str(r), names.display_name(r), tuple(writers.get(r, ())))
+                    for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
-    return Comparison(tuple(cols), inputs)
+    return Comparison(tuple(cols), inputs, missing)
 
 
 class _StDriver:
@@ -203,36 +229,46 @@ def side_reader(side: StSide, accessors: list[Accessor]) -> Callable[[], list]:
     return lambda: [acc.read(side) for acc in accessors]
 
 
-def set_presets(side: StSide, iomap: IoMap, program: Program, mp: dict, cycle_time_ms: int) -> None:
-    """Timer and counter presets of the scenario into the ST program's preset variables."""
+def preset_mismatches(side: StSide, iomap: IoMap, program: Program, mp: Mapping, cycle_time_ms: int) -> list[str]:
+    """Timer and counter presets the scenario's machine parameters give that differ from the ones the translated
+    program holds as written (its preset variables' initial values): the ST is tested as written, never patched."""
     timers, counters = load_presets(mp, program.semantics, cycle_time_ms, Diagnostics())
+    problems = []
     for number, presets in ((4110, timers), (4120, counters)):
         for row in iomap.rows:
             if row.operand.startswith(f"MP{number}."):
                 index = int(row.operand.split(".")[1])
-                side.set(row.iec, presets.get(index, 0))
+                wanted, held = presets.get(index, 0), side.get(row.iec)
+                if int(held) != int(wanted):
+                    problems.append(f"{row.operand}: {wanted} cycles from the scenario's machine parameters, "
+                                    f"{held} cycles in the translated program ({row.iec})")
+    return problems
 
 
 def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
                stimulus: Stimulus | None = None, *, cycles: int | None = None, coverage: bool = False,
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
-               compiled: CompiledProgram | None = None) -> CosimResult:
+               compiled: CompiledProgram | None = None, base_mp: Mapping | None = None) -> CosimResult:
     """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`. Callers that
     co-simulate one program many times pass it `compiled` once (see build_machine).
 
     Compared after every cycle: the static columns of comparison_for (read in one call where the side has a
     bulk_reader; `record` sees only these), then every address the original program has stored to through the
     index register so far, from the cycle of the first such store on (result.compared_indexed counts them); the
-    io map reaches those through the space's array. A divergence on either is reported the same way."""
+    io map reaches those through the space's array. A divergence on either is reported the same way.
+
+    `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
+    reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
+    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures)."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
-    machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled)
-    mp, _ = machine_parameters(scenario, diags)
+    machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled, base_mp=base_mp)
     side = make_side()
     cycle_time = machine.cycle_time_ms
-    set_presets(side, iomap, program, mp, cycle_time)
     comparison = comparison_for(program, names, iomap)
+    scenario_mp, _ = machine_parameters(scenario, diags)
+    mismatches = preset_mismatches(side, iomap, program, {**(base_mp or {}), **scenario_mp}, cycle_time)
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
     translated = side_reader(side, accessors)
@@ -240,7 +276,16 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     indexed = _IndexedColumns(machine, side, iomap, names, driver, [ref for _, ref in comparison.columns])
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     start = time.perf_counter()
-    result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine)
+    result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine,
+                         compared_operands=tuple(str(ref) for _, ref in comparison.columns),
+                         missing=comparison.missing, excluded=comparison.excluded)
+    if mismatches:
+        result.error = ("the scenario's machine parameters differ from those the translation was made with: "
+                        + "; ".join(mismatches))
+        result.error_side = "scenario"
+        return result
+    failures: list[ExpectationFailure] = []
+    read_original: Callable[[OperandRef], int | str] = lambda ref: machine.read(ref.kind, ref.addr)  # noqa: E731
     for cycle in range(total):
         writes = stimulus.writes(cycle)
         actions = stimulus.nc_actions(cycle)
@@ -260,6 +305,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.error_side = "translated"
             break
         result.cycles_run = cycle + 1
+        if scenario.expect:
+            failures += check_expectations(scenario, cycle, read_original)
         a_values = original()
         b_values = translated()
         if record is not None:
@@ -274,12 +321,13 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             progress(cycle + 1, total)
     result.seconds = time.perf_counter() - start
     result.compared_indexed = len(indexed.columns)
+    result.expectation_failures = tuple(failures)
     return result
 
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
-    from transpiler.exec.stexec import load_st
+    from transpiler.exec.stexec import StRuntimeError, load_st
     project = load_st(st_text, filename)
 
     class _Side:
@@ -295,6 +343,10 @@ def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable
             self.rt.set(path, value)
 
         def run_cycle(self) -> None:
-            self.rt.run_cycle()
+            try:
+                self.rt.run_cycle()
+            except StRuntimeError as exc:
+                where = f" ({st_origin(st_text, exc.span.line)})" if exc.span is not None else ""
+                raise StRuntimeError(f"{exc.message}{where}", exc.span) from None
 
     return _Side

@@ -6,12 +6,12 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 from xml.sax.saxutils import escape, quoteattr
 
 from transpiler.backends.iec_model import IecProject
 from transpiler.backends.report.iomap import IoMap
-from transpiler.diagnostics import CompileFailed, Diagnostic
+from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
@@ -43,7 +43,8 @@ def random_scenario(program: Program, names: NameTable, cycles: int, seed: int,
 
 
 def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
-           first: CosimResult, compiled: CompiledProgram | None = None) -> tuple[Scenario, int]:
+           first: CosimResult, compiled: CompiledProgram | None = None,
+           base_mp: Mapping | None = None) -> tuple[Scenario, int]:
     """The shortest stimulus found that still diverges: fewer cycles, then fewer events (ddmin over single writes)."""
     base = materialize_random(scenario, names)
     cycle = first.divergence.cycle
@@ -64,7 +65,7 @@ def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scen
     def diverges(events: list[Event], cycles: int) -> CosimResult | None:
         nonlocal runs
         runs += 1
-        res = cosimulate(program, make_side, iomap, make(events, cycles), names, compiled=compiled)
+        res = cosimulate(program, make_side, iomap, make(events, cycles), names, compiled=compiled, base_mp=base_mp)
         return res if res.divergence is not None else None
 
     best_cycles = cycle + 1
@@ -93,7 +94,7 @@ def shrink(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scen
         trial_initial = {k: v for k, v in shrunk.initial.items() if k != name}
         trial = bind(shrunk.model_copy(update={"initial": trial_initial}), names)
         runs += 1
-        if cosimulate(program, make_side, iomap, trial, names, compiled=compiled).divergence is not None:
+        if cosimulate(program, make_side, iomap, trial, names, compiled=compiled, base_mp=base_mp).divergence is not None:
             shrunk = trial
     return shrunk, runs
 
@@ -181,28 +182,52 @@ class EquivalenceResult:
     outcomes: list[Outcome]
     backend: str
     coverage: dict[str, Any]
+    untranslated: tuple[tuple[Span, str], ...] = ()     # code the translation left out (allowed by the user)
 
     @property
     def equivalent(self) -> bool:
-        return all(o.result.equivalent for o in self.outcomes)
+        """Every run compared whole and equal, every expectation met, nothing left untranslated."""
+        return self.verdict == "EQUIVALENT"
+
+    @property
+    def expectation_failures(self) -> list[Outcome]:
+        return [o for o in self.outcomes if o.result.expectation_failures]
 
     @property
     def errors(self) -> list[Outcome]:
-        return [o for o in self.outcomes if o.result.error]
+        """Runs that could not be carried out (bad scenario, a fault of the original, a missing tool)."""
+        return [o for o in self.outcomes if o.result.error and not _translation_fault(o.result)]
 
     @property
     def divergent(self) -> list[Outcome]:
-        return [o for o in self.outcomes if o.result.divergence]
+        """Runs that compared unequal, in which the translation lacks an operand the original writes, or in which
+        the translation faulted (an endless loop, a division by zero, ...) where the original ran on."""
+        return [o for o in self.outcomes if o.result.divergence or o.result.missing or _translation_fault(o.result)]
 
     @property
     def verdict(self) -> str:
-        return "EQUIVALENT" if self.equivalent else "NOT EQUIVALENT"
+        """NOT EQUIVALENT (a divergence, an operand missing, or a run that failed), EXPECTATION FAILED (the original
+        does not meet the scenario), NOT PROVEN (code was left untranslated), else EQUIVALENT."""
+        if self.divergent or self.errors or not self.outcomes:
+            return "NOT EQUIVALENT"
+        if self.expectation_failures:
+            return "EXPECTATION FAILED"
+        if self.untranslated:
+            return "NOT PROVEN"
+        return "EQUIVALENT"
+
+
+def _translation_fault(result: CosimResult) -> bool:
+    return result.error is not None and result.error_side == "translated"
 
 
 def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenarios: list[Scenario],
                     names: NameTable, backend: str, *, shrink_divergences: bool = True, vcd_dir: Path | None = None,
-                    progress: Callable[[str], Callable[[int, int], None]] | None = None) -> EquivalenceResult:
-    """Co-simulate every scenario; shrink each divergent stimulus. Raises CompileFailed on bad scenario input."""
+                    progress: Callable[[str], Callable[[int, int], None]] | None = None,
+                    base_mp: Mapping | None = None,
+                    untranslated: tuple[tuple[Span, str], ...] = ()) -> EquivalenceResult:
+    """Co-simulate every scenario; shrink each divergent stimulus. Raises CompileFailed on bad scenario input.
+    `base_mp` are the machine parameters the translation was made with (see cosim.cosimulate)."""
     outcomes: list[Outcome] = []
     coverage_sets: list = []
     reference = compile_program(program, coverage=True)
@@ -210,17 +235,18 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
         traces: list = []
         record = (lambda c, a, b: traces.append((c, a, b))) if vcd_dir else None
         res = cosimulate(program, make_side, iomap, scenario, names, coverage=True,
-                         progress=progress(scenario.name) if progress else None, record=record, compiled=reference)
+                         progress=progress(scenario.name) if progress else None, record=record, compiled=reference,
+                         base_mp=base_mp)
         outcome = Outcome(res)
         if res.divergence is not None and shrink_divergences:
             outcome.shrunk, outcome.shrink_runs = shrink(program, make_side, iomap, scenario, names, res,
-                                                         compile_program(program))
+                                                         compile_program(program), base_mp)
         outcomes.append(outcome)
         if res.machine is not None and res.machine.coverage_enabled:
             coverage_sets.append(res.machine.coverage)
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
-    return EquivalenceResult(outcomes, backend, coverage_summary(program, coverage_sets))
+    return EquivalenceResult(outcomes, backend, coverage_summary(program, coverage_sets), tuple(untranslated))
 
 
 def report_json(result: EquivalenceResult) -> str:
@@ -233,8 +259,16 @@ def report_json(result: EquivalenceResult) -> str:
                      "compared_indexed_addresses": r.compared_indexed,
                      "equivalent": r.equivalent, "error": r.error, "seconds": round(r.seconds, 3),
                      "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
+                     "compared": list(r.compared_operands),
+                     "excluded": [{"operand": operand, "reason": reason} for operand, reason in r.excluded],
+                     "missing_in_translation": [{"operand": m.operand, "name": m.name,
+                                                 "written_at": [str(s) for s in m.written_at]} for m in r.missing],
+                     "expectation_failures": [{"cycle": f.cycle, "name": f.name, "expected": f.expected,
+                                               "actual": f.actual, "at": str(f.span) if f.span else None}
+                                              for f in r.expectation_failures],
                      "shrunk_scenario": scenario_to_yaml(o.shrunk) if o.shrunk else None})
-    data = {"backend": backend, "equivalent": all(o.result.equivalent for o in outcomes), "runs": runs,
+    data = {"backend": backend, "verdict": result.verdict, "equivalent": result.equivalent, "runs": runs,
+            "not_translated": [{"at": str(span), "what": text} for span, text in result.untranslated],
             "coverage": coverage}
     return json.dumps(data, indent=2) + "\n"
 
@@ -242,7 +276,7 @@ def report_json(result: EquivalenceResult) -> str:
 def report_junit(result: EquivalenceResult) -> str:
     """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error."""
     outcomes, backend = result.outcomes, result.backend
-    failures = sum(1 for o in outcomes if o.result.divergence)
+    failures = sum(1 for o in outcomes if o.result.divergence or o.result.missing or o.result.expectation_failures)
     errors = sum(1 for o in outcomes if o.result.error)
     total = sum(o.result.seconds for o in outcomes)
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
@@ -255,6 +289,15 @@ def report_junit(result: EquivalenceResult) -> str:
             d = r.divergence
             msg = f"cycle {d.cycle}: {d.name} ({d.operand}): original {d.original!r}, translated {d.translated!r}"
             body = scenario_to_yaml(o.shrunk) if o.shrunk else ""
+            lines.append(f"    <failure message={quoteattr(msg)}>{escape(body)}</failure>")
+        elif _translation_fault(r):
+            lines.append(f"    <failure message={quoteattr(r.error)}/>")
+        elif r.missing:
+            msg = f"{len(r.missing)} operands written by the original are missing in the translation"
+            lines.append(f"    <failure message={quoteattr(msg)}>{escape(chr(10).join(m.render() for m in r.missing))}</failure>")
+        elif r.expectation_failures:
+            msg = f"{len(r.expectation_failures)} expectations of the scenario failed on the original"
+            body = "\n".join(f.message() for f in r.expectation_failures)
             lines.append(f"    <failure message={quoteattr(msg)}>{escape(body)}</failure>")
         elif r.error:
             lines.append(f"    <error message={quoteattr(r.error)}/>")

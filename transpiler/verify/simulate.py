@@ -6,7 +6,7 @@ import dataclasses
 import time
 from decimal import Decimal
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import yaml
 
@@ -34,6 +34,17 @@ def _operand_refs(op) -> list[OperandRef]:   # noqa: ANN001 - ir.Op
         return []
     count = op.nbits if op.code in ("LDBITS", "STBITS") else 1
     return [OperandRef(o.kind, o.addr + i) for i in range(count)]
+
+
+def operand_writers(program: Program) -> dict[OperandRef, list[Span]]:
+    """Every operand an instruction names as the target of a write, with the source lines that write it."""
+    writers: dict[OperandRef, list[Span]] = {}
+    for code in program.files:
+        for op in code.ops:
+            if op.code in _WRITES:
+                for ref in _operand_refs(op):
+                    writers.setdefault(ref, []).append(op.span)
+    return writers
 
 
 def program_operands(program: Program) -> tuple[set[OperandRef], set[OperandRef], set[OperandRef]]:
@@ -123,10 +134,12 @@ class SimulationResult:
 
 
 def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, coverage: bool = False,
-                  compiled: CompiledProgram | None = None) -> Machine:
+                  compiled: CompiledProgram | None = None, base_mp: Mapping | None = None) -> Machine:
     """A machine set up from the scenario (MPs, cycle time, module results); raises CompileFailed on bad input.
-    `compiled` (the program compiled once by the caller) saves compiling it again for every scenario."""
+    `compiled` (the program compiled once by the caller) saves compiling it again for every scenario; `base_mp`
+    (the project's machine parameters) applies where the scenario sets no value of its own."""
     mp, spans = machine_parameters(scenario, diags)
+    mp = {**(base_mp or {}), **mp}
     diags.raise_if_errors()
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:

@@ -7,6 +7,7 @@ from types import MappingProxyType
 from typing import Callable
 
 from transpiler.backends.iec_model import st_comment
+from transpiler.diagnostics import Span
 from transpiler.ir import Op, Operand
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.exprs import Expr
@@ -19,7 +20,11 @@ REG_TYPES = MappingProxyType({
 
 
 class Unsupported(Exception):
-    """An op the ST backend cannot translate; the routine reports it and continues."""
+    """An op the ST backend cannot translate; the routine reports it (at `span`, the op's line) and continues."""
+
+    def __init__(self, message: str, span: Span | None = None):
+        super().__init__(message)
+        self.span = span
 
 
 @dataclasses.dataclass

@@ -154,7 +154,7 @@ class Structurer:
                 i += 1
                 continue
             if op.code in ("SUBM", "RPLY", "CAN"):
-                raise Unsupported(f"submit jobs ({op.mnemonic}) at {op.span}")
+                raise Unsupported(f"submit jobs ({op.mnemonic})", op.span)
             self.ex.run(op, i)
             i += 1
 
@@ -187,10 +187,14 @@ class Structurer:
 
     def _call(self, op: Op, i: int) -> None:
         if op.call is None or op.call.file < 0 and not op.call.is_module:
-            raise Unsupported(f"unresolved call at {op.span}")
+            raise Unsupported("unresolved call", op.span)
         self.ex.flush(self._live(i) | frozenset(["LA"] if op.code != "CALL" else []))
         if op.call.is_module:
-            text = self.ex.ctx.module_call(op.call.module)
+            try:
+                text = self.ex.ctx.module_call(op.call.module)
+            except Unsupported as exc:
+                exc.span = exc.span or op.span
+                raise
         else:
             text = self.info.call_name(op.call)
         if op.code == "CALL":
@@ -439,7 +443,7 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
             elif op.code == "CASE":
                 structurer._case(op, i)
             elif op.code in ("SUBM", "RPLY", "CAN"):
-                raise Unsupported(f"submit jobs ({op.mnemonic}) at {op.span}")
+                raise Unsupported(f"submit jobs ({op.mnemonic})", op.span)
             else:
                 ex.run(op, i)
             i += 1

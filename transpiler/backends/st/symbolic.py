@@ -29,8 +29,12 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
             self.ctx.out.comment(text)
         handler = getattr(self, "op_" + op.code, None)
         if handler is None:
-            raise Unsupported(f"{op.mnemonic} ({op.code})")
-        handler(op)
+            raise Unsupported(f"{op.mnemonic} ({op.code})", op.span)
+        try:
+            handler(op)
+        except Unsupported as exc:
+            exc.span = exc.span or op.span
+            raise
 
     def op_LBL(self, op: Op) -> None:
         pass

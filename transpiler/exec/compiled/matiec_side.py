@@ -16,6 +16,7 @@ from typing import Callable
 from transpiler.backends.iec_model import IecProject
 from transpiler.backends.report.iomap import Place
 from transpiler.backends.st.check import matiec_home
+from transpiler.exec.st_lines import loop_sites
 
 SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
            "UINT": "UINT", "UDINT": "UDINT", "BYTE": "BYTE", "WORD": "WORD", "DWORD": "DWORD"}
@@ -95,7 +96,7 @@ def harness_source(project: IecProject) -> str:
              "    return s->len;", "}", ""]
     sput += ["    }", "    if (!s) return;", "    size_t n = strlen(text);", "    if (n > STR_MAX_LEN) n = STR_MAX_LEN;",
              "    memcpy(s->body, text, n);", "    s->len = (__strlen_t)n;", "}", ""]
-    return "\n".join(lines + get + put + sget + sput + BULK_READ)
+    return "\n".join(lines + get + put + sget + sput + BULK_READ + GUARDED_RUN)
 
 
 # One call per cycle reads every compared operand: a column is (variable id, index, width, big endian); width 0 reads
@@ -115,6 +116,47 @@ BULK_READ = [
     "        out[i] = (long long)((v ^ sign) - sign);",
     "    }",
     "}", ""]
+
+
+# A cycle of compiled ST cannot be interrupted from Python (ctypes holds the thread), so an endless loop in the
+# translation would hang the co-simulation. The cycle runs under a real-time alarm instead: when it fires, the
+# handler jumps back out of the generated code and the run ends with a finding (the state is abandoned).
+GUARDED_RUN = [
+    "#include <setjmp.h>", "#include <signal.h>", "#include <sys/time.h>",
+    "static sigjmp_buf hh_escape;",
+    "static volatile sig_atomic_t hh_guarded;",
+    "static void hh_alarm(int sig) { (void)sig; if (hh_guarded) siglongjmp(hh_escape, 1); }",
+    "int hh_run_guarded(long budget_ms) {",
+    "    struct sigaction action, previous;",
+    "    struct itimerval start, stop;",
+    "    memset(&action, 0, sizeof action);",
+    "    memset(&start, 0, sizeof start);",
+    "    memset(&stop, 0, sizeof stop);",
+    "    action.sa_handler = hh_alarm;",
+    "    sigemptyset(&action.sa_mask);",
+    "    start.it_value.tv_sec = budget_ms / 1000;",
+    "    start.it_value.tv_usec = (budget_ms % 1000) * 1000;",
+    "    sigaction(SIGALRM, &action, &previous);",
+    "    if (sigsetjmp(hh_escape, 1)) {",
+    "        hh_guarded = 0;",
+    "        setitimer(ITIMER_REAL, &stop, 0);",
+    "        sigaction(SIGALRM, &previous, 0);",
+    "        return 1;",
+    "    }",
+    "    hh_guarded = 1;",
+    "    setitimer(ITIMER_REAL, &start, 0);",
+    "    hh_run();",
+    "    hh_guarded = 0;",
+    "    setitimer(ITIMER_REAL, &stop, 0);",
+    "    sigaction(SIGALRM, &previous, 0);",
+    "    return 0;",
+    "}", ""]
+
+CYCLE_BUDGET_MS = 2000      # a PLC cycle of the translation takes microseconds; 2 s means it never ends
+
+
+class CycleOverrun(RuntimeError):
+    """A cycle of the compiled translation did not end within the budget (an endless loop)."""
 
 
 def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
@@ -164,6 +206,9 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
     lib.hh_get_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
     lib.hh_set_str.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p]
     lib.hh_get_many.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_longlong)]
+    lib.hh_run_guarded.argtypes = [ctypes.c_long]
+    lib.hh_run_guarded.restype = ctypes.c_int
+    loops = loop_sites(st_text)
     variables = _variables(project)
     ids = {name: (n, typ, shape) for n, (name, typ, shape) in enumerate(variables)}
     buffer = ctypes.create_string_buffer(512)
@@ -205,7 +250,9 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
                 lib.hh_set(n, index, int(value))
 
         def run_cycle(self) -> None:
-            lib.hh_run()
+            if lib.hh_run_guarded(CYCLE_BUDGET_MS):
+                raise CycleOverrun(f"the cycle did not end within {CYCLE_BUDGET_MS / 1000:g} s (an endless loop); "
+                                   "the ST lines that loop: " + ", ".join(loops or ["none found"]))
 
         def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
             """Reads all places in one C call (texts, which C cannot return as numbers, one by one)."""
