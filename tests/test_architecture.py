@@ -155,3 +155,23 @@ def test_every_stage_package_says_what_it_does(folder):
     assert init.is_file(), f"{folder} is not a package"
     doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8")))
     assert doc and len(doc.split()) >= 15 and "TODO" not in doc, f"{folder}/__init__.py needs its docstring"
+
+
+LONG_FUNCTION = 80
+
+
+def test_no_long_function_without_a_reason():
+    """A function over ~80 lines says why it is kept whole in a comment at the top of its body ("Kept whole ...")."""
+    offenders = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        lines = path.read_text(encoding="utf-8").splitlines()
+        for node in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            if node.end_lineno - node.lineno + 1 <= LONG_FUNCTION:
+                continue
+            head = "\n".join(lines[node.lineno - 1: node.lineno + 4])
+            if "Kept whole" not in head:
+                offenders.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name} "
+                                 f"({node.end_lineno - node.lineno + 1} lines)")
+    assert offenders == []

@@ -18,7 +18,7 @@ from transpiler.verify.simulate import project_names
 from transpiler.backends.report.report import io_map_of
 
 from test_st_backend import SAMPLE, transpile_sample, transpile_vector
-from vectors import SKIP_REASON, SPEC, load_vectors, vector_scenario_yaml
+from vectors import load_vectors, vector_scenario_yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = sorted((SAMPLE / "scenarios").glob("*.yaml"))
@@ -49,12 +49,9 @@ def test_sample_random_cycles_are_equivalent(sample):
 
 
 def _runtime_vectors():
-    if not SPEC.is_file():
-        return []
     return [v for v in load_vectors() if not v.expect_error and v.id != "TV-73"]
 
 
-@pytest.mark.skipif(not SPEC.is_file(), reason=SKIP_REASON)
 @pytest.mark.parametrize("vector", _runtime_vectors(), ids=lambda v: v.id)
 def test_vector_is_equivalent(vector, tmp_path):
     program, out = transpile_vector(vector, tmp_path)

@@ -12,11 +12,6 @@ from typing import Any
 import yaml
 
 VECTOR_DIR = Path(__file__).resolve().parent / "data" / "vectors"
-# Kept for the modules that still guard on `SPEC.is_file()` / `SPEC.exists()` (test_equiv, test_st_backend, fuzz):
-# it is the README of the vector folder, which is in the repository, so their guards no longer skip anything;
-# load_vectors() raises when the vectors themselves are missing.
-SPEC = VECTOR_DIR / "README.md"
-SKIP_REASON = f"the test vectors are missing from {VECTOR_DIR} (they belong to the repository: this is a broken checkout)"
 MIN_VECTORS = 80            # the description has 86; fewer means files were lost
 
 
