@@ -135,7 +135,7 @@ ERROR_CASES = [
     ("case-body-module", {"main.src": "CASE B0\nCM 9032\nENDC\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
     ("case-body-label", {"main.src": "CASE B0\nLBL A\nENDC\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
     ("case-never-closed", {"main.src": "L I1\nCASE B0\nCM A\nEM\nLBL A\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
-    ("case-endc-alone", {"main.src": "ENDC\nEM\n"}, [("E-CASE-BODY", "main.src", 1, 1)]),
+    ("case-endc-alone", {"main.src": "ENDC\nEM\n"}, [("E-STRUCT-NEST", "main.src", 1, 1)]),
     # KF placement (6.17), jumps, end of file, calls (6.11, 6.12, 7.3)
     ("kf-placement", {"main.src": "L I1\nKFIELD T\nK1\nENDK\nEM\n"}, [("E-KF-PLACEMENT", "main.src", 2, 1)]),
     ("kf-after-conditional-em", {"main.src": "L I1\nEMT\nKFIELD T\nK1\nENDK\nEM\n"}, [("E-KF-PLACEMENT", "main.src", 3, 1)]),

@@ -53,16 +53,30 @@ def link(low: FileLowering, lowerings: list[FileLowering], exports: dict[str, Ca
             found = exports.get(name)
             if found is not None:
                 return found
-            # (not again when the module that would export it is unreadable, or its LBL line was rejected)
-            if not labels_incomplete and not any(name in o.src.broken_labels for o in lowerings):
-                diags.report("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module")
+            unresolved_extern(name, span)
             return None
         if name in low.src.broken_labels:   # its LBL line was rejected already
             return None
         elsewhere = [o.src.path for o in lowerings if name in o.labels]
-        hint = f" (it is defined in {elsewhere[0]}: add GLOBAL there and EXTERN here)" if elsewhere else ""
+        if name in exports:
+            hint = f" ({elsewhere[0] if elsewhere else 'a used module'} exports it with GLOBAL: add EXTERN {name} here)"
+        elif elsewhere:
+            hint = f" (it is defined in {elsewhere[0]}: add GLOBAL {name} there and EXTERN {name} here)"
+        else:
+            hint = ""
         diags.report("E-SYM-UNRESOLVED", span, f"label {name} is not defined in this file{hint}")
         return None
+
+    reported: set[str] = set()
+
+    def unresolved_extern(name: str, span: Span) -> None:
+        # (not when the module that would export it is unreadable, or its LBL line was rejected)
+        reported.add(name)
+        if labels_incomplete or any(name in o.src.broken_labels for o in lowerings):
+            return
+        elsewhere = [o.src.path for o in lowerings if name in o.labels and o is not low]
+        hint = f" (it is defined in {elsewhere[0]}: add GLOBAL {name} there)" if elsewhere else ""
+        diags.report("E-SYM-UNRESOLVED", span, f"EXTERN {name} is not exported with GLOBAL by any used module{hint}")
 
     for index, name, span in low.pending_calls:
         t = target(name, span)
@@ -74,6 +88,10 @@ def link(low: FileLowering, lowerings: list[FileLowering], exports: dict[str, Ca
         case_targets.setdefault(index, []).append(t if t is not None else CallTarget(label=name))
     for index, targets in case_targets.items():
         low.ops[index] = dataclasses.replace(low.ops[index], case_targets=tuple(targets))
+    for name, extern in low.externs.items():
+        # an EXTERN that nothing calls still names a label no module exports (spec: E-SYM-UNRESOLVED)
+        if name not in reported and name not in low.labels and spelled(name, exports) not in exports:
+            unresolved_extern(name, extern.span)
     for index, name, span in low.pending_jumps:
         name = spelled(name, low.labels)
         if name in low.labels:

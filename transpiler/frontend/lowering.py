@@ -126,7 +126,7 @@ class FileLowering:
             self.case_open, self.case_faults = (index, instr.span), []
         elif m == "ENDC":
             if self.case_open is None:
-                self.diags.report("E-CASE-BODY", instr.span, "ENDC without CASE")
+                self.diags.report("E-STRUCT-NEST", instr.span, "ENDC without CASE")
             for fault_span, message in self.case_faults:
                 self.diags.report("E-CASE-BODY", fault_span, message)
             self.case_open, self.case_faults = None, []

@@ -32,10 +32,22 @@ def parse_constant(text: str, documented: bool = False) -> int | None:
         if documented and value > INT32_MAX:
             return None
         return _pattern(value)
-    value = int(text)
+    value = decimal_int(text)
     if (INT32_MIN + (1 if documented else 0)) <= value <= INT32_MAX:
         return value
     return None
+
+
+_TOO_LONG = 10 ** 15
+
+
+def decimal_int(text: str) -> int:
+    """A decimal number of any length; one with more than 15 significant digits is taken as +-10**15, far out of
+    every range (CPython refuses int() of more than 4300 digits, which would make a range error a syntax error)."""
+    digits = text.lstrip("+-").lstrip("0")
+    if len(digits) > 15:
+        return -_TOO_LONG if text.startswith("-") else _TOO_LONG
+    return int(text)
 
 
 def _pattern(value: int) -> int | None:
@@ -99,7 +111,7 @@ class _SrcTransformer(Transformer):
         return ast.OperandSyntax("K", _const_value(items[0], self.documented), False, "K" + str(items[0])[1:].strip())
 
     def str_op(self, items):
-        return ast.OperandSyntax("S", int(str(items[0])[1:]), False, str(items[0]))
+        return ast.OperandSyntax("S", decimal_int(str(items[0])[1:]), False, str(items[0]))
 
     def strref_op(self, items):
         text = str(items[0])
@@ -116,7 +128,7 @@ class _SrcTransformer(Transformer):
         return ast.OperandSyntax("X", 0, False, "X")
 
     def num_op(self, items):
-        return ast.OperandSyntax("NUM", int(str(items[0])), False, str(items[0]))
+        return ast.OperandSyntax("NUM", decimal_int(str(items[0])), False, str(items[0]))
 
     def sym_op(self, items):
         return ast.OperandSyntax("SYM", str(items[0]), False, str(items[0]))
@@ -128,14 +140,14 @@ class _SrcTransformer(Transformer):
 def _addr_operand(token: Token) -> ast.OperandSyntax:
     text = str(token)
     kind = text[0].upper()
-    return ast.OperandSyntax(kind, int(text[1:].strip()), False, kind + text[1:].strip())
+    return ast.OperandSyntax(kind, decimal_int(text[1:].strip()), False, kind + text[1:].strip())
 
 
 def _const_value(token: Token, documented: bool = False) -> int:
     text = str(token)[1:].strip()
     value = parse_constant(text, documented)
     if value is None:
-        raise _ConstRange(text)
+        raise _ConstRange(text if len(text) <= 40 else text[:37] + "...")
     return value
 
 
@@ -375,7 +387,7 @@ class _DefTransformer(Transformer):
 
     def t_fixed(self, items):
         text = str(items[0])
-        return (text[0].upper(), int(text[1:].strip()), None, None)
+        return (text[0].upper(), decimal_int(text[1:].strip()), None, None)
 
     def t_const(self, items):
         return ("K", None, _const_value(items[0], self.documented), None)
@@ -421,6 +433,10 @@ class DefParser(_CachedLineParser):
         section: str | None = None
         broken: list[str] = []
         for code, span, comments in _code_lines(lines, []):
+            cut = code.find("*")
+            if cut > 0 and not code.startswith("#"):
+                # A-60: `I_HR410_key_spindle_M5 M *I174` - a note after the kind or address, kept as a comment
+                code, comments = code[:cut].rstrip(), comments + (code[cut + 1:].strip(),)
             parsed = self.parse_line(code)
             if parsed[0] != "ok":
                 if parsed[0] == "range":

@@ -194,7 +194,10 @@ def _add(table: dict[str, Symbol], sym: Symbol, diags: Diagnostics) -> None:
     if old is not None:
         if (old.kind, old.addr) != (sym.kind, sym.addr) or old.auto or sym.auto:
             if not (old.auto and sym.auto and old.span == sym.span):
-                diags.report("E-SYM-DUP", sym.span, f"symbol {sym.name} is already defined at {old.span}")
+                # at the second definition in the file (an alias is taken after every fixed address, so the
+                # table may hold the later line)
+                first, second = (sym, old) if sym.span.file == old.span.file and sym.span < old.span else (old, sym)
+                diags.report("E-SYM-DUP", second.span, f"symbol {sym.name} is already defined at {first.span}")
         return
     table[sym.name] = sym
 
