@@ -1,4 +1,4 @@
-"""The `hh2iec` command line: the parser with every subcommand, and `check`, `explain`, `assumptions`."""
+"""The `hh2iec` command line: the parser with every subcommand, `--version`, and `check`, `explain`, `assumptions`."""
 
 from __future__ import annotations
 
@@ -6,15 +6,17 @@ import argparse
 import json
 import os
 import sys
+from importlib import metadata
 from typing import Sequence
 
-from transpiler import api
+from transpiler import __version__, api
 from transpiler.cli import equiv, simulate, transpile
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
                                    options_from_args, print_diagnostics, semantics_from_args)
-from transpiler.diagnostics import NO_SPAN, CompileFailed, explain
+from transpiler.diagnostics import CODES, NO_SPAN, CompileFailed, explain
 from transpiler.frontend.pipeline import CompileResult
-from transpiler.language.semantics import ASSUMPTION_BY_KEY, PROFILES
+from transpiler.language.semantics import ASSUMPTION_BY_KEY, ASSUMPTIONS, PROFILES, Assumption
+from transpiler.resources import DataMissing
 
 # Each module registers its own subcommands; listed here so that the parser's contents are visible in one place.
 SUBCOMMAND_MODULES = (transpile, simulate, equiv)
@@ -22,13 +24,15 @@ SUBCOMMAND_MODULES = (transpile, simulate, equiv)
 
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
+    parser.add_argument("--version", action="version", version=f"hh2iec {version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check", help="preprocess, parse and resolve a project; print a summary")
     add_project_arguments(check)
     check.add_argument("--json", action="store_true", help="print the summary as JSON")
     check.set_defaults(handler=cmd_check)
-    ex = sub.add_parser("explain", help="explain a diagnostic code")
-    ex.add_argument("code")
+    ex = sub.add_parser("explain", help="explain a diagnostic code (E-...) or a semantic assumption (A-...)")
+    ex.add_argument("code", nargs="?", help="a diagnostic code such as E-SYNTAX, or an assumption id (A-09) or key")
+    ex.add_argument("--list", action="store_true", help="list every diagnostic code and assumption with its summary")
     ex.set_defaults(handler=cmd_explain)
     sub.add_parser("assumptions", help="list every semantic choice with its default per profile").set_defaults(
         handler=cmd_assumptions)
@@ -69,11 +73,66 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_BAD_INPUT if result.diagnostics.has_errors() else EXIT_OK
 
 
+def version() -> str:
+    """The installed distribution's version; a checkout that was never installed has only the package's own."""
+    try:
+        return metadata.version("hh2iec")
+    except metadata.PackageNotFoundError:
+        return __version__
+
+
+def _assumption(text: str) -> Assumption | None:
+    by_id = {a.id.upper(): a for a in ASSUMPTIONS}
+    return by_id.get(text.upper()) or ASSUMPTION_BY_KEY.get(text.lower())
+
+
+def explain_assumption(a: Assumption) -> str:
+    """Text for `hh2iec explain A-xx`: the choice, its default per profile, the alternatives and how to switch."""
+    names = sorted(PROFILES)
+    defaults = ", ".join(f"{n}: {PROFILES[n].defaults[a.key]!s}" if PROFILES[n].defaults[a.key] != "" else
+                         f"{n}: (empty)" for n in names)
+    if a.alternatives:
+        values = ", ".join(str(v) for v in (a.default, *a.alternatives))
+        example = a.alternatives[0]
+    elif isinstance(a.default, int) and not isinstance(a.default, bool):
+        values, example = "any integer", a.default
+    else:
+        values, example = "any text", "..."
+    lines = [f"{a.id} {a.key}: {a.topic}",
+             f"  default per profile: {defaults}",
+             f"  values: {values}",
+             f"  switch: -S {a.key}={str(example).lower() if isinstance(example, bool) else example} "
+             f"(or `semantics: {{{a.key}: ...}}` in a scenario)"]
+    if a.vectors:
+        lines.append(f"  test vectors: {', '.join(a.vectors)}")
+    lines.append("  see docs/assumptions.md")
+    return "\n".join(lines) + "\n"
+
+
+def explain_list() -> str:
+    """Every diagnostic code and every assumption with its one-line summary (`hh2iec explain --list`)."""
+    width = max(map(len, CODES))
+    lines = [f"{info.code:<{width}}  {info.severity.value:<7}  {info.summary}" for info in CODES.values()]
+    lines += [f"{a.id:<{width}}  {'assume':<7}  {a.key}: {a.topic}" for a in ASSUMPTIONS]
+    return "\n".join(lines) + "\n"
+
+
 def cmd_explain(args: argparse.Namespace) -> int:
+    if args.list:
+        if args.code:
+            raise UsageError("explain takes either a CODE or --list, not both")
+        print(explain_list(), end="")
+        return EXIT_OK
+    if not args.code:
+        raise UsageError("explain needs a diagnostic code, an assumption id, or --list")
     text = explain(args.code)
     if text is None:
-        print(f"{NO_SPAN}: error[E-USAGE]: unknown diagnostic code {args.code}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        assumption = _assumption(args.code)
+        if assumption is None:
+            print(f"{NO_SPAN}: error[E-USAGE]: unknown diagnostic code or assumption {args.code} "
+                  "(`hh2iec explain --list` lists them)", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        text = explain_assumption(assumption)
     print(text, end="")
     return EXIT_OK
 
@@ -103,6 +162,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except CompileFailed as exc:
         for d in exc.diagnostics:
             print(d.render(), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except DataMissing as exc:
+        print(f"{NO_SPAN}: error[E-TOOL]: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130

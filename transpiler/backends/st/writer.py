@@ -8,8 +8,7 @@ from pathlib import Path
 import jinja2
 
 from transpiler.backends.iec_model import IecProject, IecVar, VarSection, st_comment
-
-TEMPLATE_DIR = Path(__file__).resolve().parents[3] / "templates" / "st"
+from transpiler.resources import data_dir
 BODY_INDENT = "    "
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
@@ -61,9 +60,14 @@ def _block(section: VarSection, run: list[IecVar], first: bool) -> VarSection:
                       retain=section.retain, comment=section.comment if first else None)
 
 
+def template_dir() -> Path:
+    """templates/st as installed with the package (a wheel), else from the checkout."""
+    return data_dir("templates") / "st"
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
+        loader=jinja2.FileSystemLoader(str(template_dir())),
         undefined=jinja2.StrictUndefined,
         autoescape=False,
         trim_blocks=True,

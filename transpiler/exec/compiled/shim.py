@@ -6,12 +6,18 @@ import ctypes
 import dataclasses
 import fcntl
 import functools
+import hashlib
+import os
+import shlex
+import shutil
 import subprocess
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence, TypeVar
 
-SHIM_DIR = Path(__file__).resolve().parents[3] / "runtime_shim"
+from transpiler import __version__
+from transpiler.resources import DataMissing, cache_dir, data_dir
+
 LIB_NAME = "libhhshim.so"
 
 # Mirrors of the C constants (hh_nc.h, hh_modules.h).
@@ -30,7 +36,8 @@ Write = tuple[str, int, int]
 
 
 class ShimUnavailable(RuntimeError):
-    """The runtime shim library could not be built or loaded (the message carries gcc's/make's output)."""
+    """The runtime shim library could not be built or loaded (the message says what is missing, or carries the
+    compiler's output)."""
 
 
 class NcActionError(ValueError):
@@ -68,8 +75,31 @@ _READ_BIT = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_int32)
 # building and loading
 
 
+# The flags of runtime_shim/Makefile (which builds the C unit tests); -fwrapv: signed overflow wraps, as on the control.
+SHIM_CFLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-O2", "-fwrapv", "-fPIC", "-shared")
+COMPILERS = ("cc", "gcc")
+"""Looked for on PATH, in this order, when $CC is not set."""
+
+
+def shim_sources() -> Path:
+    """The folder of the shim's C sources: installed with the package, else the checkout's runtime_shim/."""
+    try:
+        return data_dir("runtime_shim")
+    except DataMissing as exc:
+        raise ShimUnavailable(f"cannot build the runtime shim: {exc}") from None
+
+
 def _sources(root: Path) -> list[Path]:
-    return [p for pattern in ("*.c", "*.h", "Makefile") for p in root.glob(pattern)]
+    return sorted(p for pattern in ("*.c", "*.h") for p in root.glob(pattern))
+
+
+def cache_key(root: Path) -> str:
+    """<version>-<hash of the sources and flags>: a changed source or flag builds a new library beside the old one,
+    so two hh2iec versions (or checkouts) sharing one cache never load each other's library."""
+    digest = hashlib.sha256(" ".join(SHIM_CFLAGS).encode())
+    for path in _sources(root):
+        digest.update(b"\0" + path.name.encode() + b"\0" + path.read_bytes())
+    return f"{__version__}-{digest.hexdigest()[:16]}"
 
 
 def _is_stale(root: Path, lib: Path) -> bool:
@@ -81,35 +111,68 @@ def _is_stale(root: Path, lib: Path) -> bool:
     return lib.stat().st_mtime_ns < max(p.stat().st_mtime_ns for p in sources)
 
 
-def _run_make(root: Path) -> None:
-    command = ["make", "-C", str(root), "lib"]
+def find_compiler() -> list[str]:
+    """The C compiler command: $CC when set, else cc or gcc from PATH; ShimUnavailable naming what was looked for."""
+    configured = os.environ.get("CC", "").strip()
+    if configured:
+        argv = shlex.split(configured)
+        if shutil.which(argv[0]):
+            return argv
+        raise ShimUnavailable(f"cannot build the runtime shim: the C compiler named by CC ({configured!r}) was not "
+                              "found; install it or point CC at a C compiler")
+    for name in COMPILERS:
+        found = shutil.which(name)
+        if found:
+            return [found]
+    raise ShimUnavailable("cannot build the runtime shim: no C compiler found (looked for "
+                          f"{' and '.join(repr(c) for c in COMPILERS)} on PATH, and CC is not set); install one "
+                          "(e.g. 'apt-get install gcc') or set CC")
+
+
+def _compile(root: Path, lib: Path) -> None:
+    command = [*find_compiler(), *SHIM_CFLAGS]
+    # Written under a temporary name and renamed: a process loading the library never sees a half-written file.
+    tmp = lib.with_name(f"{lib.name}.tmp.{os.getpid()}")
+    argv = [*command, "-o", str(tmp), *(str(p) for p in sorted(root.glob("*.c")))]
     try:
-        proc = subprocess.run(command, capture_output=True, text=True, timeout=300)
-    except FileNotFoundError:
-        raise ShimUnavailable("cannot build the runtime shim: 'make' was not found on PATH") from None
+        proc = subprocess.run(argv, capture_output=True, text=True, timeout=300)
     except subprocess.TimeoutExpired:
-        raise ShimUnavailable(f"building the runtime shim timed out ({' '.join(command)})") from None
+        raise ShimUnavailable(f"building the runtime shim timed out ({' '.join(argv)})") from None
+    except OSError as exc:
+        raise ShimUnavailable(f"cannot run the C compiler {argv[0]}: {exc}") from None
     if proc.returncode != 0:
+        tmp.unlink(missing_ok=True)
         output = (proc.stderr.strip() or proc.stdout.strip() or f"exit status {proc.returncode}")
-        raise ShimUnavailable(f"building the runtime shim failed ({' '.join(command)}):\n{output}")
+        raise ShimUnavailable(f"building the runtime shim failed ({' '.join(argv)}):\n{output}")
+    os.replace(tmp, lib)
 
 
 def ensure_built(root: Path | str | None = None) -> Path:
-    """Path of the shim library, running `make -C runtime_shim lib` first when it is missing or stale."""
-    root = Path(root) if root is not None else SHIM_DIR
-    lib = root / "build" / LIB_NAME
+    """Path of the shim library, compiled first when it is missing or older than its sources.
+
+    By default the sources are the installed (or checkout) runtime_shim/ and the library goes to the per-user cache,
+    <cache>/shim-<version>-<hash>/ (see transpiler.resources.cache_dir): never into the package, which may be
+    read-only. An explicit `root` (a folder of shim sources) builds into root/build/."""
+    if root is not None:
+        root = Path(root)
+        out = root / "build"
+    else:
+        root = shim_sources()
+        out = cache_dir() / f"shim-{cache_key(root)}"
+    lib = out / LIB_NAME
     if not _is_stale(root, lib):
         return lib
     try:
-        (root / "build").mkdir(exist_ok=True)
-        lock = open(root / "build" / ".lock", "w")
+        out.mkdir(parents=True, exist_ok=True)
+        lock = open(out / ".lock", "w")
     except OSError as exc:
-        raise ShimUnavailable(f"cannot build the runtime shim in {root}: {exc}") from None
+        raise ShimUnavailable(f"cannot build the runtime shim in {out}: {exc} (set HH2IEC_CACHE to a writable "
+                              "folder)") from None
     with lock:
         # Other processes (parallel test runs, the CLI) may build at the same time.
         fcntl.flock(lock, fcntl.LOCK_EX)
         if _is_stale(root, lib):
-            _run_make(root)
+            _compile(root, lib)
     if not lib.exists():
         raise ShimUnavailable(f"building the runtime shim did not produce {lib}")
     return lib
