@@ -7,40 +7,17 @@ typedef struct {
     int32_t number;
     int32_t nparams;
     int32_t nresults;
-    int kind; /* HH_MODULE_STUB / HH_MODULE_MODELLED */
+    int kind;     /* HH_KIND_PURE / HH_KIND_DATA / HH_KIND_MACHINE */
+    int context;  /* HH_CTX_ANY / HH_CTX_CYCLIC / HH_CTX_SUBMIT */
+    int strobe;   /* bound to a pending strobe while an NC program runs (not checked: no program runs) */
+    int modelled; /* 0: the stub rule of A-46 (results 0, no error) */
+    int profiles; /* bit mask, see hh_module_table.h */
+    int error_result; /* index of a result that also carries the error code, -1 none */
     const char *purpose;
 } module_entry;
 
-/* Spec 14.2; signatures of the stubs-only entries are unknown, hence 0/0. */
-static const module_entry MODULES[] = {
-    {9006, 1, 0, HH_MODULE_MODELLED, "start an additional timer T96-T999"},
-    {9031, 3, 1, HH_MODULE_MODELLED, "overwrite a machine parameter (run-time value)"},
-    {9032, 2, 1, HH_MODULE_MODELLED, "read a machine parameter"},
-    {9035, 1, 1, HH_MODULE_MODELLED, "read status information"},
-    {9036, 2, 1, HH_MODULE_MODELLED, "write status information"},
-    {9040, 2, 0, HH_MODULE_STUB, "read axis coordinates"},
-    {9041, 2, 0, HH_MODULE_STUB, "read axis coordinates"},
-    {9042, 0, 0, HH_MODULE_STUB, "spindle coordinates"},
-    {9051, 0, 0, HH_MODULE_STUB, "binary to ASCII"},
-    {9094, 4, 1, HH_MODULE_STUB, "write an element of a tool/datum table"},
-    {9095, 0, 0, HH_MODULE_STUB, "nonlinear compensation"},
-    {9097, 2, 1, HH_MODULE_STUB, "select a geometry description"},
-    {9105, 0, 0, HH_MODULE_STUB, "binary data over the serial interface"},
-    {9106, 0, 0, HH_MODULE_STUB, "binary data over the serial interface"},
-    {9123, 0, 0, HH_MODULE_STUB, "PLC axes"},
-    {9124, 0, 0, HH_MODULE_STUB, "PLC axes"},
-    {9148, 0, 0, HH_MODULE_STUB, "named in the sources without a signature"},
-    {9150, 0, 0, HH_MODULE_STUB, "named in the sources without a signature"},
-    {9159, 0, 0, HH_MODULE_STUB, "named in the sources without a signature"},
-    {9162, 0, 0, HH_MODULE_STUB, "named in the sources without a signature"},
-    {9166, 0, 0, HH_MODULE_STUB, "named in the sources without a signature"},
-    {9190, 0, 0, HH_MODULE_STUB, "operating hours"},
-    {9191, 0, 0, HH_MODULE_STUB, "operating hours"},
-    {9192, 1, 1, HH_MODULE_MODELLED, "read an operating time in seconds"},
-    {9194, 0, 0, HH_MODULE_STUB, "maintenance alarm"},
-    {9195, 0, 1, HH_MODULE_MODELLED, "system time"},
-    {9429, 0, 0, HH_MODULE_STUB, "MANUALplus API module"},
-};
+/* The rows are generated from the Python module table (one source for both executors). */
+#include "hh_module_table.h"
 
 #define N_MODULES ((int32_t)(sizeof MODULES / sizeof MODULES[0]))
 #define MP_TIMER_EXTRA 4111
@@ -56,6 +33,10 @@ typedef struct {
     int32_t number, index, value;
 } override_entry;
 
+typedef struct {
+    int32_t type, line, element, value;
+} table_entry;
+
 struct hh_sys {
     int32_t cycle_time_ms;
     int64_t cycle;
@@ -67,6 +48,16 @@ struct hh_sys {
     int32_t timer_unit_cycles;
     int32_t timer_restart;
     int32_t status[HH_STATUS_SIZE];
+    table_entry *tables;
+    size_t n_tables, cap_tables;
+    int32_t axes_active;                  /* bit n = axis n+1 exists and is active (9038 info 0) */
+    int32_t axis_pos[HH_AXES];            /* actual REF positions, 0.0001 mm (9049 info 2) */
+    int32_t drives_available;             /* drives whose power stage is ready (9162 = available & enabled) */
+    int32_t drives_enabled;               /* written by 9161 */
+    int32_t drives_i32;                   /* written by 9169 */
+    int32_t drives_switching_off;         /* 9159 early warning, from the scenario */
+    int32_t counters_running;             /* bits 0..7: PLC operating-hours counters 1..8 (9190/9191) */
+    int64_t counter_ms[HH_HOUR_COUNTERS];
     int32_t rem[HH_EXTRA_TIMER_COUNT];
     unsigned char start[HH_EXTRA_TIMER_COUNT];
 };
@@ -87,7 +78,21 @@ int hh_module_info(int32_t number, int32_t *nparams, int32_t *nresults)
         *nparams = m ? m->nparams : 0;
     if (nresults != NULL)
         *nresults = m ? m->nresults : 0;
-    return m ? m->kind : HH_MODULE_UNKNOWN;
+    return m ? (m->modelled ? HH_MODULE_MODELLED : HH_MODULE_STUB) : HH_MODULE_UNKNOWN;
+}
+
+int hh_module_meta(int32_t number, int32_t *kind, int32_t *context, int32_t *strobe, int32_t *profiles,
+                   int32_t *error_result)
+{
+    const module_entry *m = find_module(number);
+    if (m == NULL)
+        return 0;
+    *kind = m->kind;
+    *context = m->context;
+    *strobe = m->strobe;
+    *profiles = m->profiles;
+    *error_result = m->error_result;
+    return 1;
 }
 
 const char *hh_module_purpose(int32_t number)
@@ -119,6 +124,7 @@ void hh_sys_free(hh_sys *sys)
         return;
     free(sys->mps);
     free(sys->overrides);
+    free(sys->tables);
     free(sys);
 }
 
@@ -230,7 +236,76 @@ void hh_sys_clear_module_results(hh_sys *sys, int32_t number)
     sys->n_overrides = kept;
 }
 
-void hh_sys_tick(hh_sys *sys) { sys->cycle++; }
+void hh_sys_tick(hh_sys *sys)
+{
+    int32_t i;
+    sys->cycle++;
+    for (i = 0; i < HH_HOUR_COUNTERS; i++)
+        if (sys->counters_running & (1 << i))
+            sys->counter_ms[i] += sys->cycle_time_ms;
+}
+
+int hh_sys_set_axis(hh_sys *sys, int32_t axis, int32_t active, int32_t position)
+{
+    if (axis < 0 || axis >= HH_AXES)
+        return -1;
+    sys->axes_active = active ? sys->axes_active | (1 << axis) : sys->axes_active & ~(1 << axis);
+    sys->axis_pos[axis] = position;
+    return 0;
+}
+
+void hh_sys_set_drives(hh_sys *sys, int32_t available, int32_t switching_off)
+{
+    sys->drives_available = available;
+    sys->drives_switching_off = switching_off;
+}
+
+static table_entry *find_table(const hh_sys *sys, int32_t type, int32_t line, int32_t element)
+{
+    size_t i;
+    for (i = 0; i < sys->n_tables; i++)
+        if (sys->tables[i].type == type && sys->tables[i].line == line && sys->tables[i].element == element)
+            return &sys->tables[i];
+    return NULL;
+}
+
+int hh_sys_set_table(hh_sys *sys, int32_t type, int32_t line, int32_t element, int32_t value)
+{
+    table_entry *e;
+    if (type < 0 || type > 2 || line < 0 || element < 0 || element > HH_TABLE_ELEMENTS)
+        return -1;
+    e = find_table(sys, type, line, element);
+    if (e == NULL) {
+        table_entry *p = (table_entry *)reserve(sys->tables, sys->n_tables, &sys->cap_tables, 16, sizeof *p);
+        if (p == NULL)
+            return -1;
+        sys->tables = p;
+        e = &sys->tables[sys->n_tables++];
+        e->type = type;
+        e->line = line;
+        e->element = element;
+    }
+    e->value = value;
+    return 0;
+}
+
+static int table_has_line(const hh_sys *sys, int32_t type, int32_t line)
+{
+    size_t i;
+    for (i = 0; i < sys->n_tables; i++)
+        if (sys->tables[i].type == type && sys->tables[i].line == line)
+            return 1;
+    return 0;
+}
+
+static int table_has_type(const hh_sys *sys, int32_t type)
+{
+    size_t i;
+    for (i = 0; i < sys->n_tables; i++)
+        if (sys->tables[i].type == type)
+            return 1;
+    return 0;
+}
 
 int64_t hh_sys_cycle(const hh_sys *sys) { return sys->cycle; }
 
@@ -354,9 +429,114 @@ static int call_9036(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
     return 0;
 }
 
-static int call_9192(hh_sys *sys, const int32_t *p, int32_t *r)
+static int call_9192(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
 {
-    r[0] = p[0] >= -3 && p[0] <= -1 ? clock_seconds(sys) : -1;
+    if (p[0] >= -3 && p[0] <= -1) {
+        r[0] = clock_seconds(sys);
+        return 0;
+    }
+    if (p[0] >= 0 && p[0] < HH_HOUR_COUNTERS) {
+        r[0] = saturate(sys->counter_ms[p[0]] / 1000);
+        return 0;
+    }
+    r[0] = -1;
+    *code = HH_MODERR_PARAM;
+    return 1;
+}
+
+/* 9092/9093/9094: file type 0 .T, 1 .D, 2 .TCH; the table store holds what the scenario loaded. */
+static int table_error(const hh_sys *sys, int32_t type, int32_t line, int32_t element)
+{
+    if (type < 0 || type > 2)
+        return 2;
+    if (!table_has_type(sys, type))
+        return 3;
+    if (line < 0 || !table_has_line(sys, type, line))
+        return 4;
+    if (element < 0 || element > HH_TABLE_ELEMENTS)
+        return 5;
+    return 0;
+}
+
+static int call_9092(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    size_t i;
+    int32_t best = -1;
+    int err = p[0] < 0 || p[0] > 2 ? 2 : !table_has_type(sys, p[0]) ? 3 : p[1] < 0 || p[1] > HH_TABLE_ELEMENTS ? 5 : 0;
+    if (err == 0) {
+        for (i = 0; i < sys->n_tables; i++) {
+            const table_entry *e = &sys->tables[i];
+            if (e->type == p[0] && e->element == p[1] && e->value == p[2] && (best < 0 || e->line < best))
+                best = e->line;
+        }
+        if (best < 0)
+            err = 6;
+    }
+    r[0] = best;
+    r[1] = err;
+    *code = err;
+    return err != 0;
+}
+
+static int call_9093(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    const table_entry *e;
+    int err = table_error(sys, p[0], p[1], p[2]);
+    e = err ? NULL : find_table(sys, p[0], p[1], p[2]);
+    r[0] = e ? e->value : 0; /* an element the table does not fill reads 0 */
+    r[1] = err;
+    *code = err;
+    return err != 0;
+}
+
+static int call_9094(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    int err = table_error(sys, p[0], p[1], p[2]);
+    if (err == 0 && hh_sys_set_table(sys, p[0], p[1], p[2], p[3]) != 0)
+        err = 6;
+    r[0] = err;
+    *code = err;
+    return err != 0;
+}
+
+static int call_9038(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    int32_t axis = p[0], info = p[1];
+    r[0] = 0;
+    if (info < 0 || info > 9) {
+        *code = 1;
+        return 1;
+    }
+    if (axis != -1 && (axis < 0 || axis >= HH_AXES)) {
+        *code = 2;
+        return 1;
+    }
+    /* Only info 0 (axis active) has data; the other infos read 0 (assumption A-46c). */
+    if (info == 0)
+        r[0] = axis == -1 ? sys->axes_active : (sys->axes_active >> axis) & 1;
+    return 0;
+}
+
+static int call_9049(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    int32_t axis = p[0], info = p[1];
+    r[0] = 0;
+    if (axis < 0 || axis >= HH_AXES || !(info == 2 || info == 3 || (info >= 8 && info <= 11))) {
+        *code = 2;
+        return 1;
+    }
+    if (info == 2)
+        r[0] = sys->axis_pos[axis];
+    return 0;
+}
+
+static int call_counters(hh_sys *sys, int32_t mask, int start, int32_t *code)
+{
+    if (mask & ~((1 << HH_HOUR_COUNTERS) - 1)) {
+        *code = HH_MODERR_PARAM;
+        return 1;
+    }
+    sys->counters_running = start ? sys->counters_running | mask : sys->counters_running & ~mask;
     return 0;
 }
 
@@ -369,7 +549,18 @@ static int run_model(hh_sys *sys, const module_entry *m, const int32_t *p, int32
     case 9032: return call_9032(sys, p, r, code);
     case 9035: return call_9035(sys, p, r, code);
     case 9036: return call_9036(sys, p, r, code);
-    case 9192: return call_9192(sys, p, r);
+    case 9192: return call_9192(sys, p, r, code);
+    case 9092: return call_9092(sys, p, r, code);
+    case 9093: return call_9093(sys, p, r, code);
+    case 9094: return call_9094(sys, p, r, code);
+    case 9038: return call_9038(sys, p, r, code);
+    case 9049: return call_9049(sys, p, r, code);
+    case 9159: r[0] = sys->drives_switching_off; return 0;
+    case 9161: sys->drives_enabled = p[0]; return 0;
+    case 9162: r[0] = sys->drives_available & sys->drives_enabled; return 0;
+    case 9169: sys->drives_i32 = p[0]; return 0;
+    case 9190: return call_counters(sys, p[0], 1, code);
+    case 9191: return call_counters(sys, p[0], 0, code);
     case 9195: r[0] = clock_seconds(sys); return 0;
     default: /* stub rule of A-46 */
         for (i = 0; i < m->nresults; i++)
@@ -380,18 +571,36 @@ static int run_model(hh_sys *sys, const module_entry *m, const int32_t *p, int32
 
 int hh_module_call(hh_sys *sys, int32_t number, const int32_t *params, int32_t *results, int32_t *error_code)
 {
+    return hh_module_call_ctx(sys, number, HH_CALLER_ANY, params, results, error_code);
+}
+
+int hh_module_call_ctx(hh_sys *sys, int32_t number, int32_t caller, const int32_t *params, int32_t *results,
+                       int32_t *error_code)
+{
     const module_entry *m = find_module(number);
-    int32_t code = 0;
+    int32_t code = 0, i;
     int status;
-    size_t i;
+    size_t k;
     if (m == NULL) {
         *error_code = 0;
         return -1;
     }
+    if (caller == HH_CALLER_CYCLIC && m->context == HH_CTX_SUBMIT)
+        code = HH_MODERR_NOT_IN_JOB;
+    else if (caller == HH_CALLER_JOB && m->context == HH_CTX_CYCLIC)
+        code = HH_MODERR_NOT_CYCLIC;
+    if (code != 0) { /* the module does nothing; an error result carries the code too (A-46q) */
+        for (i = 0; i < m->nresults; i++)
+            results[i] = 0;
+        if (m->error_result >= 0)
+            results[m->error_result] = code;
+        *error_code = code;
+        return 1;
+    }
     status = run_model(sys, m, params, results, &code);
-    for (i = 0; i < sys->n_overrides; i++)
-        if (sys->overrides[i].number == number)
-            results[sys->overrides[i].index] = sys->overrides[i].value;
+    for (k = 0; k < sys->n_overrides; k++)
+        if (sys->overrides[k].number == number)
+            results[sys->overrides[k].index] = sys->overrides[k].value;
     *error_code = status ? code : 0;
     return status;
 }

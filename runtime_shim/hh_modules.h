@@ -35,10 +35,14 @@
  *        "not available" answer, without module error.
  *  9195  system time (0 parameters; 1 result): whole seconds of the simulated clock, same
  *        value as 9192 -3 (the simulated clock starts at 0).
- * Stubs with a known signature: 9040/9041 (2 parameters, 0 results: the 5 double words they
- * would write are not produced), 9094 (4 parameters, 1 result), 9097 (2 parameters, 1
- * result).  Stubs without a usable signature (0 parameters, 0 results, spec 14.2 "stubs
- * only"): 9042 9051 9095 9105 9106 9123 9124 9148 9150 9159 9162 9166 9190 9191 9194 9429.
+ *  9038/9049 axis information / REF position from hh_sys_set_axis; 9092/9093/9094 tables from
+ *        hh_sys_set_table (error numbers 2..6 of the manual, also pulled as the error result);
+ *        9159/9161/9162/9169 drives (9162 = available AND enabled); 9190/9191 start/stop the 8 PLC
+ *        operating-hours counters that 9192 0..7 reads (other numbers: -1 and module error 1).
+ * The table rows (signatures, kind, calling context, profiles) are generated from the Python table into
+ * hh_module_table.h.  Every other row runs the stub rule of A-46 (results 0, no error).  The pure
+ * modules (9019, 9050-9054, 9070) need PLC memory, so the executors implement them, not the shim.
+ * hh_module_call_ctx applies the calling-context rule (codes 20 / 24).
  *
  * Scenario `module_results` overrides (hh_sys_set_module_result) replace the results of a
  * module after its model ran; the module's effects and its error status are kept.
@@ -56,6 +60,18 @@ enum { HH_MODULE_UNKNOWN = 0, HH_MODULE_STUB = 1, HH_MODULE_MODELLED = 2 };
 /* W1022 error codes written by the models (assumption: the real codes are not documented
  * except for 9031, whose code is its error result). */
 enum { HH_MODERR_PARAM = 1 };
+/* W1022 codes of the calling context (documented iTNC/TNC 426 convention). */
+enum { HH_MODERR_NOT_IN_JOB = 20, HH_MODERR_NOT_CYCLIC = 24 };
+
+/* Rows of the generated table hh_module_table.h. */
+enum { HH_KIND_PURE = 0, HH_KIND_DATA = 1, HH_KIND_MACHINE = 2 };
+enum { HH_CTX_ANY = 0, HH_CTX_CYCLIC = 1, HH_CTX_SUBMIT = 2 };
+/* Who calls: the context rule is checked only for CYCLIC and JOB callers. */
+enum { HH_CALLER_ANY = 0, HH_CALLER_CYCLIC = 1, HH_CALLER_JOB = 2 };
+
+#define HH_AXES 16
+#define HH_HOUR_COUNTERS 8
+#define HH_TABLE_ELEMENTS 63
 
 #define HH_MODULE_MAX_PARAMS 8
 #define HH_MODULE_MAX_RESULTS 8
@@ -66,6 +82,10 @@ enum { HH_MODERR_PARAM = 1 };
 
 /* Table lookup; nparams/nresults may be NULL (they are set to 0 for an unknown number). */
 int hh_module_info(int32_t number, int32_t *nparams, int32_t *nresults);
+/* Metadata of a table entry: kind HH_KIND_*, context HH_CTX_*, strobe-bound, profile bit mask, index of
+ * the error result (-1 none).  0 for an unknown number (outputs untouched), else 1. */
+int hh_module_meta(int32_t number, int32_t *kind, int32_t *context, int32_t *strobe, int32_t *profiles,
+                   int32_t *error_result);
 /* Purpose text of a table entry for reports, "" for an unknown number. */
 const char *hh_module_purpose(int32_t number);
 /* Enumerate the table: entries 0 .. hh_module_count()-1. */
@@ -77,6 +97,12 @@ int32_t hh_module_number_at(int32_t i);
  * W1022 value when the status is 1, else 0); -1 for a number without table entry (nothing
  * happens: the caller reports E-RT-MODULE or applies its own stub rule). */
 int hh_module_call(hh_sys *sys, int32_t number, const int32_t *params, int32_t *results, int32_t *error_code);
+
+/* As hh_module_call, with the calling context rule: a submit-only module called by HH_CALLER_CYCLIC, or
+ * a cyclic-only module called by HH_CALLER_JOB, does nothing, returns 1 with code 20 / 24, results 0
+ * (the error result, if the module has one, = the code).  hh_module_call is HH_CALLER_ANY. */
+int hh_module_call_ctx(hh_sys *sys, int32_t number, int32_t caller, const int32_t *params, int32_t *results,
+                       int32_t *error_code);
 
 /* NULL when cycle_time_ms <= 0 or memory is exhausted. */
 hh_sys *hh_sys_new(int32_t cycle_time_ms);
@@ -100,6 +126,15 @@ int hh_sys_set_status(hh_sys *sys, int32_t number, int32_t value);
  * an index >= its result count, or no memory. */
 int hh_sys_set_module_result(hh_sys *sys, int32_t number, int32_t index, int32_t value);
 void hh_sys_clear_module_results(hh_sys *sys, int32_t number);
+
+/* Axis `axis` (0..HH_AXES-1): active flag (9038 info 0) and actual REF position in 0.0001 mm (9049). 0 / -1. */
+int hh_sys_set_axis(hh_sys *sys, int32_t axis, int32_t active, int32_t position);
+/* Drives: bit mask of ready power stages (9162 reads available AND the mask 9161 enabled) and the
+ * early warning 9159 reads. */
+void hh_sys_set_drives(hh_sys *sys, int32_t available, int32_t switching_off);
+/* Element of a table selected for program run (type 0 .T, 1 .D, 2 .TCH): what 9092/9093 read and 9094
+ * writes.  A line exists once any of its elements is set.  0, or -1 for a bad type/element or no memory. */
+int hh_sys_set_table(hh_sys *sys, int32_t type, int32_t line, int32_t element, int32_t value);
 
 /* Advance the simulated clock by one cycle (scenario step 5). */
 void hh_sys_tick(hh_sys *sys);

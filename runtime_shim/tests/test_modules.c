@@ -26,8 +26,8 @@ static void module_table(void)
         {9032, HH_MODULE_MODELLED, 2, 1}, {9035, HH_MODULE_MODELLED, 1, 1},
         {9036, HH_MODULE_MODELLED, 2, 1}, {9192, HH_MODULE_MODELLED, 1, 1},
         {9195, HH_MODULE_MODELLED, 0, 1}, {9040, HH_MODULE_STUB, 2, 0},
-        {9094, HH_MODULE_STUB, 4, 1},     {9097, HH_MODULE_STUB, 2, 1},
-        {9042, HH_MODULE_STUB, 0, 0},     {9194, HH_MODULE_STUB, 0, 0},
+        {9094, HH_MODULE_MODELLED, 4, 1}, {9097, HH_MODULE_STUB, 2, 1},
+        {9042, HH_MODULE_STUB, 1, 0},     {9194, HH_MODULE_STUB, 3, 0},
         {9999, HH_MODULE_UNKNOWN, 0, 0},  {0, HH_MODULE_UNKNOWN, 0, 0},
     };
     size_t i;
@@ -52,7 +52,7 @@ static void unknown_and_stub_calls(void)
     hh_sys *sys = hh_sys_new(20);
     CHECK_EQ(call(sys, 9999, 0, 0, 0), -1);
     CHECK_EQ(code, 0);
-    CHECK_EQ(call(sys, 9094, 1, 2, 3), 0); /* stub rule A-46: results 0, no error */
+    CHECK_EQ(call(sys, 9097, 1, 0, 0), 0); /* stub rule A-46: results 0, no error */
     CHECK_EQ(results[0], 0);
     CHECK_EQ(code, 0);
     hh_sys_free(sys);
@@ -239,8 +239,11 @@ static void clock_9192_9195(void)
         CHECK_EQ(call(sys, 9192, n, 0, 0), 0);
         CHECK_EQ(results[0], 1);
     }
-    CHECK_EQ(call(sys, 9192, 0, 0, 0), 0);
+    CHECK_EQ(call(sys, 9192, 0, 0, 0), 0); /* PLC counter 1 of 9190, never started */
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9192, 8, 0, 0), 1); /* no such operating time: -1 and the module error */
     CHECK_EQ(results[0], -1);
+    CHECK_EQ(code, 1);
     CHECK_EQ(call(sys, 9195, 0, 0, 0), 0);
     CHECK_EQ(results[0], 1);
     hh_sys_free(sys);
@@ -260,10 +263,10 @@ static void result_overrides(void)
     CHECK_EQ(hh_sys_set_module_result(sys, 9192, 1, 1), -1);
     CHECK_EQ(hh_sys_set_module_result(sys, 9999, 0, 1), -1);
     CHECK_EQ(hh_sys_set_module_result(sys, 9006, 0, 1), -1); /* no results */
-    CHECK_EQ(hh_sys_set_module_result(sys, 9094, 0, 4), 0);
+    CHECK_EQ(hh_sys_set_module_result(sys, 9097, 0, 4), 0);
     CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
     CHECK_EQ(results[0], 3600);
-    CHECK_EQ(call(sys, 9094, 0, 0, 0), 0);
+    CHECK_EQ(call(sys, 9097, 0, 0, 0), 0);
     CHECK_EQ(results[0], 4);
     CHECK_EQ(hh_sys_set_module_result(sys, 9192, 0, 7200), 0);
     CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
@@ -275,8 +278,108 @@ static void result_overrides(void)
     hh_sys_clear_module_results(sys, 9192);
     CHECK_EQ(call(sys, 9192, -1, 0, 0), 0);
     CHECK_EQ(results[0], 0);
-    CHECK_EQ(call(sys, 9094, 0, 0, 0), 0);
+    CHECK_EQ(call(sys, 9097, 0, 0, 0), 0);
     CHECK_EQ(results[0], 4);
+    hh_sys_free(sys);
+}
+
+static int call_ctx(hh_sys *sys, int32_t number, int32_t caller, int32_t p0, int32_t p1, int32_t p2, int32_t p3)
+{
+    int32_t params[4];
+    params[0] = p0;
+    params[1] = p1;
+    params[2] = p2;
+    params[3] = p3;
+    memset(results, 0x5a, sizeof results);
+    code = -99;
+    return hh_module_call_ctx(sys, number, caller, params, results, &code);
+}
+
+static void context_rule(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    CHECK_EQ(hh_sys_set_mp(sys, 910, 0, 1001200, 4), 0);
+    /* 9032 is submit-only: 20 in the cyclic program, read in a job */
+    CHECK_EQ(call_ctx(sys, 9032, HH_CALLER_CYCLIC, 910, 0, 0, 0), 1);
+    CHECK_EQ(code, HH_MODERR_NOT_IN_JOB);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call_ctx(sys, 9032, HH_CALLER_JOB, 910, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 1001200);
+    /* 9031 carries the code in its error result too */
+    CHECK_EQ(call_ctx(sys, 9031, HH_CALLER_CYCLIC, 910, 0, 5, 0), 1);
+    CHECK_EQ(results[0], 20);
+    /* 9161 is cyclic-only: 24 in a job, and the drives stay disabled */
+    hh_sys_set_drives(sys, 0x7, 0x4);
+    CHECK_EQ(call_ctx(sys, 9161, HH_CALLER_JOB, 0x3, 0, 0, 0), 1);
+    CHECK_EQ(code, HH_MODERR_NOT_CYCLIC);
+    CHECK_EQ(call_ctx(sys, 9162, HH_CALLER_JOB, 0, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call_ctx(sys, 9161, HH_CALLER_CYCLIC, 0x3, 0, 0, 0), 0);
+    CHECK_EQ(call_ctx(sys, 9162, HH_CALLER_CYCLIC, 0, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 0x3);
+    CHECK_EQ(call_ctx(sys, 9159, HH_CALLER_CYCLIC, 0, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 0x4);
+    hh_sys_free(sys);
+}
+
+static void tables_9092_9094(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    /* no .T table: error 3 (file missing); bad type 2 */
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 0, 5, 1, 0), 1);
+    CHECK_EQ(results[1], 3);
+    CHECK_EQ(code, 3);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 7, 5, 1, 0), 1);
+    CHECK_EQ(results[1], 2);
+    CHECK_EQ(hh_sys_set_table(sys, 0, 5, 1, 40000), 0); /* tool 5: R = 4.0000 mm */
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 0, 5, 1, 0), 0);
+    CHECK_EQ(results[0], 40000);
+    CHECK_EQ(results[1], 0);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 0, 6, 1, 0), 1); /* line not in file */
+    CHECK_EQ(results[1], 4);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 0, 5, 64, 0), 1); /* bad element */
+    CHECK_EQ(results[1], 5);
+    CHECK_EQ(call_ctx(sys, 9094, HH_CALLER_JOB, 0, 5, 7, 1200), 0); /* write current life */
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_JOB, 0, 5, 7, 0), 0);
+    CHECK_EQ(results[0], 1200);
+    CHECK_EQ(call_ctx(sys, 9092, HH_CALLER_JOB, 0, 7, 1200, 0), 0); /* search: tool 5 */
+    CHECK_EQ(results[0], 5);
+    CHECK_EQ(call_ctx(sys, 9092, HH_CALLER_JOB, 0, 7, 99, 0), 1);
+    CHECK_EQ(results[0], -1);
+    CHECK_EQ(results[1], 6);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_CYCLIC, 0, 5, 1, 0), 1); /* submit-only */
+    CHECK_EQ(results[1], 20);
+    hh_sys_free(sys);
+}
+
+static void axes_and_counters(void)
+{
+    hh_sys *sys = hh_sys_new(500);
+    CHECK_EQ(hh_sys_set_axis(sys, 0, 1, 123456), 0);
+    CHECK_EQ(hh_sys_set_axis(sys, 2, 1, -5), 0);
+    CHECK_EQ(hh_sys_set_axis(sys, 16, 1, 0), -1);
+    CHECK_EQ(call(sys, 9038, -1, 0, 0), 0);
+    CHECK_EQ(results[0], 0x5);
+    CHECK_EQ(call(sys, 9038, 1, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9038, 0, 10, 0), 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9038, 20, 0, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9049, 0, 2, 0), 0);
+    CHECK_EQ(results[0], 123456);
+    CHECK_EQ(call(sys, 9049, 0, 4, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9190, 0x100, 0, 0), 1); /* only counters 1..8 */
+    CHECK_EQ(call(sys, 9190, 0x2, 0, 0), 0);
+    hh_sys_tick(sys);
+    hh_sys_tick(sys);
+    hh_sys_tick(sys);
+    CHECK_EQ(call(sys, 9191, 0x2, 0, 0), 0);
+    hh_sys_tick(sys);
+    CHECK_EQ(call(sys, 9192, 1, 0, 0), 0);
+    CHECK_EQ(results[0], 1); /* 1.5 s counted while running */
     hh_sys_free(sys);
 }
 
@@ -285,6 +388,9 @@ static void invalid_context(void) { CHECK(hh_sys_new(0) == NULL); }
 void run_module_tests(void)
 {
     RUN(module_table);
+    RUN(context_rule);
+    RUN(tables_9092_9094);
+    RUN(axes_and_counters);
     RUN(unknown_and_stub_calls);
     RUN(timer_9006_needs_numbermp4111);
     RUN(timer_9006_counts_like_9_2);

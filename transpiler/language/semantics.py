@@ -58,6 +58,8 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
     Assumption("A-42", "byte_order", "little", ("big",), "byte order of W/D", ("TV-16", "TV-17")),
     Assumption("A-44", "nonvolatile", "", (), "non-volatile operand ranges (e.g. 'M1000-2000,B0-127')"),
     Assumption("A-45", "submit_model", "same_cycle", ("next_cycle",), "submit-job scheduling", ("TV-73",)),
+    Assumption("A-46q", "module_context", "enforce", ("ignore",), "calling context of PLC modules: a submit-only "
+               "module in the cyclic program fails with W1022 = 20, a cyclic-only one in a job with 24"),
     Assumption("A-51", "word_gate_at_chain_start", "gate", ("load",), "word gating at chain start", ("TV-70",)),
     Assumption("A-56", "literal_range", "bit_pattern", ("documented",), "literal range", ("TV-19",)),
     Assumption("A-57a", "cycle_time_ms", 20, (), "PLC cycle time"),

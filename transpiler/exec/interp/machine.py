@@ -24,7 +24,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.ir import Program
-from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel, SysModules
+from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
+from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from transpiler.exec.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
 from transpiler.exec.interp.state import MachineState, byte_cells, sext
@@ -80,7 +81,7 @@ class Machine:
         mps = normalize_mp(mp)
         diags = Diagnostics()
         timer_presets, counter_presets = load_presets(mps, sem, self.cycle_time_ms, diags, mp_spans)
-        self.sys = SysModules(self.cycle_time_ms, number_mp4111=number_mp4111, timer_unit=sem["timer_unit"],
+        self.sys = SysContext(self.cycle_time_ms, number_mp4111=number_mp4111, timer_unit=sem["timer_unit"],
                               timer_restart=bool(sem["timer_restart_while_running"]))
         for (number, index), value in mps.items():
             try:

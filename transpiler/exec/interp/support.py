@@ -6,10 +6,12 @@ import collections
 from typing import Callable
 
 from transpiler.language.semantics import Semantics
-from transpiler.exec.compiled.shim import SysModules
+from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
 from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
+from transpiler.exec.interp.pure_modules import PURE_MODULES, PureEnv
 from transpiler.exec.interp.submit import SubmitQueue
+from transpiler.language.module_table import MODULE_TABLE
 
 _TO_CHARS = bytes.maketrans(b"\x00\x01", b"01")
 _FROM_CHARS = bytes.maketrans(b"01", b"\x00\x01")
@@ -20,7 +22,7 @@ Warn = Callable[[str, str, int], None]        # code, message, op id
 class Runtime:
     """Per-machine state the generated code reaches through helpers (stack, jobs, modules) and the helpers themselves."""
 
-    def __init__(self, state: MachineState, semantics: Semantics, sys: SysModules, jobs: SubmitQueue, warn: Warn):
+    def __init__(self, state: MachineState, semantics: Semantics, sys: SysContext, jobs: SubmitQueue, warn: Warn):
         self.state = state
         self.sem = semantics
         self.sys = sys
@@ -38,6 +40,8 @@ class Runtime:
         self.module_log: list[tuple[tuple[int, tuple[int, ...]], tuple[list[int], int, int | None]]] = []
         self.replay: collections.deque | None = None
         self.unknown_modules: dict[int, int] = {}
+        mp7280 = sys.get_mp(7280, 0)
+        self.pure_env = PureEnv(lambda: len(self.stack), "," if mp7280 is not None and mp7280 == 0 else ".")
         self.hits = bytearray(0)
         self.branches: set[tuple[int, int]] = set()
         # (kind, address) of every store made through an indexed operand, in first-write order (a dict is an
@@ -192,12 +196,13 @@ class Runtime:
     def module(self, number: int, opid: int) -> None:
         itf = self.profile.interface
         info = self.sys.info(number)
-        if not info.known:
+        row = MODULE_TABLE.get(number)
+        if not info.known or row is None or self.profile.name not in row.profiles:
             first = number not in self.unknown_modules
             self.unknown_modules[number] = self.unknown_modules.get(number, 0) + 1
             if first:
-                self.warn("E-RT-MODULE", f"PLC module {number} has no simulation model: it ran as a stub "
-                          "without parameters or results (A-46)", opid)
+                self.warn("E-RT-MODULE", f"PLC module {number} is not in the module table of profile "
+                          f"{self.profile.name}: it ran as a stub without parameters or results (A-46)", opid)
             self.state.M[itf.module_err] = 0
             return
         params = [0] * info.nparams
@@ -206,15 +211,27 @@ class Runtime:
         key = (number, tuple(params))
         if self.replay:
             logged_key, outcome = self.replay.popleft()
-            results, status, code = outcome if logged_key == key else self.sys.call(number, params)
+            results, status, code = outcome if logged_key == key else self._run_module(number, params)
         else:
-            results, status, code = self.sys.call(number, params)
+            results, status, code = self._run_module(number, params)
             self.module_log.append((key, (list(results), status, code)))
         for value in reversed(results):
             self.push32(value)
         self.state.M[itf.module_err] = 1 if status else 0
         if status and itf.module_err_code_word is not None and code is not None:
             self.state.write_mem("W", itf.module_err_code_word, code)
+
+    def _run_module(self, number: int, params: list[int]) -> tuple[list[int], int, int | None]:
+        """Pure modules here (they read and write PLC memory), the others in the shim; both with the context rule."""
+        pure = PURE_MODULES.get(number)
+        if pure is None:
+            if self.sem["module_context"] == "ignore":
+                return self.sys.call(number, params)
+            return self.sys.call_in(number, params, self.in_job)
+        row = MODULE_TABLE[number]          # pure modules may be called anywhere: no context rule
+        results, code = pure(self.state, params, self.pure_env)
+        results = results or [0] * row.nresults
+        return results, 1 if code else 0, code or None
 
     # ---- submit jobs (15, A-45)
 
