@@ -151,6 +151,8 @@ def test_explained_examples_trigger_their_code(tmp_path, capsys, code):
         files.update({"main.src": "#define /g ex.def\nEM\n", "ex.def": example})
     elif where == "cfg":
         files["OEM.cfg"] = example
+    if code == "E-PP-UNDEF":
+        files["OEM.cfg"] = "DEFINE CFG_SET = 1\n"     # (without any configuration it is E-CFG-MISSING)
     elif where == "module":
         files.update({"main.src": "USES m.src\nEM\n", "m.src": example})
     if code == "E-FILE-INCLUDE-CYCLE":

@@ -277,7 +277,7 @@ def test_diagnostic_after_an_if_block_points_at_the_original_line(tmp_path):
 
 def test_inactive_regions_of_every_file_reach_the_program(tmp_path):
     files = {"main.src": "#define /g a.def\nUSES m.src\n#if X = 1\nUSES never.src\n#endif\nEM\n",
-             "m.src": "#if X = 1\nL I1\n#endif\nEM\n", "a.def": "#if X = 1\nI_a I 1\n#endif\n"}
+             "m.src": "#if X = 1\nL I1\n#endif\nEM\n", "a.def": "#if X = 1\nI_a I 1\n#endif\n", "OEM.cfg": ""}
     result = compile_files(tmp_path, files)
     assert errors(result) == []
     assert sorted((r.file, r.first_line, r.last_line) for r in result.program.inactive_regions) == [

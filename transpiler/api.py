@@ -9,6 +9,7 @@ runs the equivalence check over many OEM variants.
 
 from __future__ import annotations
 
+import codecs
 import dataclasses
 from decimal import Decimal
 from pathlib import Path
@@ -21,6 +22,7 @@ from transpiler.backends.st.backend import StResult
 from transpiler.backends.transpile import transpile_program
 from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.mainfile import main_candidates
 from transpiler.frontend.mpfile import mp_candidates, read_mp_file
 from transpiler.frontend.pipeline import CompileResult, compile_project
 from transpiler.frontend.preprocess import parse_define_value
@@ -63,12 +65,27 @@ def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | 
 
 
 def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str, str] | None = None,
-                    include_dirs: Iterable[Path] = (), extra_defs: Iterable[Path] = ()) -> ProjectOptions:
-    """Where the project is and how to configure it; DEFINE values are written as in OEM.cfg. Raises
-    HH2IECError (E-USAGE) when a named file or folder does not exist."""
+                    include_dirs: Iterable[Path] = (), extra_defs: Iterable[Path] = (), encoding: str | None = None,
+                    werror: bool = False) -> ProjectOptions:
+    """Where the project is and how to configure it; DEFINE values are written as in OEM.cfg. `main` may be the
+    project folder when exactly one .src file in it can be the main program. `encoding` forces one encoding for
+    every file (default: detected per file); `werror` makes warnings fail the run. Raises HH2IECError (E-USAGE)
+    when a named file or folder does not exist."""
     main = Path(main)
+    if main.is_dir():
+        candidates = main_candidates(main)
+        if len(candidates) != 1:
+            found = ", ".join(p.name for p in candidates) if candidates else "none"
+            raise _usage(f"'{main}' is a folder; the main program is the .src file no other file USES and that "
+                         f"exports nothing with GLOBAL; candidates: {found}. Name the main program instead")
+        main = candidates[0]
     if not main.is_file():
         raise _usage(f"main program '{main}' does not exist")
+    if encoding is not None:
+        try:
+            encoding = codecs.lookup(encoding).name
+        except LookupError:
+            raise _usage(f"unknown encoding '{encoding}' (e.g. utf-8, cp1252, latin-1)") from None
     if cfg is not None and not Path(cfg).is_file():
         raise _usage(f"configuration file '{cfg}' does not exist")
     include_dirs = tuple(Path(d) for d in include_dirs)
@@ -77,7 +94,8 @@ def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str
             raise _usage(f"-I folder '{d}' does not exist")
     values = {name.strip(): parse_define_value(str(value)) for name, value in (defines or {}).items()}
     return ProjectOptions(main=main, cfg=Path(cfg) if cfg is not None else None, defines=values,
-                          include_dirs=include_dirs, extra_global_defs=tuple(Path(p) for p in extra_defs))
+                          include_dirs=include_dirs, extra_global_defs=tuple(Path(p) for p in extra_defs),
+                          encoding=encoding, werror=werror)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,6 +185,8 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
                      "no machine-parameter file (*.mp) beside the main program and no --mp: the timer and counter "
                      "presets of the translation are 0")
+    if project.options.werror and diags.warnings and not diags.has_errors():
+        diags.report("E-WERROR", NO_SPAN, f"{len(diags.warnings)} warning(s) of the translation and --werror")
     diags.raise_if_errors()    # a partial translation is never written or compared as if it were whole
     return path, mp, out, diags
 

@@ -158,6 +158,19 @@ CODES: dict[str, CodeInfo] = {
            "hh2iec check          ; MAIN.src is missing\nhh2iec check Main.src -D CFG_X    ; -D needs NAME=VALUE"),
         _c("E-XSD", "error", "emitted PLCopen XML does not validate against the TC6 schema (a bug in hh2iec)",
            "; a bug in hh2iec: the written project.xml does not validate against PLCopen TC6 XML v2.01"),
+        # issue 20: the project as users have it, and strictness
+        _c("E-PP-CASE", "warning", "a DEFINE name is used with another spelling than its definition (names compare "
+           "ignoring case, A-61)", 'DEFINE CFG_panel = "active"\n#if CFG_Panel = "active"\n#endif'),
+        _c("E-CFG-MISSING", "error", "#if lines test DEFINE names that nothing defines, and there is no OEM.cfg beside "
+           "the main program and no --cfg", '; no OEM.cfg beside Main.src\n#if CFG_Spindle = "belt"\n#endif'),
+        _c("E-DEF-UNUSED", "warning", "-D names a DEFINE that no file defines or tests (a misspelling?)",
+           "hh2iec check Main.src -D CFG_Spindel=belt"),
+        _c("E-WERROR", "error", "warnings were reported and --werror makes them fail the run",
+           "hh2iec check Main.src --werror   ; Main.src has an E-PP-UNDEF warning"),
+        _c("E-MAIN-MODULE", "error", "the file given as main program is a module (it exports labels with GLOBAL); "
+           "give the main program that USES it", "hh2iec check Module.src   ; Module.src: GLOBAL Fn\nLBL Fn\nEM"),
+        _c("E-ENCODING", "error", "a file is not valid text in the encoding forced with --encoding",
+           "hh2iec check Main.src --encoding utf-8   ; Main.src holds the cp1252 byte 0xE4"),
     )
 }
 

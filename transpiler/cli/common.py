@@ -26,7 +26,7 @@ class ArgumentParser(argparse.ArgumentParser):
 
 
 def add_project_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("main", type=Path, help="main program (.src) of the HEIDENHAIN project")
+    p.add_argument("main", type=Path, help="main program (.src) of the HEIDENHAIN project, or its folder")
     p.add_argument("--cfg", type=Path, help="configuration file with DEFINE lines (default: OEM.cfg beside MAIN)")
     p.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE", help="override a DEFINE")
     p.add_argument("-I", dest="include_dirs", action="append", default=[], type=Path, metavar="DIR",
@@ -34,6 +34,9 @@ def add_project_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--profile", choices=sorted(PROFILES), help="control profile (default itnc530)")
     p.add_argument("-S", "--semantics", dest="semantic_overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override one semantic choice (see `hh2iec assumptions`)")
+    p.add_argument("--encoding", metavar="NAME", help="read every file in this encoding (default: per file, UTF-8 "
+                   "with or without BOM when valid, else Windows-1252)")
+    p.add_argument("--werror", action="store_true", help="warnings fail the run (exit 2)")
     p.add_argument("--defs", dest="extra_defs", action="append", default=[], type=Path, metavar="FILE",
                    help="extra global definition file (as if loaded with #define /g)")
 
@@ -50,7 +53,8 @@ def _pairs(items: Iterable[str], flag: str) -> dict[str, str]:
 
 def options_from_args(args: argparse.Namespace):
     return api.project_options(args.main, cfg=args.cfg, defines=_pairs(args.defines, "-D"),
-                               include_dirs=args.include_dirs, extra_defs=args.extra_defs)
+                               include_dirs=args.include_dirs, extra_defs=args.extra_defs,
+                               encoding=args.encoding, werror=args.werror)
 
 
 def semantics_from_args(args: argparse.Namespace, scenario: Path | None = None):

@@ -8,9 +8,10 @@ from typing import Iterator, Mapping
 
 from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span, NO_SPAN
+from transpiler.frontend.mainfile import is_module
 from transpiler.frontend.parse import DefParser, SrcParser
 from transpiler.frontend.preprocess import (DefineValue, Defines, InactiveRegion, PPParser, Preprocessor, find_default_cfg,
-                         initial_defines, read_config)
+                         initial_defines, read_config, unused_overrides)
 from transpiler.language.semantics import Semantics
 from transpiler.frontend.sources import ProjectFolders, SourceText, read_source
 
@@ -34,6 +35,10 @@ class ParsedProject:
     # "*" stands for the global definitions (a missing `#define /g` file).
     symbols_incomplete: frozenset[str] = frozenset()
     labels_incomplete: bool = False
+    number_mp4111: int | None = None     # DEFINE NUMBERMP4111 of the configuration (A-37), when set
+
+
+MAX_NUMBER_MP4111 = 904             # T96 ... T999
 
 
 @dataclasses.dataclass
@@ -44,6 +49,8 @@ class ProjectOptions:
     defines: Mapping[str, DefineValue] = dataclasses.field(default_factory=dict)
     include_dirs: tuple[Path, ...] = ()
     extra_global_defs: tuple[Path, ...] = ()
+    encoding: str | None = None          # None: each file's own (UTF-8 when it decodes as UTF-8, else cp1252)
+    werror: bool = False                 # warnings fail the run (E-WERROR)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,7 +74,7 @@ class _Loader:
         self.semantics = semantics
         self.diags = diags
         self.folders = ProjectFolders(options.main.parent, list(options.include_dirs))
-        self.defines: Defines = initial_defines(options.defines)
+        self.defines: Defines = initial_defines(options.defines, semantics["define_case"] == "insensitive")
         self.parsers = parsers or Parsers.for_semantics(semantics)
         self.inactive: list[InactiveRegion] = []
         self.files_read: list[str] = []
@@ -77,7 +84,7 @@ class _Loader:
         self._def_missing = False       # set by _load_def when a file of the current request is unreadable
 
     def _read(self, path: Path, at: Span) -> SourceText | None:
-        text = read_source(path, self.folders, at, self.diags)
+        text = read_source(path, self.folders, at, self.diags, self.options.encoding)
         if text is not None:
             self.files_read.append(text.display)
             self.line_count += len(text.lines)
@@ -108,6 +115,8 @@ class _Loader:
             cfg_text = self._read(cfg, NO_SPAN)
             if cfg_text is not None:
                 read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.parsers.pp)
+        elif opts.use_default_cfg:
+            self.defines.no_config = True     # (a caller that turned the default off wants warnings only)
         if not opts.main.is_file():
             self.diags.report("E-FILE-NOT-FOUND", NO_SPAN, f"main program {opts.main} not found")
             return self._empty()
@@ -115,6 +124,11 @@ class _Loader:
         seen: set[Path] = set()
         def_requests: list[tuple[ast.DefineFile, str, Path]] = []
         self._load_sources(opts.main.resolve(), seen, src_files, def_requests)
+        if src_files and is_module(src_files[0]):
+            # one clear error, not an E-SYM-UNDEF per symbol the main program's definition files would give
+            self.diags.report("E-MAIN-MODULE", Span(src_files[0].path, 1, 1), f"{opts.main.name} is a module (it exports labels with GLOBAL "
+                              "and has no code before its first LBL): give the main program that USES it")
+            return self._empty()
 
         global_defs: list[ast.DefFile] = []
         local_defs: dict[str, list[ast.DefFile]] = {}
@@ -137,9 +151,24 @@ class _Loader:
                 global_defs.extend(d for d in defs if d not in global_defs)
             else:
                 local_defs.setdefault(owner, []).extend(defs)
+        number_mp4111 = self._number_mp4111()
+        unused_overrides(self.defines, self.diags)
         return ParsedProject(tuple(src_files), tuple(global_defs), {k: tuple(v) for k, v in local_defs.items()},
                              dict(self.defines.values), tuple(self.inactive), tuple(self.files_read), self.line_count,
-                             frozenset(self.symbols_incomplete), self.labels_incomplete)
+                             frozenset(self.symbols_incomplete), self.labels_incomplete, number_mp4111)
+
+    def _number_mp4111(self) -> int | None:
+        """DEFINE NUMBERMP4111 = n of the configuration (OEM.SYS's setting), checked against T96 ... T999."""
+        self.defines.used.setdefault("numbermp4111", "NUMBERMP4111")     # (so `-D NUMBERMP4111=n` is not unused)
+        key = next((k for k in self.defines.values if k.lower() == "numbermp4111"), None)
+        if key is None:
+            return None
+        value = self.defines.values[key]
+        if not isinstance(value, int) or not 0 <= value <= MAX_NUMBER_MP4111:
+            self.diags.report("E-CFG-SYNTAX", self.defines.spans[key], f"NUMBERMP4111 = {value!r}: expected a number "
+                              f"of additional timers 0 ... {MAX_NUMBER_MP4111}")
+            return None
+        return value
 
     def _empty(self) -> ParsedProject:
         return ParsedProject((), (), {}, dict(self.defines.values), (), tuple(self.files_read), self.line_count)

@@ -6,8 +6,8 @@ import contextlib
 import dataclasses
 import gc
 
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import Parsers, ProjectOptions, load_project
+from transpiler.diagnostics import NO_SPAN, Diagnostics
+from transpiler.frontend.load import ParsedProject, Parsers, ProjectOptions, load_project
 from transpiler.ir import Program
 from transpiler.frontend.resolve import resolve
 from transpiler.language.semantics import Semantics
@@ -47,5 +47,15 @@ def compile_project(options: ProjectOptions, semantics: Semantics, diags: Diagno
         parsed = load_project(options, semantics, diags, parsers)
         if not parsed.src_files:
             return CompileResult(None, diags)
-        program = resolve(parsed, semantics, diags)
+        program = resolve(parsed, project_semantics(semantics, parsed), diags)
+    if options.werror and diags.warnings and not diags.has_errors():
+        diags.report("E-WERROR", NO_SPAN, f"{len(diags.warnings)} warning(s) and --werror")
     return CompileResult(program, diags)
+
+
+def project_semantics(semantics: Semantics, parsed: ParsedProject) -> Semantics:
+    """The semantics with the project's own settings: NUMBERMP4111 from its configuration (A-37), unless the
+    command line set another value than the default (`-S number_mp4111=n` wins)."""
+    if parsed.number_mp4111 is None or semantics["number_mp4111"] != semantics.profile.defaults["number_mp4111"]:
+        return semantics
+    return dataclasses.replace(semantics, values={**semantics.values, "number_mp4111": parsed.number_mp4111})

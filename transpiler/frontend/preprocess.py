@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import re
 from pathlib import Path
 from typing import Callable, Mapping, NamedTuple, Union
@@ -39,17 +40,43 @@ class InactiveRegion:
 
 @dataclasses.dataclass
 class Defines:
-    """The DEFINE table of one run; `-D` overrides are fixed and win over every DEFINE line."""
+    """The DEFINE table of one run; `-D` overrides are fixed and win over every DEFINE line.
+
+    With `case_insensitive` (A-61, the default) a name matches a DEFINE of any spelling; a use spelled otherwise
+    than the definition is an E-PP-CASE warning naming both. `used` collects (lower-case) every name a file
+    defines or tests, so that a `-D` for a name no file uses can be reported. `no_config` is set when the project
+    has no configuration file: an #if on an undefined name is then E-CFG-MISSING (once), not a warning per line."""
 
     values: dict[str, DefineValue]
     spans: dict[str, Span]
     fixed: frozenset[str] = frozenset()
+    case_insensitive: bool = True
+    no_config: bool = False
+    used: dict[str, str] = dataclasses.field(default_factory=dict)    # lower-case name -> first spelling
+    missing_config_reported: bool = False
+
+    def key(self, name: str, span: Span, diags: Diagnostics) -> str | None:
+        """The table's key for `name` (None when undefined); a differing spelling is reported."""
+        self.used.setdefault(name.lower(), name)
+        if name in self.values:
+            return name
+        if not self.case_insensitive:
+            return None
+        lower = name.lower()
+        found = next((k for k in self.values if k.lower() == lower), None)
+        if found is not None:
+            diags.report("E-PP-CASE", span, f"{name} is spelled {found} where it is defined ({self.spans[found]}); "
+                         "DEFINE names compare ignoring case (A-61)")
+        return found
 
     def define(self, name: str, value: DefineValue, span: Span, diags: Diagnostics) -> None:
-        if name in self.fixed:
+        existing = self.key(name, span, diags)
+        if existing is not None and existing in self.fixed:
             return
-        if name in self.values:
-            diags.report("E-DEF-REDEFINE", span, f"DEFINE {name} redefined (was {self.values[name]!r} at {self.spans[name]})")
+        if existing is not None:
+            diags.report("E-DEF-REDEFINE", span, f"DEFINE {name} redefined (was {self.values[existing]!r} at "
+                         f"{self.spans[existing]})")
+            del self.values[existing], self.spans[existing]
         self.values[name] = value
         self.spans[name] = span
 
@@ -129,8 +156,9 @@ def resolve_value(raw: tuple, defines: Defines, span: Span, diags: Diagnostics) 
     kind, value = raw
     if kind != "ref":
         return value
-    if value in defines.values:
-        return defines.values[value]
+    key = defines.key(value, span, diags)
+    if key is not None:
+        return defines.values[key]
     diags.report("E-PP-UNDEF-REF", span, f"&{value} names no DEFINE; it is taken as the string \"{value}\"")
     return value
 
@@ -288,11 +316,20 @@ class Preprocessor:
 
     def _condition(self, parsed: tuple, span: Span) -> bool:
         if parsed[0] in ("ifdef", "ifndef"):
-            defined = parsed[1] in self.defines.values
+            defined = self.defines.key(parsed[1], span, self.diags) is not None
             return defined if parsed[0] == "ifdef" else not defined
         _, name, op, raw = parsed
-        if name in self.defines.values:
-            left: DefineValue = self.defines.values[name]
+        key = self.defines.key(name, span, self.diags)
+        if key is not None:
+            left: DefineValue = self.defines.values[key]
+        elif self.defines.no_config:
+            # One root error instead of a warning per #if and silently dropped code.
+            if not self.defines.missing_config_reported:
+                self.defines.missing_config_reported = True
+                self.diags.report("E-CFG-MISSING", span, f"#if tests {name}, but no DEFINE sets it and the project "
+                                  "has no configuration: put OEM.cfg beside the main program, name one with --cfg, "
+                                  "or give the values with -D NAME=VALUE")
+            left = ""
         else:
             self.diags.report("E-PP-UNDEF", span, f"{name} is not defined; it compares as the empty string")
             left = ""
@@ -304,8 +341,13 @@ class Preprocessor:
 def _normalise_dashes(text: str) -> str:
     # The manuals print "L–" with an en dash; files may carry it as UTF-8 (read as Latin-1),
     # as the cp1252 byte 0x96, or as U+2013. All of them mean '-'.
+    # Only the code is changed: a comment keeps its dashes (it is copied into the ST, the XML and the report).
     if "\u2013" in text or "\xe2\x80\x93" in text or "\x96" in text:
-        return text.replace("\xe2\x80\x93", "-").replace("\u2013", "-").replace("\x96", "-")
+        if text.lstrip().startswith("*"):
+            return text
+        code, comment = split_comment(text)
+        code = code.replace("\xe2\x80\x93", "-").replace("\u2013", "-").replace("\x96", "-")
+        return code if comment is None else code + ";" + comment
     return text
 
 
@@ -317,8 +359,22 @@ def read_config(display: str, lines: tuple[str, ...], defines: Defines, diags: D
             diags.report("E-CFG-IGNORED", line.span, f"line ignored: {line.code.strip()[:80]}")
 
 
-def initial_defines(overrides: Mapping[str, DefineValue]) -> Defines:
-    return Defines(dict(overrides), {name: Span("<command line>", 1, 1) for name in overrides}, frozenset(overrides))
+def initial_defines(overrides: Mapping[str, DefineValue], case_insensitive: bool = True,
+                    no_config: bool = False) -> Defines:
+    """The table before any file is read: the `-D` values, fixed."""
+    return Defines(dict(overrides), {name: Span("<command line>", 1, 1) for name in overrides}, frozenset(overrides),
+                   case_insensitive, no_config)
+
+
+def unused_overrides(defines: Defines, diags: Diagnostics) -> None:
+    """A `-D NAME=...` for a name no file defines or tests: E-DEF-UNUSED with the nearest names used."""
+    for name in sorted(defines.fixed):
+        if name.lower() in defines.used:
+            continue
+        near = difflib.get_close_matches(name.lower(), sorted(defines.used), n=3, cutoff=0.6)
+        hint = f"; nearest names used: {', '.join(defines.used[n] for n in near)}" if near else ""
+        diags.report("E-DEF-UNUSED", Span("<command line>", 1, 1), f"-D {name}: no file defines or tests this name"
+                     f"{hint}")
 
 
 def find_default_cfg(main: Path) -> Path | None:

@@ -1,11 +1,13 @@
-"""Finds and reads project files: case-insensitive lookup inside the allowed folders, Latin-1 text, split lines."""
+"""Finds and reads project files: case-insensitive lookup inside the allowed folders, text in each file's encoding, split lines."""
 
 from __future__ import annotations
 
+import codecs
 import dataclasses
 import os
 import re
 from pathlib import Path
+from types import MappingProxyType
 
 from transpiler.diagnostics import Diagnostics, Span
 
@@ -85,8 +87,9 @@ def _find_case_insensitive(root: Path, parts: list[str]) -> Path | None:
     return current if current.is_file() else None
 
 
-def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostics) -> SourceText | None:
-    """Read a file as Latin-1 (every byte sequence is accepted) and split it into lines."""
+def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostics,
+                encoding: str | None = None) -> SourceText | None:
+    """Read a file and split it into lines, decoded as `encoding` or, when None, as detected (`decode_text`)."""
     try:
         if not path.exists():
             diags.report("E-FILE-NOT-FOUND", at, f"file {path} not found")
@@ -103,8 +106,43 @@ def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostic
     except OSError as exc:
         diags.report("E-FILE-READ", at, f"cannot read {path}: {exc.strerror or exc}")
         return None
-    text = data.decode("latin-1")
+    display = folders.display(path)
+    try:
+        text = decode_text(data, encoding)
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        col = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        diags.report("E-ENCODING", Span(display, line, col), f"byte 0x{data[exc.start]:02X} is not valid {encoding} "
+                     "(drop --encoding to detect each file's encoding)")
+        return None
     lines = _LINE_SPLIT.split(text)
     if lines and lines[-1] == "":
         lines.pop()
-    return SourceText(path, folders.display(path), tuple(lines))
+    return SourceText(path, display, tuple(lines))
+
+
+def decode_text(data: bytes, encoding: str | None = None) -> str:
+    """The text of a file. Detected (encoding None): UTF-8 with or without a byte-order mark when the bytes are
+    valid UTF-8, else Windows-1252 (what HEIDENHAIN's PLCdesign writes), whose five unassigned bytes are taken as
+    Latin-1 so that every file reads. A forced encoding raises UnicodeDecodeError on bytes it does not allow."""
+    if data.startswith(codecs.BOM_UTF8) and (encoding is None or codecs.lookup(encoding).name == "utf-8"):
+        data = data[len(codecs.BOM_UTF8):]
+        encoding = "utf-8"
+    if encoding is not None:
+        return data.decode(encoding)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1").translate(_CP1252_C1)
+
+
+def _cp1252_char(byte: int) -> str | None:
+    try:
+        return bytes([byte]).decode("cp1252")
+    except UnicodeDecodeError:
+        return None
+
+
+# Latin-1 text -> Windows-1252 text: the C1 range 0x80-0x9F holds printable characters in cp1252 (the en dash
+# 0x96, the euro sign 0x80, ...); its five unassigned bytes stay as Latin-1 reads them.
+_CP1252_C1 = MappingProxyType({b: c for b in range(0x80, 0xA0) if (c := _cp1252_char(b)) is not None})

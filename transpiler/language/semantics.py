@@ -65,6 +65,10 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
     Assumption("A-57a", "cycle_time_ms", 20, (), "PLC cycle time"),
     Assumption("A-57b", "max_instructions_per_cycle", 1_000_000, (), "watchdog instruction budget"),
     Assumption("A-59", "bracket_span", "forbidden", ("allowed",), "control flow inside brackets"),
+    Assumption("A-37", "number_mp4111", 0, (), "NUMBERMP4111 of OEM.SYS: how many additional timers T96... module 9006 "
+               "may start (the project sets it with DEFINE NUMBERMP4111 = n in its configuration)"),
+    Assumption("A-61", "define_case", "insensitive", ("sensitive",), "case of DEFINE names (E-PP-CASE on a differing "
+               "spelling)"),
 )
 
 ASSUMPTION_BY_KEY: dict[str, Assumption] = {a.key: a for a in ASSUMPTIONS}

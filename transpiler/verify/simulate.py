@@ -144,7 +144,7 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:
         return Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
-                       mp_spans=spans, compiled=compiled)
+                       mp_spans=spans, compiled=compiled, number_mp4111=int(program.semantics["number_mp4111"]))
     except MachineConfigError:
         raise
     except (UnknownModule, ValueError) as exc:
