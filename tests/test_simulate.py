@@ -189,12 +189,12 @@ def test_runtime_warnings_are_reported_once_with_a_count(tmp_path: Path, capsys:
     assert "4 times in total" in err
 
 
-def test_default_observation_is_written_operands_and_outputs(project: Path) -> None:
+def test_default_observation_is_inputs_written_operands_and_outputs(project: Path) -> None:
     scn = scenario(project, "cycles: 2\nprofile: tv\n")
     out_csv = project / "t.csv"
     assert simulate(project, scn, "--trace", str(out_csv)) == 0
     header = next(csv.reader(out_csv.open()))
-    assert header == ["cycle", "O_lamp", "M4092", "TS_lamp", "WG_code"]
+    assert header == ["cycle", "I_start", "O_lamp", "M4092", "TS_lamp", "WG_code"]
 
 
 def test_plc_error_messages_are_listed(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

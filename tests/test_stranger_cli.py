@@ -55,3 +55,29 @@ def test_check_given_a_folder_checks_its_main_program(tmp_path, capsys):
     (tmp_path / "Mod.src").write_text("GLOBAL Fn\nLBL Fn\nEM\n")
     code, out, _ = _run(["check", tmp_path], capsys)
     assert code == 0 and "files          2" in out and "routines       1" in out
+
+
+def test_traces_get_normal_permissions_and_show_inputs(tmp_path, capsys):
+    _timer_project(tmp_path)
+    (tmp_path / "s.yaml").write_text("cycles: 3\nevents:\n  - cycle: 0\n    set: {I1: 1}\n")
+    old = os.umask(0o022)
+    try:
+        code, _, err = _run(["simulate", tmp_path / "main.src", "--scenario", tmp_path / "s.yaml", "--trace",
+                             tmp_path / "t.csv", "--vcd", tmp_path / "t.vcd"], capsys)
+    finally:
+        os.umask(old)
+    assert code == 0, err
+    for name in ("t.csv", "t.vcd"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644
+    header = (tmp_path / "t.csv").read_text().splitlines()[0].split(",")
+    assert "I1" in header and "O1" in header
+    assert (tmp_path / "t.csv").read_text().splitlines()[1].split(",")[header.index("I1")] == "1"
+
+
+def test_trace_into_a_missing_folder_names_the_folder(tmp_path, capsys):
+    _timer_project(tmp_path)
+    for flag in ("--trace", "--vcd"):
+        code, _, err = _run(["simulate", tmp_path / "main.src", "--scenario", tmp_path / "s.yaml", flag,
+                             tmp_path / "nowhere" / "t.out"], capsys)
+        assert code == 2 and f"folder '{tmp_path / 'nowhere'}' does not exist" in err and flag in err
+        assert "Traceback" not in err

@@ -28,6 +28,11 @@ def _current_umask() -> int:
     return mask
 
 
+def new_file_mode() -> int:
+    """The mode an ordinary new file gets (0o666 less the umask, 0644 usually); mkstemp's temp files are 0600."""
+    return 0o666 & ~_current_umask()
+
+
 def _make_dirs(folders: list[Path], created: list[Path]) -> None:
     """Create missing folders, recording each in `created` (deepest last) so a failure can remove them again."""
     for folder in folders:

@@ -23,6 +23,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
 def cmd_simulate(args: argparse.Namespace) -> int:
     if not args.scenario.is_file():
         raise UsageError(f"scenario file '{args.scenario}' does not exist")
+    for flag, path in (("--trace", args.trace), ("--vcd", args.vcd)):
+        if path is not None and not path.parent.is_dir():      # (checked before the run, not after it)
+            raise UsageError(f"{flag} {path}: folder '{path.parent}' does not exist")
     project = project_from_args(args, scenario=args.scenario)
     print_diagnostics(project.diagnostics)
     sim = api.simulate(project, args.scenario)
@@ -32,13 +35,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace, simulation: api.Simulation) -> int:
     scenario, sim = simulation.scenario, simulation.run
+    written = None
     try:
         if args.trace is not None:
+            written = args.trace
             sim.trace.write_csv(args.trace)
         if args.vcd is not None:
+            written = args.vcd
             sim.trace.write_vcd(args.vcd, sim.machine.cycle_time_ms)
     except OSError as exc:
-        print(f"{args.trace or args.vcd}:1:1: error[E-USAGE]: cannot write the trace: {exc}", file=sys.stderr)
+        print(f"{written}:1:1: error[E-USAGE]: cannot write the trace: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     _print_warnings(sim.warnings)
     first_marker = sim.machine.profile.interface.error_markers[0]

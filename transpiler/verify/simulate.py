@@ -158,8 +158,11 @@ def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulu
     diags = diags or Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     machine = machine or build_machine(program, scenario, diags)
-    _, written, outputs = program_operands(program)
-    columns = observed_operands(scenario, names, written, outputs, diags)
+    used, written, outputs = program_operands(program)
+    # Without `observe` the trace shows what the program reads from the machine (its inputs) beside what it writes:
+    # a trace of outputs alone cannot tell why they changed.
+    inputs = {r for r in used if r.kind == "I"}
+    columns = observed_operands(scenario, names, written, outputs | inputs, diags)
     trace = _Trace(columns)
     read: Callable[[OperandRef], Any] = lambda ref: machine.read(ref.kind, ref.addr)  # noqa: E731
     observed = machine.reader([(ref.kind, ref.addr) for _, ref in columns])

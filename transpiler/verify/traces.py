@@ -11,6 +11,7 @@ from typing import IO, Iterator, Sequence
 
 from vcd import VCDWriter
 
+from transpiler.atomic import new_file_mode
 from transpiler.verify.scenario import WIDTHS, OperandRef, normalize_value
 
 
@@ -18,10 +19,13 @@ from transpiler.verify.scenario import WIDTHS, OperandRef, normalize_value
 def atomic_text_file(path: Path) -> Iterator[IO[str]]:
     """A text file that appears under `path` only once it is completely written (temp file + os.replace)."""
     path = Path(path)
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"folder '{path.parent}' does not exist")
     fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
             yield handle
+        os.chmod(temp, new_file_mode())      # an output like any other, not mkstemp's private 0600
         os.replace(temp, path)
     except BaseException:
         with contextlib.suppress(OSError):
