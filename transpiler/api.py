@@ -274,7 +274,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN."""
     from transpiler.exec.compiled.shim import ShimUnavailable
-    from transpiler.verify.equiv import choose_backend, random_scenario, run_equivalence
+    from transpiler.verify.equiv import choose_backend, run_equivalence
+    from transpiler.verify.guided import generate
     from transpiler.verify.scenario import load_scenario
     from transpiler.verify.simulate import project_names
     scenarios = [Path(p) for p in scenarios]
@@ -303,7 +304,9 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     names = project_names(project.program)
     loaded = [load_scenario(path, names) for path in scenarios]
     if random_cycles > 0:
-        loaded.append(random_scenario(project.program, names, random_cycles, seed, mp_path))
+        # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
+        loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
+                           base_mp=mp)
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,

@@ -125,4 +125,6 @@ def _print_outcomes(result) -> None:
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
           f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
+    for item in c.get("never_taken", ()):
+        print(f"  not covered: {item['at']}: {item['what']}")
     print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, backend {result.backend})")

@@ -147,32 +147,55 @@ def _builtin(st_text: str, st_name: str) -> tuple[Callable[[], StSide] | None, l
         return None, list(exc.diagnostics)
 
 
+_TWO_WAY = ("JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF")
+
+
+def _untaken(op: Any, seen: set) -> str:
+    """The outcome of a conditional jump, call or module end that no run took, in the words of the source.
+    The interpreter records 1 when the jump/call/end happens (an IFT is a JPF over its body), else 0."""
+    if not seen:
+        return "never reached"
+    if op.mnemonic == "IFT":
+        return "body never skipped" if 1 not in seen else "body never run"
+    action = {"JPT": "jumps", "JPF": "jumps", "CALLT": "calls", "CALLF": "calls"}.get(op.code, "ends the module")
+    return f"never {action}" if 1 not in seen else f"always {action}"
+
+
 def coverage_summary(program: Program, sets: list) -> dict[str, Any]:
-    total_ops = [(fi, i) for fi, f in enumerate(program.files) for i, op in enumerate(f.ops)
-                 if op.code not in ("LBL", "KFIELD", "NOP")]
-    branch_ops = [(fi, i) for fi, f in enumerate(program.files) for i, op in enumerate(f.ops)
-                  if op.code in ("JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF", "CASE")]
+    """Instructions executed, conditional branches taken both ways and CASE entries taken over the runs'
+    coverage sets; `never_taken` lists each branch outcome and CASE entry no run took, with its source line."""
     executed: set = set()
     outcomes: dict = {}
     for cov in sets:
         executed |= set(cov.executed)
         for key, values in cov.branches.items():
             outcomes.setdefault(key, set()).update(values)
-    op_hit = len([k for k in total_ops if k in executed])
-    two_way = 0
-    both = 0
-    for fi, i in branch_ops:
-        op = program.files[fi].ops[i]
-        if op.code == "CASE":
-            continue
-        two_way += 1
-        if outcomes.get((fi, i), set()) >= {0, 1}:
-            both += 1
-    case_entries = sum(len(program.files[fi].ops[i].case_targets) for fi, i in branch_ops if program.files[fi].ops[i].code == "CASE")
-    case_hit = sum(len([v for v in outcomes.get((fi, i), set()) if v >= 0]) for fi, i in branch_ops
-                   if program.files[fi].ops[i].code == "CASE")
-    return {"instructions": len(total_ops), "instructions_executed": op_hit,
-            "branches": two_way, "branches_both_ways": both, "case_entries": case_entries, "case_entries_taken": case_hit}
+    instructions = hit = two_way = both = case_entries = case_hit = 0
+    never: list[dict[str, str]] = []
+    for fi, f in enumerate(program.files):
+        for i, op in enumerate(f.ops):
+            if op.code in ("LBL", "KFIELD", "NOP"):
+                continue
+            instructions += 1
+            hit += (fi, i) in executed
+            seen = outcomes.get((fi, i), set())
+            if op.code in _TWO_WAY:
+                two_way += 1
+                if seen >= {0, 1}:
+                    both += 1
+                else:
+                    never.append({"at": str(op.span), "what": f"{op.mnemonic} {_untaken(op, seen)}"})
+            elif op.code == "CASE":
+                case_entries += len(op.case_targets)
+                for entry, target in enumerate(op.case_targets):
+                    if entry in seen:
+                        case_hit += 1
+                    else:
+                        at = op.case_notes[entry][0] if entry < len(op.case_notes) else op.span
+                        never.append({"at": str(at), "what": f"CASE entry {entry} ({target.label}) never taken"})
+    return {"instructions": instructions, "instructions_executed": hit,
+            "branches": two_way, "branches_both_ways": both, "case_entries": case_entries,
+            "case_entries_taken": case_hit, "never_taken": never}
 
 
 @dataclasses.dataclass

@@ -1,0 +1,83 @@
+"""Corner stimulus (verify/corners.py) and the coverage-guided search (verify/guided.py) on the sample."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+
+from transpiler import api
+from transpiler.diagnostics import Diagnostics
+from transpiler.exec.interp import compile_program
+from transpiler.verify.corners import NC_MODEL_OWNED, harvest
+from transpiler.verify.equiv import coverage_summary
+from transpiler.verify.guided import generate
+from transpiler.verify.scenario import load_scenario
+from transpiler.verify.simulate import build_machine, project_names
+from transpiler.verify.stimulus import build_stimulus, scenario_to_yaml
+
+SAMPLE = Path(__file__).resolve().parents[1] / "samples" / "basic_program"
+
+
+@pytest.fixture(scope="module")
+def sample():
+    project = api.load_project(api.project_options(SAMPLE / "Main_PGM.src"))
+    names = project_names(project.program)
+    seeds = [load_scenario(p, names) for p in sorted((SAMPLE / "scenarios").glob("*.yaml"))]
+    return project.program, names, seeds
+
+
+def test_harvest_finds_the_decoded_m_codes_their_neighbours_and_the_foreign_words(sample):
+    program, names, _ = sample
+    corners = harvest(program, names)
+    # the M-code table of Mfunction.src
+    assert {3, 4, 5, 8, 9, 10, 11, 19, 30, 50, 51} <= set(corners.tables)
+    assert {23, 24, 25, 9999, 10000, 10001} <= set(corners.values)      # KG_mag_pockets and K10000, +-1
+    words = {name for name, _ in corners.foreign_words}
+    assert "NP_W1032_ref_pending" in words and "NP_W1026_axes_in_pos" in words
+    # words the NC model writes for nc actions are never driven directly
+    assert not any(names.resolve(n) in {(k, a) for k, a in NC_MODEL_OWNED} for n in words)
+    assert "NP_M4543_tool_life_expired" in corners.foreign_markers
+    rng = random.Random(3)
+    jobs = [corners.nc_action(rng, "m_function")["m_function"] for _ in range(200)]
+    assert {4, 19, 51, 52} <= set(jobs)
+
+
+def _coverage(program, names, scenarios):
+    compiled = compile_program(program, coverage=True)
+    sets = []
+    for scenario in scenarios:
+        stimulus = build_stimulus(scenario, names)
+        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for cycle in range(stimulus.cycles):
+            report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+            assert not report.faults, (scenario.name, report.faults)
+        sets.append(machine.coverage)
+    return coverage_summary(program, sets)
+
+
+def test_guided_stimulus_is_deterministic_within_budget_and_enters_every_case_entry(sample):
+    program, names, seeds = sample
+    short = [s for s in seeds if s.cycles <= 1000]
+    first = generate(program, names, 1500, 7, short, machine_parameters=SAMPLE / "MP_data.mp")
+    again = generate(program, names, 1500, 7, short, machine_parameters=SAMPLE / "MP_data.mp")
+    assert [scenario_to_yaml(s) for s in first] == [scenario_to_yaml(s) for s in again]
+    assert 0 < sum(s.cycles for s in first) <= 1500
+    before = _coverage(program, names, short)
+    after = _coverage(program, names, short + first)
+    assert before["case_entries_taken"] < before["case_entries"]
+    assert after["case_entries_taken"] == after["case_entries"]
+    assert after["branches_both_ways"] > before["branches_both_ways"]
+    # what is still not covered is listed with its source line
+    assert len(after["never_taken"]) == (after["branches"] - after["branches_both_ways"])
+    assert all(":" in item["at"] and item["what"] for item in after["never_taken"])
+    untaken_case = [i for i in before["never_taken"] if i["what"].startswith("CASE entry")]
+    assert untaken_case and untaken_case[0]["at"].startswith("Mfunction.src:")
+
+
+def test_generate_without_scenarios_spends_the_budget_on_corner_random_runs(sample):
+    program, names, _ = sample
+    out = generate(program, names, 300, 1, machine_parameters=SAMPLE / "MP_data.mp")
+    assert out and sum(s.cycles for s in out) <= 300
+    assert any(e.nc is not None for s in out for e in s.events)

@@ -1,0 +1,126 @@
+"""Corner values of a program: the constants it compares against, harvested from the IR, and the operands the
+stimulus may drive with them (inputs, and words and markers the program reads but never writes).
+
+A mutated comparison or constant differs from the original only at the edges of the program's own constants
+(c-1, c, c+1) or outside the ranges it decodes; random values almost never land there. The guided search
+(verify/guided.py) draws its values and NC jobs from a Corners."""
+
+from __future__ import annotations
+
+import dataclasses
+import random
+from typing import Any
+
+from transpiler.ir import Program
+from transpiler.verify.scenario import NameTable, OperandRef
+from transpiler.verify.simulate import program_operands
+
+# Operands the NC model itself writes for `nc:` actions (runtime_shim/hh_nc.c, iTNC and TNC 407 numbers): the
+# stimulus never sets them directly, or a strobe or mode word would change behind the model's back.
+NC_MODEL_OWNED = frozenset({
+    ("W", 256), ("W", 260), ("W", 262), ("W", 264), ("W", 272), ("D", 280), ("D", 284), ("D", 356),
+    *(("M", m) for m in (4070, 4071, 4072, 4073, 4074, 4075, 4172, 4173, 4174, 4520, 4521, 4522, 4523, 2045)),
+})
+
+# Values worth trying on any word besides the program's constants: the edges of the signed ranges and 0.
+_EDGES = (0, 1, -1, 127, 128, 255, 256, 32767, -32768, 65535)
+_WIDTH_BITS = {"B": 8, "W": 16, "D": 32}
+_WORD_MAX = 32767        # scenario values of W-sized NC fields (tool, pocket, mode, M code) are 0..32767
+
+
+@dataclasses.dataclass(frozen=True)
+class Corners:
+    """What the stimulus draws from: the program's constants and the operands it may drive."""
+
+    constants: tuple[int, ...]                    # every K value and KFIELD entry of the program
+    tables: tuple[int, ...]                       # the KFIELD entries (decoded numbers such as M codes)
+    values: tuple[int, ...]                       # c-1, c, c+1 of every constant, plus the range edges
+    inputs: tuple[str, ...]                       # display names of the inputs the program reads
+    foreign_words: tuple[tuple[str, str], ...]    # (name, kind) of B/W/D read, never written, not the NC model's
+    foreign_markers: tuple[str, ...]              # markers read, never written, not the NC model's
+    remanent_words: tuple[tuple[str, str], ...]   # (name, kind) of B/W/D the program writes (start values)
+    remanent_markers: tuple[str, ...]             # markers the program writes (start values)
+
+    def word_value(self, rng: random.Random, kind: str) -> int:
+        """A corner value in the range of a `kind` (B/W/D) operand: mostly near a constant, sometimes an edge."""
+        bits = _WIDTH_BITS.get(kind, 16)
+        low, high = -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+        value = rng.choice(self.values) if rng.random() < 0.85 else rng.choice(_EDGES)
+        return max(low, min(high, value))
+
+    def nc_value(self, rng: random.Random, low: int = 0, high: int = _WORD_MAX) -> int:
+        """A corner value for an NC field (M code, tool, pocket, mode, ...) within low..high."""
+        candidates = [v for v in self.values if low <= v <= high] or [low]
+        pick = rng.choice(candidates) if rng.random() < 0.9 else rng.randint(low, min(high, 1000))
+        return pick
+
+    def nc_action(self, rng: random.Random, kind: str | None = None) -> dict[str, Any]:
+        """One NC job (of `kind`, else of a random kind) with values at the program's corners (also 0 and out of
+        the decoded ranges)."""
+        kind = kind or rng.choice(_NC_KINDS)
+        if kind == "m_function":
+            # Mostly a number of a table the program decodes (its M codes), or one next to it.
+            if self.tables and rng.random() < 0.7:
+                return {kind: max(0, min(_WORD_MAX, rng.choice(self.tables) + rng.choice((0, 0, 0, -1, 1))))}
+            return {kind: self.nc_value(rng)}
+        if kind in ("tool_call", "tool_def"):
+            job = {"tool": self.nc_value(rng), "pocket": self.nc_value(rng, -1)}
+            if kind == "tool_call" and rng.random() < 0.2:
+                job["second_strobe"] = True
+            return {kind: job}
+        if kind == "spindle_speed":
+            return {kind: self.nc_value(rng, 0, 1 << 20) if rng.random() < 0.7 else rng.choice((0, 1500, 24000))}
+        if kind == "gear":
+            return {kind: rng.randint(0, 4)}
+        if kind == "mode":
+            return {kind: self.nc_value(rng, 0, 16)}
+        if kind == "fn19":
+            return {kind: {"value1": self.word_value(rng, "D"), "value2": self.word_value(rng, "D")}}
+        return {kind: rng.choice(("program", "machine_parameters"))}
+
+
+_NC_KINDS = ("m_function", "m_function", "m_function", "tool_call", "tool_call", "tool_def", "spindle_speed", "gear",
+             "mode", "mode", "fn19", "restart")
+
+
+def harvest(program: Program, names: NameTable) -> Corners:
+    """The constants of the program (compare operands, K values, KFIELD tables such as decoded M-function numbers,
+    CASE limits, tool/pocket and mode values) and the operands the stimulus may drive."""
+    constants: set[int] = set()
+    tables: set[int] = set()
+    for code in program.files:
+        for op in code.ops:
+            operand = op.operand
+            if operand is None:
+                continue
+            if operand.kind == "K":
+                constants.add(operand.addr)
+            elif operand.kind == "KF":
+                constants.update(operand.kfield)
+                tables.update(operand.kfield)
+    values = {c + d for c in constants for d in (-1, 0, 1)} | set(_EDGES)
+    used, written, _ = program_operands(program)
+    profile = program.semantics.profile
+
+    def name(ref: OperandRef) -> str:
+        return names.display_name(ref)
+
+    def drivable(ref: OperandRef) -> bool:
+        return (ref.kind, ref.addr) not in NC_MODEL_OWNED and name(ref) not in names.non_toggle
+
+    foreign = sorted((r for r in set(used) - set(written) if drivable(r)), key=lambda r: (r.kind, r.addr))
+    # Only interface words: a B/W/D the program reads but never writes outside the NC interface is memory the
+    # program expects another module to fill, and is set through `initial` like the remanent words.
+    foreign_words = tuple((name(r), r.kind) for r in foreign if r.kind in _WIDTH_BITS
+                          and profile.is_interface(r.kind, r.addr, _WIDTH_BITS[r.kind] // 8))
+    foreign_markers = tuple(name(r) for r in foreign if r.kind == "M")
+    remanent = sorted((r for r in written if drivable(r)), key=lambda r: (r.kind, r.addr))
+    return Corners(
+        constants=tuple(sorted(constants)),
+        tables=tuple(sorted(tables)),
+        values=tuple(sorted(values)),
+        inputs=tuple(sorted({name(r) for r in used if r.kind == "I" and name(r) not in names.non_toggle})),
+        foreign_words=foreign_words,
+        foreign_markers=foreign_markers,
+        remanent_words=tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS),
+        remanent_markers=tuple(name(r) for r in remanent if r.kind == "M"))

@@ -1,0 +1,235 @@
+"""Coverage-guided stimulus: scenarios generated within a cycle budget that take the program's conditional
+branches both ways and enter its CASE entries, deterministic for a seed.
+
+As a fuzzer does, the search keeps a corpus (the user's scenarios, then every generated one that raised
+coverage) and mutates its members: an NC job moved to a corner value (verify/corners.py), an NC job inserted at a
+random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner,
+rare random toggles added. Each candidate runs on the reference interpreter alone (no ST side, with coverage);
+one that reaches a branch outcome or CASE entry not seen before is kept, cut just after the last cycle that
+brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
+budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
+
+A candidate in which the original program faults (an NC handshake that cannot finish, a runtime fault) is cut
+before the faulting cycle: the generated stimulus only asks what the original answers."""
+
+from __future__ import annotations
+
+import dataclasses
+import random
+from pathlib import Path
+from typing import Any, Mapping
+
+from transpiler.diagnostics import CompileFailed, Diagnostics
+from transpiler.exec.compiled.shim import NcActionError
+from transpiler.exec.interp import CompiledProgram, compile_program
+from transpiler.ir import Program
+from transpiler.verify.corners import Corners, harvest
+from transpiler.verify.scenario import Event, NcAction, NameTable, RandomStimulus, Scenario, bind
+from transpiler.verify.simulate import build_machine
+from transpiler.verify.stimulus import build_stimulus
+
+MARGIN = 5                  # cycles kept after the last one that brought new coverage (effects settle)
+SEARCH_FACTOR = 12          # interpreter cycles the search may spend per cycle of the budget
+SEARCH_MIN = 20_000
+SEARCH_MAX = 120_000
+STALE_LIMIT = 400           # candidates in a row without anything new: the search stops
+FILLER_ATTEMPTS = 8
+CHILD_CYCLES = 1000         # longest candidate run
+
+
+@dataclasses.dataclass(frozen=True)
+class Probe:
+    """One candidate run on the reference interpreter."""
+
+    cycles_ok: int                 # cycles that ran without a fault of the original
+    new: frozenset                 # (op id, outcome) pairs not seen before this run
+    last_new: int                  # the cycle in which the last of them first appeared (-1: none)
+
+
+@dataclasses.dataclass
+class Search:
+    """The state of one search: the program compiled with coverage once, the features seen so far."""
+
+    program: Program
+    names: NameTable
+    corners: Corners
+    compiled: CompiledProgram
+    base_mp: Mapping | None
+    seen: set = dataclasses.field(default_factory=set)
+    interpreter_cycles: int = 0
+
+    def probe(self, scenario: Scenario) -> Probe | None:
+        """Run `scenario` on the reference interpreter; None when the scenario is unusable (bad NC job)."""
+        try:
+            stimulus = build_stimulus(scenario, self.names)
+            machine = build_machine(self.program, scenario, Diagnostics(), coverage=True, compiled=self.compiled,
+                                    base_mp=self.base_mp)
+        except (CompileFailed, ValueError):
+            return None
+        branches = machine.runtime.branches
+        local: set = set()
+        new: set = set()
+        last_new, count, ok = -1, 0, 0
+        for cycle in range(stimulus.cycles):
+            try:
+                report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+            except NcActionError:
+                return None
+            self.interpreter_cycles += 1
+            if report.faults:
+                break
+            ok = cycle + 1
+            if len(branches) != count:
+                # The set only grows; the difference is taken only in the rare cycles in which it did.
+                fresh = branches - local
+                local |= fresh
+                count = len(branches)
+                fresh -= self.seen
+                if fresh:
+                    new |= fresh
+                    last_new = cycle
+        return Probe(ok, frozenset(new), last_new)
+
+    def keep(self, probe: Probe) -> None:
+        self.seen |= probe.new
+
+
+def _events_with(scenario: Scenario, extra: list[Event]) -> list[Event]:
+    # sorted() is stable: at equal cycles the scenario's own events stay first
+    return sorted([*scenario.events, *extra], key=lambda e: e.cycle)
+
+
+def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTable, serial: int) -> Scenario:
+    """A child of `parent` with one to three mutations (see the module docstring)."""
+    events = list(parent.events)
+    initial = dict(parent.initial)
+    stimulus = parent.random
+    cycles = min(parent.cycles, CHILD_CYCLES)      # a long seed (a 15 000-cycle soak) would eat the search budget
+    for _ in range(rng.randint(1, 3)):
+        choice = rng.random()
+        at = rng.randrange(cycles)
+        nc_events = [i for i, e in enumerate(events) if e.nc is not None]
+        if choice < 0.3 and nc_events:
+            # the same kind of job with a corner value: the scenario's own inputs then drive what that value starts
+            i = rng.choice(nc_events)
+            events[i] = Event(cycle=events[i].cycle, nc=NcAction(**corners.nc_action(rng, events[i].nc.kind)))
+        elif choice < 0.5:
+            events.append(Event(cycle=at, nc=NcAction(**corners.nc_action(rng))))
+        elif choice < 0.62 and (corners.foreign_words or corners.foreign_markers):
+            if corners.foreign_words and (not corners.foreign_markers or rng.random() < 0.6):
+                name, kind = rng.choice(corners.foreign_words)
+                events.append(Event(cycle=at, set={name: corners.word_value(rng, kind)}))
+            else:
+                events.append(Event(cycle=at, set={rng.choice(corners.foreign_markers): rng.randrange(2)}))
+        elif choice < 0.75 and corners.inputs:
+            events.append(Event(cycle=at, set={rng.choice(corners.inputs): rng.randrange(2)}))
+        elif choice < 0.85 and (corners.remanent_words or corners.remanent_markers or corners.inputs):
+            # the state at power-on: remanent memory at a corner, or an input already made in the first cycle
+            draw = rng.random()
+            if corners.inputs and draw < 0.3:
+                initial[rng.choice(corners.inputs)] = rng.randrange(2)
+            elif corners.remanent_words and draw < 0.8:
+                name, kind = rng.choice(corners.remanent_words)
+                initial[name] = corners.word_value(rng, kind)
+            elif corners.remanent_markers:
+                initial[rng.choice(corners.remanent_markers)] = rng.randrange(2)
+        elif choice < 0.93 and corners.inputs:
+            stimulus = RandomStimulus(seed=rng.randrange(1 << 30), inputs=list(corners.inputs),
+                                      toggle_probability=rng.choice((0.005, 0.01, 0.02, 0.05)))
+        elif events:
+            events.pop(rng.randrange(len(events)))
+    events.sort(key=lambda e: e.cycle)
+    events = [e for e in events if e.cycle < cycles]
+    return bind(parent.model_copy(update={"name": f"{_stem(parent.name)}_g{serial}", "events": events, "cycles": cycles,
+                                          "initial": initial, "random": stimulus, "expect": []}), names)
+
+
+def _stem(name: str) -> str:
+    return name.split("_g", 1)[0] if "_g" in name and name.rsplit("_g", 1)[-1].isdigit() else name
+
+
+def corner_random(program: Program, corners: Corners, names: NameTable, cycles: int, rng: random.Random, name: str,
+                  machine_parameters: Path | None, healthy: bool) -> Scenario:
+    """`cycles` cycles of corner-random stimulus: every input toggling (from all 1, a healthy machine with its
+    normally-closed contacts made, or all 0), NC jobs with corner values every 20-200 cycles, and a foreign word or
+    marker set to a corner value with each job."""
+    events: list[Event] = []
+    cycle = rng.randrange(2, 20)
+    while cycle < cycles:
+        events.append(Event(cycle=cycle, nc=NcAction(**corners.nc_action(rng))))
+        if corners.foreign_words and rng.random() < 0.5:
+            operand, kind = rng.choice(corners.foreign_words)
+            events.append(Event(cycle=cycle, set={operand: corners.word_value(rng, kind)}))
+        elif corners.foreign_markers and rng.random() < 0.3:
+            events.append(Event(cycle=cycle, set={rng.choice(corners.foreign_markers): rng.randrange(2)}))
+        cycle += rng.randrange(20, 200)
+    initial: dict[str, Any] = {n: 1 for n in corners.inputs} if healthy else {}
+    inputs = list(corners.inputs)
+    scenario = Scenario(name=name, cycles=cycles, profile=program.semantics.profile.name,
+                        machine_parameters=machine_parameters, initial=initial, events=events,
+                        random=RandomStimulus(seed=rng.randrange(1 << 30), inputs=inputs,
+                                              toggle_probability=0.01 if healthy else 0.05) if inputs else None)
+    return bind(scenario, names)
+
+
+def _cut(scenario: Scenario, cycles: int, names: NameTable) -> Scenario:
+    return bind(scenario.model_copy(update={"cycles": cycles,
+                                            "events": [e for e in scenario.events if e.cycle < cycles]}), names)
+
+
+def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: list[Scenario] = (), *,
+             machine_parameters: Path | None = None, base_mp: Mapping | None = None,
+             search_cycles: int | None = None) -> list[Scenario]:
+    """Scenarios of at most `budget` cycles in all (the whole budget unless the original faults early in every
+    attempt), chosen by coverage of the reference interpreter, starting from `seeds` (the user's scenarios);
+    the same list for the same seed."""
+    if budget <= 0:
+        return []
+    rng = random.Random(seed)
+    corners = harvest(program, names)
+    search = Search(program, names, corners, compile_program(program, coverage=True), base_mp)
+    limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
+    corpus: list[Scenario] = []
+    for scenario in seeds:
+        probe = search.probe(scenario)
+        if probe is not None:
+            search.keep(probe)
+            corpus.append(bind(scenario.model_copy(update={"expect": []}), names))
+    kept: list[Scenario] = []
+    spent = 0
+    search.interpreter_cycles = 0       # the seeds' own runs are not part of the search budget
+    # Without scenarios of the user, the corpus starts from corner-random runs (kept only where they add).
+    if not corpus:
+        for n, healthy in enumerate((True, False)):
+            corpus.append(corner_random(program, corners, names, min(budget, 400), rng, f"corner_seed{seed}_{n}",
+                                        machine_parameters, healthy))
+    serial = 0
+    stale = 0
+    while spent < budget and search.interpreter_cycles < limit and stale < STALE_LIMIT:
+        serial += 1
+        # Short parents give short children, which leave more of the budget to the next find.
+        parent = rng.choices(corpus, weights=[1.0 / max(50, min(s.cycles, CHILD_CYCLES)) for s in corpus])[0]
+        child = mutate(parent, rng, corners, names, serial)
+        probe = search.probe(child)
+        if probe is None or not probe.new or probe.last_new >= budget - spent:
+            stale += 1
+            continue
+        stale = 0
+        length = min(probe.cycles_ok, probe.last_new + 1 + MARGIN, budget - spent)
+        child = _cut(child, length, names)
+        search.keep(probe)
+        kept.append(child)
+        corpus.append(child)
+        spent += length
+    attempt = 0
+    while spent < budget and attempt < FILLER_ATTEMPTS:
+        filler = corner_random(program, corners, names, budget - spent, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
+                               machine_parameters, healthy=attempt % 2 == 0)
+        attempt += 1
+        probe = search.probe(filler)
+        if probe is None or probe.cycles_ok == 0:
+            continue
+        search.keep(probe)
+        kept.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, names))
+        spent += probe.cycles_ok
+    return kept
