@@ -50,7 +50,7 @@ def _c(code: str, sev: str, summary: str, example: str = "", *, allowable: bool 
     return CodeInfo(code, Severity(sev), summary, example, allowable)
 
 
-# The one registry of diagnostic codes (spec sections 1-17b plus the tool's own).
+# The one registry of diagnostic codes (the language's and the tool's own).
 CODES: dict[str, CodeInfo] = {
     info.code: info
     for info in (

@@ -91,7 +91,7 @@ class Op:
     rel: str = ""                           # comparison relation for CMP/SCMP and compare brackets
     nbits: int = 0                          # LB/LW/LD and B=/W=/D=
     label: str = ""                         # LBL name
-    chain_open: bool = False                # static chain state before this op (spec 5.4)
+    chain_open: bool = False                # static chain state before this op
 
 
 @dataclasses.dataclass(frozen=True)

@@ -134,7 +134,7 @@ def _call_edges(files: tuple[FileCode, ...]) -> tuple[dict[_Key, CallTarget], _E
             if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
                 callees.append((op.call, op.span))
             elif op.code == "CASE":
-                # each entry is a call site of its own (spec 6.15.1), located at its CM line
+                # each entry is a call site of its own, located at its CM line
                 callees.extend((t, op.case_notes[k][0] if k < len(op.case_notes) else op.span)
                                for k, t in enumerate(op.case_targets) if t is not None and t.file >= 0)
             elif op.code == "SUBM" and op.call is not None and op.call.file >= 0:

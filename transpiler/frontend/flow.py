@@ -61,7 +61,7 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
 
 
 def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
-    """Op indices reachable from an entry until EM (the body of a subprogram, spec 7.3)."""
+    """Op indices reachable from an entry until EM (the body of a subprogram)."""
     ops = files[entry.file].ops
     seen: set[int] = set()
     stack = [entry.index]

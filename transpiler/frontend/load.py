@@ -139,7 +139,7 @@ class _Loader:
             if self._def_missing:
                 self.symbols_incomplete.add("*")
             global_defs.extend(d)
-        # SYSTEM.DEF first when it is named (spec 1.3 step 3), then in the order named.
+        # SYSTEM.DEF first when it is named, then in the order named.
         def_requests.sort(key=lambda r: 0 if Path(r[0].file).name.lower() == "system.def" else 1)
         for request, owner, base in def_requests:
             path = self.folders.find(request.file, request.span, self.diags, base)

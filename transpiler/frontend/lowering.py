@@ -84,7 +84,7 @@ class FileLowering:
             self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} is defined twice in this file")
         else:
             self.labels[stmt.name] = index
-            # KFIELD names live in the label name space of the file (spec 6.17): the later one is the fault
+            # KFIELD names live in the label name space of the file: the later one is the fault
             if self.kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
                 self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
                                  f"KFIELD at line {self.kfield_lines[stmt.name]}")

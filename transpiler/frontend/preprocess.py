@@ -247,7 +247,7 @@ class Preprocessor:
                 self.defines.define(parsed[1], resolve_value(parsed[2], self.defines, span, self.diags), span, self.diags)
             return True, active
         if kind in ("if", "ifdef", "ifndef"):
-            # Any depth is allowed (spec 3.2); the stack is a list, so depth costs no recursion.
+            # #if blocks nest to any depth; the stack is a list, so depth costs no recursion.
             taking = self._condition(parsed, span) if active else False
             frame = _Frame(active, taking, False, span, code.strip(), None)
             stack.append(frame)
@@ -352,7 +352,7 @@ def _normalise_dashes(text: str) -> str:
 
 
 def read_config(display: str, lines: tuple[str, ...], defines: Defines, diags: Diagnostics, pp: PPParser) -> None:
-    """A .cfg file: DEFINE lines under conditional compilation; free text is a warning (spec 4.3, 17b.3)."""
+    """A .cfg file: DEFINE lines under conditional compilation; free text is a warning."""
     pre = Preprocessor(defines, diags, pp)
     for line in pre.run(display, lines):
         if line.code.strip():

@@ -1,4 +1,4 @@
-"""The instruction set as data: every mnemonic of spec section 6 with its operand form and allowed operand kinds."""
+"""The instruction set as data: every mnemonic of the language with its operand form and allowed operand kinds."""
 
 from __future__ import annotations
 

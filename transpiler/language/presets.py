@@ -1,4 +1,4 @@
-"""Timer and counter presets from machine parameters (spec 9.3): MP4110/MP4120 values to PLC cycles, exact decimals."""
+"""Timer and counter presets from machine parameters: MP4110/MP4120 values to PLC cycles, exact decimals."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Control profiles and the single table of semantic choices (every ASSUMPTION of spec section 18)."""
+"""Control profiles and the single table of semantic choices (every ASSUMPTION; docs/assumptions.md lists them)."""
 
 from __future__ import annotations
 
@@ -95,7 +95,7 @@ class Ranges:
 
 @dataclasses.dataclass(frozen=True)
 class Interface:
-    """NC interface operands of a profile (spec 12.2, 12.6, 13.1)."""
+    """NC interface operands of a profile (strobes, acknowledgements, error and first-cycle markers)."""
 
     mul_err: int
     div_err: int
@@ -123,7 +123,7 @@ _ITNC_IF_BYTES = frozenset(
 
 @dataclasses.dataclass(frozen=True)
 class Profile:
-    """A control generation: ranges, byte order, interface operands and assumption defaults (spec 0.3)."""
+    """A control generation: ranges, byte order, interface operands and assumption defaults."""
 
     name: str
     ranges: Ranges

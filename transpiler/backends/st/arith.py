@@ -83,7 +83,7 @@ class ArithmeticMixin(ExecutorPart):
 
     def _divmod_checked(self, a: Expr, b: Expr, flag: int, fn: str) -> Expr:
         """Division or MOD by a divisor known only at run time: WA keeps `a` and the marker is set when it is 0."""
-        # Unknown divisor: keep WA and set the marker when it is 0 (spec 6.5, 17b.4).
+        # Unknown divisor: keep WA and set the marker when it is 0.
         result_var = self.ctx.register("WA")
         if not b.simple or result_var.upper() in b.deps:
             b = self._temp_copy(b)

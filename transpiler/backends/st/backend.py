@@ -258,7 +258,7 @@ class StBackend:
                    comment=comment, source_map=(SourceRange(file.path, first, last),))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
-        """Indexed access to a bit space: a CASE over the named operands, the rest in one array (spec 6.13)."""
+        """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""
         layout = self.layout
         arr = layout.bit_arrays[kind]
         named = layout.named_bits(kind)
@@ -296,7 +296,7 @@ class StBackend:
         lines: list[str] = []
         local = list(main.sections[0].vars) if main.sections else []
         if layout.timers or layout.counters:
-            lines.append("(* phase 3: timer and counter service (spec 9.2, 10.2) *)")
+            lines.append("(* phase 3: timer and counter service, see docs/language.md#timers-and-counters *)")
         for t in layout.timers:
             inst = self.names.name(f"timer:{t}", f"HH_Timer{t}")
             local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))

@@ -1,4 +1,4 @@
-"""The small emitted ST library: pure helper FUNCTIONs (wrap-around arithmetic, masks, packing) and the timer/counter FBs of spec 9-10."""
+"""The small emitted ST library: pure helper FUNCTIONs (wrap-around arithmetic, masks, packing) and the timer/counter FBs."""
 
 from __future__ import annotations
 
@@ -50,16 +50,16 @@ def helper_pous() -> dict[str, Pou]:
     pous = [
         _fn("HH_ADD", "DINT", [("A", "DINT"), ("B", "DINT")],
             "HH_ADD := LINT_TO_DINT(DINT_TO_LINT(A) + DINT_TO_LINT(B));",
-            "A + B modulo 2^32 (spec 6.5, A-09)"),
+            "A + B modulo 2^32 (A-09, see docs/language.md#arithmetic)"),
         _fn("HH_SUB", "DINT", [("A", "DINT"), ("B", "DINT")],
             "HH_SUB := LINT_TO_DINT(DINT_TO_LINT(A) - DINT_TO_LINT(B));",
-            "A - B modulo 2^32 (spec 6.5, A-09)"),
+            "A - B modulo 2^32 (A-09, see docs/language.md#arithmetic)"),
         _fn("HH_MUL", "DINT", [("A", "DINT"), ("B", "DINT")],
             "HH_MUL := LINT_TO_DINT(DINT_TO_LINT(A) * DINT_TO_LINT(B));",
             "low 32 bits of the product (A-10)"),
         _fn("HH_MULOVF", "BOOL", [("A", "DINT"), ("B", "DINT")],
             "P := DINT_TO_LINT(A) * DINT_TO_LINT(B);\nHH_MULOVF := P < -2147483648 OR P > 2147483647;",
-            "multiplication overflow marker (spec 6.5)", [("P", "LINT")]),
+            "multiplication overflow marker (see docs/language.md#arithmetic)", [("P", "LINT")]),
         _fn("HH_DIV", "DINT", [("A", "DINT"), ("B", "DINT")],
             "IF B = 0 THEN\n    HH_DIV := A;\nELSIF B = -1 THEN\n    HH_DIV := HH_SUB(0, A);\nELSE\n    HH_DIV := A / B;\nEND_IF;",
             "division truncating toward zero; -2^31 / -1 = -2^31 (A-11, A-12)"),
@@ -67,24 +67,24 @@ def helper_pous() -> dict[str, Pou]:
             "IF B = 0 THEN\n    HH_MOD := A;\nELSIF B = -1 THEN\n    HH_MOD := 0;\nELSE\n    HH_MOD := A MOD B;\nEND_IF;",
             "remainder with the sign of the dividend (A-11, A-12)"),
         _fn("HH_SEXT8", "DINT", [("V", "DINT")], "HH_SEXT8 := SINT_TO_DINT(DINT_TO_SINT(V));",
-            "low 8 bits, sign-extended (comparison over the operand width, spec 6.6)"),
+            "low 8 bits, sign-extended (comparison over the operand width, see docs/language.md#comparisons-shifts-and-bit-commands)"),
         _fn("HH_SEXT16", "DINT", [("V", "DINT")], "HH_SEXT16 := INT_TO_DINT(DINT_TO_INT(V));",
-            "low 16 bits, sign-extended (comparison over the operand width, spec 6.6)"),
-        _gate("HH_WAND", "AND", "word AND over the operand width W (spec 6.4)"),
-        _gate("HH_WOR", "OR", "word OR over the operand width W (spec 6.4)"),
-        _gate("HH_WXOR", "XOR", "word XOR over the operand width W (spec 6.4)"),
+            "low 16 bits, sign-extended (comparison over the operand width, see docs/language.md#comparisons-shifts-and-bit-commands)"),
+        _gate("HH_WAND", "AND", "word AND over the operand width W (see docs/language.md#word-logic)"),
+        _gate("HH_WOR", "OR", "word OR over the operand width W (see docs/language.md#word-logic)"),
+        _gate("HH_WXOR", "XOR", "word XOR over the operand width W (see docs/language.md#word-logic)"),
         _fn("HH_SHL", "DINT", [("A", "DINT"), ("K", "DINT")],
             _COUNT_MOD_32 + "HH_SHL := DWORD_TO_DINT(SHL(DINT_TO_DWORD(A), KK));", "shift left, count mod 32 (A-14)", shift_locals),
         _fn("HH_SHR", "DINT", [("A", "DINT"), ("K", "DINT")],
             _COUNT_MOD_32 + "IF A >= 0 THEN\n    HH_SHR := DWORD_TO_DINT(SHR(DINT_TO_DWORD(A), KK));\nELSE\n"
                    "    HH_SHR := DWORD_TO_DINT(NOT SHR(NOT DINT_TO_DWORD(A), KK));\nEND_IF;",
-            "arithmetic shift right, count mod 32 (spec 6.7)", shift_locals),
+            "arithmetic shift right, count mod 32 (see docs/language.md#comparisons-shifts-and-bit-commands)", shift_locals),
         _fn("HH_BSET", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _COUNT_MOD_32 + "HH_BSET := DWORD_TO_DINT(DINT_TO_DWORD(A) OR SHL(DWORD#1, KK));", "BS (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BSET := DWORD_TO_DINT(DINT_TO_DWORD(A) OR SHL(DWORD#1, KK));", "BS (see docs/language.md#comparisons-shifts-and-bit-commands)", shift_locals),
         _fn("HH_BCLR", "DINT", [("A", "DINT"), ("K", "DINT")],
-            _COUNT_MOD_32 + "HH_BCLR := DWORD_TO_DINT(DINT_TO_DWORD(A) AND NOT SHL(DWORD#1, KK));", "BC (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BCLR := DWORD_TO_DINT(DINT_TO_DWORD(A) AND NOT SHL(DWORD#1, KK));", "BC (see docs/language.md#comparisons-shifts-and-bit-commands)", shift_locals),
         _fn("HH_BTEST", "BOOL", [("A", "DINT"), ("K", "DINT")],
-            _COUNT_MOD_32 + "HH_BTEST := (SHR(DINT_TO_DWORD(A), KK) AND 16#1) <> 0;", "BT (spec 6.8)", shift_locals),
+            _COUNT_MOD_32 + "HH_BTEST := (SHR(DINT_TO_DWORD(A), KK) AND 16#1) <> 0;", "BT (see docs/language.md#comparisons-shifts-and-bit-commands)", shift_locals),
         _fn("HH_BIT", "BOOL", [("A", "DINT"), ("K", "DINT")],
             "HH_BIT := (SHR(DINT_TO_DWORD(A), DINT_TO_INT(K)) AND 16#1) <> 0;", "bit K (0-31) of a word"),
         _fn("HH_LOWORD", "INT", [("V", "DINT")], "HH_LOWORD := WORD_TO_INT(DWORD_TO_WORD(DINT_TO_DWORD(V)));",
@@ -112,7 +112,7 @@ HELPER_DEPENDENCIES = MappingProxyType({"HH_DIV": ("HH_SUB",)})
 
 
 def timer_fb(semantics: Semantics) -> Pou:
-    """HH_TIMER: spec 9.2 exactly, cycle based; the options of A-34 decide the body."""
+    """HH_TIMER: the control's timer service exactly, cycle based; the options of A-34 decide the body."""
     restart = semantics["timer_restart_while_running"]
     consumed = semantics["timer_start_consumed"]
     cond = "START" if restart else "START AND REMAINING = 0"
@@ -124,11 +124,11 @@ def timer_fb(semantics: Semantics) -> Pou:
         VarSection("VAR_INPUT", (IecVar("PRESET", "DINT", comment="duration in PLC cycles (MP4110)"),)),
         VarSection("VAR_OUTPUT", (IecVar("RUNNING", "BOOL", comment="timer running operand"),)),
         VarSection("VAR", (IecVar("REMAINING", "DINT", comment="cycles left"),)),
-    ), body, comment="HEIDENHAIN timer service (spec 9.2, A-34): call once per cycle before the program logic")
+    ), body, comment="HEIDENHAIN timer service (A-34, see docs/language.md#timers-and-counters): call once per cycle before the program logic")
 
 
 def counter_fb(semantics: Semantics) -> Pou:
-    """HH_COUNTER: spec 10.2 exactly; the options of A-36 decide the body."""
+    """HH_COUNTER: the control's counter service exactly; the options of A-36 decide the body."""
     edges = semantics["counter_counts"] == "rising_edges"
     consumed = semantics["counter_start_consumed"]
     release = "RELEASE AND NOT LAST_RELEASE" if edges else "RELEASE"
@@ -141,4 +141,4 @@ def counter_fb(semantics: Semantics) -> Pou:
                                  IecVar("RELEASE", "BOOL", comment="release count pulse"))),
         VarSection("VAR_OUTPUT", (IecVar("RUNNING", "BOOL", comment="counter contents not zero"),)),
         VarSection("VAR", (IecVar("COUNT", "DINT"), IecVar("LAST_RELEASE", "BOOL"))),
-    ), body, comment="HEIDENHAIN counter service (spec 10.2, A-36): call once per cycle before the program logic")
+    ), body, comment="HEIDENHAIN counter service (A-36, see docs/language.md#timers-and-counters): call once per cycle before the program logic")

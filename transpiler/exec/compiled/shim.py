@@ -49,7 +49,7 @@ class UnknownModule(ValueError):
 
 
 class HandshakeTimeout(Exception):
-    """E-SIM-HANDSHAKE-TIMEOUT: an NC handshake did not complete within 10 s of simulated time (spec 17b.8)."""
+    """E-SIM-HANDSHAKE-TIMEOUT: an NC handshake did not complete within 10 s of simulated time."""
 
     code = "E-SIM-HANDSHAKE-TIMEOUT"
 
@@ -335,7 +335,7 @@ def _fields(value: Any, action: str, required: tuple[str, ...], optional: tuple[
 
 
 def _nc_args(action: str, value: Any) -> tuple[int, ...]:
-    """C arguments of a scenario nc action (scenario-format.md), validated."""
+    """C arguments of a scenario nc action (see docs/scenarios.md#nc-actions), validated."""
     def num(v: Any, what: str) -> int:
         return _int32(v, f"nc action {action!r}: {what}", NcActionError)
 
@@ -363,7 +363,7 @@ def _nc_args(action: str, value: Any) -> tuple[int, ...]:
 
 
 class NcModel(_Owned):
-    """The NC side of the strobe/acknowledge interface (spec 12.3), played from scenario nc actions.
+    """The NC side of the strobe/acknowledge interface, played from scenario nc actions.
 
     `first_cycle_marker` (A-38) is the marker pulsed in cycles 0 and 1 instead of M4172 (ITNC profile).
     """
@@ -456,7 +456,7 @@ class NcModel(_Owned):
 
 @dataclasses.dataclass(frozen=True)
 class ModuleInfo:
-    """One entry of the shared module table (spec 14.3): kind is 'unknown', 'stub' or 'modelled'."""
+    """One entry of the shared module table: kind is 'unknown', 'stub' or 'modelled'."""
 
     number: int
     kind: str

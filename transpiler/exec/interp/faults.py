@@ -1,4 +1,4 @@
-"""Runtime faults and warnings of the reference interpreter (spec 13.3) and the per-cycle report."""
+"""Runtime faults and warnings of the reference interpreter and the per-cycle report."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ class MachineConfigError(CompileFailed):
 
 
 class MachineHalted(RuntimeError):
-    """run_cycle after a runtime fault stopped the PLC program (spec 8.1)."""
+    """run_cycle after a runtime fault stopped the PLC program."""
 
 
 @dataclasses.dataclass(frozen=True)

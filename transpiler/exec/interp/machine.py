@@ -1,4 +1,4 @@
-"""The reference machine: cycle phases of spec 8.1 around the generated program code, runtime faults, coverage.
+"""The reference machine: the PLC cycle's phases around the generated program code, runtime faults, coverage.
 
 Co-simulation (issue 7) drives the phases one by one instead of run_cycle:
 
@@ -65,7 +65,7 @@ def normalize_mp(mp: Mapping[Any, Any] | None) -> dict[tuple[int, int], Decimal]
 
 
 class Machine:
-    """Cycle-accurate executor of a resolved program (spec sections 5-15)."""
+    """Cycle-accurate executor of a resolved program."""
 
     def __init__(self, program: Program, mp: Mapping[Any, Any] | None = None, cycle_time_ms: int | None = None, *,
                  coverage: bool = False, number_mp4111: int = 0, module_results: Mapping[int, Iterable[int]] | None = None,
@@ -185,7 +185,7 @@ class Machine:
 
     def run_cycle(self, cycle: int, stimulus_writes: Iterable[WriteLike] = (),
                   nc_actions: Iterable[Mapping[str, Any]] = ()) -> CycleReport:
-        """One PLC cycle (spec 8.1) after the scenario writes; faults stop the machine (see `halted`)."""
+        """One PLC cycle after the scenario writes; faults stop the machine (see `halted`)."""
         if self.halted:
             raise MachineHalted(f"the PLC program stopped after a runtime fault; cannot run cycle {cycle}")
         if cycle != self.next_cycle:

@@ -1,4 +1,4 @@
-"""Machine memory: the five bit spaces, byte memory with the profile byte order (B/W/D overlap), strings, access functions (spec 5.1-5.5)."""
+"""Machine memory: the five bit spaces, byte memory with the profile byte order (B/W/D overlap), strings, access functions."""
 
 from __future__ import annotations
 
@@ -119,7 +119,7 @@ class MachineState:
     def bits(self, kind: str) -> bytearray:
         return getattr(self, kind)
 
-    # ---- access functions of spec 5.5 (used by the machine API, not by generated code)
+    # ---- operand access functions (used by the machine API, not by generated code)
 
     def read_mem(self, kind: str, addr: int, signed: bool = True) -> int:
         size = MEM_WIDTH[kind]

@@ -1,4 +1,4 @@
-"""The submit-job queue of the simulation model (spec 15, ASSUMPTION A-45): identifiers, RPLY states, CAN, scheduling."""
+"""The submit-job queue of the simulation model (ASSUMPTION A-45): identifiers, RPLY states, CAN, scheduling."""
 
 from __future__ import annotations
 

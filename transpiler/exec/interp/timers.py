@@ -1,4 +1,4 @@
-"""Timer and counter service of cycle phase 3 (spec 9.2, 10.2); presets come from transpiler.presets (9.3)."""
+"""Timer and counter service of cycle phase 3; presets come from transpiler.language.presets."""
 
 from __future__ import annotations
 
