@@ -137,6 +137,7 @@ ERROR_CASES = [
     # CASE (6.15.1)
     ("case-body-instruction", {"main.src": "CASE B0\nCM A\nL I1\nENDC\nEM\nLBL A\nEM\n"}, [("E-CASE-BODY", "main.src", 3, 1)]),
     ("case-body-module", {"main.src": "CASE B0\nCM 9032\nENDC\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
+    ("module-unknown", {"main.src": "L I1\n  CMT 9999\nEM\n"}, [("E-MODULE-UNKNOWN", "main.src", 2, 3)]),
     ("case-body-label", {"main.src": "CASE B0\nLBL A\nENDC\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
     ("case-never-closed", {"main.src": "L I1\nCASE B0\nCM A\nEM\nLBL A\nEM\n"}, [("E-CASE-BODY", "main.src", 2, 1)]),
     ("case-endc-alone", {"main.src": "ENDC\nEM\n"}, [("E-STRUCT-NEST", "main.src", 1, 1)]),
@@ -184,7 +185,6 @@ WARNING_CASES = [
      [("E-MOD-UNREACHABLE", "m.src", 2, 1)]),
     ("sym-case", {"main.src": "#define /g a.def\nEM\n", "a.def": "MG_a M 1\nMG_A M 2\n"}, [("E-SYM-CASE", "a.def", 2, 1)]),
     ("def-dup-addr", {"main.src": "#define /g a.def\nEM\n", "a.def": "I_a I 5\nI_b I 5\n"}, [("E-DEF-DUP-ADDR", "a.def", 2, 1)]),
-    ("module-unknown", {"main.src": "L I1\n  CMT 9999\nEM\n"}, [("E-MODULE-UNKNOWN", "main.src", 2, 3)]),
 ]
 
 

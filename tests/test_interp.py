@@ -397,18 +397,12 @@ def test_module_results_errors_and_overrides(tmp_path: Path) -> None:
     assert m.read("D", 24) == 3600       # scenario override of module 9192
 
 
-def test_unknown_module_runs_as_a_stub_with_one_warning(tmp_path: Path) -> None:
-    m = machine(tmp_path, """
-        PS  K1
-        CM  9888
-        PL  D0
-        EM
-    """)
-    reports = cycles(m, 2)
-    assert not any(r.faults for r in reports)
-    assert [(w.code, w.span.line) for r in reports for w in r.warnings] == [("E-RT-MODULE", 2)]
-    assert m.unknown_modules == {9888: 2}
-    assert m.read("D", 0) == 1           # the stub took no parameters, so PL got the pushed value
+def test_unknown_module_is_a_compile_error_naming_the_nearest(tmp_path: Path) -> None:
+    (tmp_path / "main.src").write_text("PS  K1\nCM  9888\nPL  D0\nEM\n", encoding="latin-1")
+    result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("tv"))
+    [diag] = result.diagnostics.errors
+    assert (diag.code, diag.span.line) == ("E-MODULE-UNKNOWN", 2)
+    assert "nearest known: 9263, 9264, 9429" in diag.message
 
 
 def test_module_9006_starts_an_additional_timer(tmp_path: Path) -> None:

@@ -123,7 +123,8 @@ CODES: dict[str, CodeInfo] = {
         _c("E-CALL-RECURSION", "error", "recursive subprogram calls", "LBL A\nCM A\nEM"),
         _c("E-CALL-DEPTH", "error", "static call depth exceeds the limit",
            "CM  F1\nEM\nLBL F1\nCM  F2\nEM\n; ... F2 calls F3, ..., F32 calls F33: 33 levels"),
-        _c("E-MODULE-UNKNOWN", "warning", "a PLC module number without a model; it runs as a stub (A-46)", "CM 9999"),
+        _c("E-MODULE-UNKNOWN", "error", "a PLC module number the module table does not have (for this profile); the "
+           "message names the nearest known numbers (docs/modules.md)", "CM 9999"),
         # lints
         _c("W-LINT", "warning", "the program depends on a corner of the semantics (spec [LINT])", "L I1\n= O1\nA I2"),
         # runtime (interpreter)

@@ -12,7 +12,7 @@ from transpiler.frontend.opcodes import (ARITH, BIT_GROUPS, COMPARES, GATE_AS_LO
 from transpiler.frontend.operands import label_text
 from transpiler.frontend.structure import StructureMatcher
 from transpiler.ir import Bracket, CallTarget, Op, Operand
-from transpiler.language.modules import MODULES
+from transpiler.language.modules import MODULES, nearest
 from transpiler.language.semantics import Semantics
 
 Lowered = tuple[Op | None, bool, str]        # the op (None: rejected), then chain_open and last_acc after it
@@ -174,9 +174,12 @@ class ChainLowering:
             if not 9000 <= number <= 9999:
                 self.diags.report("E-SYNTAX", span, f"PLC module numbers are 9000-9999, not {number}")
                 return None, s.chain_open, s.last_acc
-            if number not in MODULES:
-                self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} has no model; "
-                                   "it runs as a stub without parameters or results (A-46)")
+            profile = self.semantics.profile.name
+            if number not in MODULES or profile not in MODULES[number].profiles:
+                known = ", ".join(map(str, nearest(number)))
+                where = "in the module table" if number not in MODULES else f"a module of profile {profile}"
+                self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} is not {where} "
+                                  f"(nearest known: {known}; see docs/modules.md)")
             return Op(code, call=CallTarget(module=number), **base), False, "NONE"
         self.pending_calls.append((s.index, label_text(s.instr.operand), span))
         return Op(code, **base), False, "NONE"
