@@ -133,6 +133,8 @@ class Program:
     inactive_regions: tuple = ()
     auto_assigned: tuple[Symbol, ...] = ()
     line_count: int = 0
+    config_file: str | None = None                      # the configuration read (display path), if any
+    command_line_defines: tuple[tuple[str, object], ...] = ()   # the -D values, in name order
 
     @property
     def main(self) -> FileCode:

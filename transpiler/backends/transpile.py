@@ -36,5 +36,5 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     if "xml" in formats:
         files["project.xml"] = render_xml(project)
     files["report.md"] = render_report(program, result, diags, mp_name).encode("utf-8")
-    files["io_map.csv"] = render_io_map(result, mp_name).encode("utf-8")
+    files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

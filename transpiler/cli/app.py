@@ -12,7 +12,7 @@ from typing import Sequence
 from transpiler import __version__, api
 from transpiler.cli import equiv, simulate, transpile
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
-                                   options_from_args, print_diagnostics, semantics_from_args)
+                                   diagnostics_json, options_from_args, print_diagnostics, semantics_from_args)
 from transpiler.diagnostics import CODES, NO_SPAN, CompileFailed, explain
 from transpiler.frontend.pipeline import CompileResult
 from transpiler.language.semantics import ASSUMPTION_BY_KEY, ASSUMPTIONS, PROFILES, Assumption
@@ -61,6 +61,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     print_diagnostics(result.diagnostics.items)
     data = summary(result)
     if args.json:
+        data["diagnostics"] = diagnostics_json(result.diagnostics.items)
         print(json.dumps(data, indent=2, sort_keys=True))
     else:
         print(f"hh2iec check: {args.main}")

@@ -71,3 +71,9 @@ def print_diagnostics(items: Iterable[Diagnostic], stream=None) -> None:
     stream = stream or sys.stderr
     for d in items:
         print(d.render(), file=stream)
+
+
+def diagnostics_json(items: Iterable[Diagnostic]) -> list[dict]:
+    """Every diagnostic as data for `--json`: code, severity, file, line, col, message and notes."""
+    return [{"code": d.code, "severity": d.severity.value, "file": d.span.file, "line": d.span.line,
+             "col": d.span.col, "message": d.message, "notes": list(d.notes)} for d in items]

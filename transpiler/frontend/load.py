@@ -36,6 +36,7 @@ class ParsedProject:
     symbols_incomplete: frozenset[str] = frozenset()
     labels_incomplete: bool = False
     number_mp4111: int | None = None     # DEFINE NUMBERMP4111 of the configuration (A-37), when set
+    config_file: str | None = None       # display path of the configuration read
 
 
 MAX_NUMBER_MP4111 = 904             # T96 ... T999
@@ -82,6 +83,7 @@ class _Loader:
         self.symbols_incomplete: set[str] = set()
         self.labels_incomplete = False
         self._def_missing = False       # set by _load_def when a file of the current request is unreadable
+        self.config_file: str | None = None
 
     def _read(self, path: Path, at: Span) -> SourceText | None:
         text = read_source(path, self.folders, at, self.diags, self.options.encoding)
@@ -114,6 +116,7 @@ class _Loader:
             # path is relative to the main folder when it lies inside it, as for every other file.
             cfg_text = self._read(cfg, NO_SPAN)
             if cfg_text is not None:
+                self.config_file = cfg_text.display
                 read_config(cfg_text.display, cfg_text.lines, self.defines, self.diags, self.parsers.pp)
         elif opts.use_default_cfg:
             self.defines.no_config = True     # (a caller that turned the default off wants warnings only)
@@ -155,7 +158,8 @@ class _Loader:
         unused_overrides(self.defines, self.diags)
         return ParsedProject(tuple(src_files), tuple(global_defs), {k: tuple(v) for k, v in local_defs.items()},
                              dict(self.defines.values), tuple(self.inactive), tuple(self.files_read), self.line_count,
-                             frozenset(self.symbols_incomplete), self.labels_incomplete, number_mp4111)
+                             frozenset(self.symbols_incomplete), self.labels_incomplete, number_mp4111,
+                             self.config_file)
 
     def _number_mp4111(self) -> int | None:
         """DEFINE NUMBERMP4111 = n of the configuration (OEM.SYS's setting), checked against T96 ... T999."""

@@ -47,7 +47,7 @@ def compile_project(options: ProjectOptions, semantics: Semantics, diags: Diagno
         parsed = load_project(options, semantics, diags, parsers)
         if not parsed.src_files:
             return CompileResult(None, diags)
-        program = resolve(parsed, project_semantics(semantics, parsed), diags)
+        program = resolve(parsed, project_semantics(semantics, parsed), diags, options.defines)
     if options.werror and diags.warnings and not diags.has_errors():
         diags.report("E-WERROR", NO_SPAN, f"{len(diags.warnings)} warning(s) and --werror")
     return CompileResult(program, diags)

@@ -7,6 +7,8 @@ graph) and `flow` (successors, subprogram bodies, fall-off and unreachable check
 
 from __future__ import annotations
 
+from typing import Mapping
+
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.calls import call_graph, exports_of, link
 from transpiler.frontend.flow import (LOST_LINE_CODES, check_flow, check_module_starts, flow_is_complete, routine_body,
@@ -20,7 +22,10 @@ from transpiler.language.semantics import Semantics
 __all__ = ["resolve", "routine_body", "successors"]
 
 
-def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) -> Program:
+def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics,
+            overrides: Mapping[str, object] | None = None) -> Program:
+    """The resolved program; `overrides` are the command line's -D values, recorded for the report."""
+    overrides = overrides or {}
     symbols, auto = build_symbols(project, semantics, diags)
     lowerings = [FileLowering(i, src, symbols, semantics, diags) for i, src in enumerate(project.src_files)]
     for low in lowerings:
@@ -37,4 +42,5 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics) ->
     routines, depth = call_graph(files, semantics, diags)
     modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
     return Program(files, symbols.all_symbols(), semantics, routines, depth, tuple(modules), project.files_read,
-                   dict(project.defines), project.inactive, tuple(auto), project.line_count)
+                   dict(project.defines), project.inactive, tuple(auto), project.line_count, project.config_file,
+                   tuple(sorted(overrides.items())))

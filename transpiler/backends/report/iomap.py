@@ -24,6 +24,17 @@ class MapRow:
     iec_type: str
     direction: str
     comment: str = ""
+    address: str = ""          # the IEC located address (%IX0.3, %QX1.0) of a process-image operand
+
+
+def iec_address(operand: str) -> str:
+    """The located address the ST declares an input or output at: bit n of the process image is byte n div 8,
+    bit n mod 8 (%IX for I, %QX for O); '' for every other operand. CODESYS, TwinCAT and OpenPLC use this form."""
+    m = re.fullmatch(r"([IO])(\d+)", operand)
+    if m is None:
+        return ""
+    addr = int(m.group(2))
+    return f"%{'IX' if m.group(1) == 'I' else 'QX'}{addr // 8}.{addr % 8}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,13 +141,14 @@ class IoMap:
         need = {"symbol", "operand", "iec_variable", "iec_type", "direction"}
         if reader.fieldnames is None or not need <= set(reader.fieldnames):
             raise ValueError(f"io_map.csv needs the columns {', '.join(sorted(need))}")
-        return cls(MapRow(r["symbol"], r["operand"], r["iec_variable"], r["iec_type"], r["direction"], r.get("comment", ""))
+        return cls(MapRow(r["symbol"], r["operand"], r["iec_variable"], r["iec_type"], r["direction"], r.get("comment", ""),
+                          r.get("iec_address") or "")
                    for r in reader)
 
     def to_csv(self) -> str:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(["symbol", "operand", "iec_variable", "iec_type", "direction", "comment"])
+        w.writerow(["symbol", "operand", "iec_variable", "iec_address", "iec_type", "direction", "comment"])
         for r in self.rows:
-            w.writerow([r.symbol, r.operand, r.iec, r.iec_type, r.direction, r.comment])
+            w.writerow([r.symbol, r.operand, r.iec, r.address, r.iec_type, r.direction, r.comment])
         return buf.getvalue()

@@ -5,20 +5,33 @@ everything not translated."""
 from __future__ import annotations
 
 from transpiler.backends.iec_model import Pou
-from transpiler.backends.report.iomap import IoMap, MapRow
+from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
 from transpiler.backends.st.backend import StResult
 from transpiler.backends.st.liveness import use_def
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 
 
-def io_map_of(result: StResult, mp_file: str | None = None) -> IoMap:
-    """Operand rows in a stable order, then one row per timer/counter preset variable (naming `mp_file`, the
-    machine parameters its initial value comes from)."""
+def configuration_text(program: Program) -> str:
+    """The configuration a translation was made with: the configuration file, the -D values, NUMBERMP4111."""
+    parts = [program.config_file if program.config_file else "no configuration file"]
+    if program.command_line_defines:
+        parts.append("-D " + ", ".join(f"{name}={value!r}" if isinstance(value, str) else f"{name}={value}"
+                                         for name, value in program.command_line_defines))
+    if program.semantics["number_mp4111"]:
+        parts.append(f"NUMBERMP4111 = {program.semantics['number_mp4111']}")
+    return "; ".join(parts)
+
+
+def io_map_of(result: StResult, mp_file: str | None = None, program: Program | None = None) -> IoMap:
+    """Operand rows in a stable order (inputs and outputs with their IEC address), then one row per timer/counter
+    preset variable (naming `mp_file`, the machine parameters its initial value comes from), then, given the
+    `program`, one row naming the configuration the translation was made with."""
     def order(r):
         digits = r.operand[1:]
         return (r.operand[0], int(digits) if digits.isdigit() else 0)
-    rows = [MapRow(r.symbol, r.operand, r.iec, r.iec_type, r.direction, r.comment)
+    rows = [MapRow(r.symbol, r.operand, r.iec, r.iec_type, r.direction, r.comment,
+                   iec_address(r.operand) if "[" not in r.iec else "")
             for r in sorted(result.layout.rows, key=order)]
     layout = result.layout
     order_tag = "LE" if layout.little else "BE"
@@ -31,11 +44,13 @@ def io_map_of(result: StResult, mp_file: str | None = None) -> IoMap:
     for (number, index), name in sorted(result.preset_vars.items()):
         source = f"from {mp_file}" if mp_file else "no machine-parameter file: 0"
         rows.append(MapRow("", f"MP{number}.{index}", name, "DINT", "parameter", f"preset in PLC cycles ({source})"))
+    if program is not None:
+        rows.append(MapRow("", "CONFIG", "", "", "configuration", configuration_text(program)))
     return IoMap(rows)
 
 
-def render_io_map(result: StResult, mp_file: str | None = None) -> str:
-    return io_map_of(result, mp_file).to_csv()
+def render_io_map(result: StResult, mp_file: str | None = None, program: Program | None = None) -> str:
+    return io_map_of(result, mp_file, program).to_csv()
 
 
 def user_pous(result: StResult) -> list[Pou]:
@@ -73,6 +88,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
                   f"{len(result.untranslated)} places were left out (--allow-untranslated); the ST does not do what "
                   "the original does there, and no equivalence check can prove it does:", ""]
         lines += _not_translated(result) + [""]
+    lines += [f"Configuration: {configuration_text(program)}.", ""]
     if mp_file:
         lines += [f"Machine parameters: `{mp_file}` (timer and counter presets).", ""]
     elif any(result.presets.values()):
@@ -94,10 +110,12 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += ["", "### State-machine fallbacks (irreducible control flow)", ""]
         for f in result.fallbacks:
             lines.append(f"- `{f.pou}` at {f.span}: {f.reason}")
-    lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | type | direction |", "|---|---|---|---|---|"]
+    lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
+              "|---|---|---|---|---|---|"]
     for r in result.layout.rows:
         if r.operand[0] in "IO":
-            lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.iec_type} | {r.direction} |")
+            address = iec_address(r.operand) if "[" not in r.iec else "(indexed: array element)"
+            lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {address} | {r.iec_type} | {r.direction} |")
     lines += ["", "## NC interface operands used", "", "| symbol | operand | IEC variable | direction |", "|---|---|---|---|"]
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
@@ -122,4 +140,53 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += [f"- {r.file}:{r.first_line}-{r.last_line} (`{r.condition}`)" for r in program.inactive_regions] or ["none"]
     lines += ["", "## Warnings", ""]
     lines += [f"- {d.render()}" for d in diags.warnings] or ["none"]
+    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file)
     return "\n".join(lines) + "\n"
+
+
+# Assumptions whose choice changes what a program using the construct does: confirm them on the machine.
+_CONFIRM_BY_USE = (
+    ("timers", ("A-32", "A-34a", "A-34b", "A-35")),
+    ("counters", ("A-36a", "A-36b")),
+    ("CASE", ("A-24",)),
+    ("arithmetic", ("A-09", "A-10", "A-11")),
+    ("word loads and stores", ("A-06", "A-08", "A-42")),
+)
+
+
+def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list[str]:
+    """What a porting engineer does with this output: wire the I/O, provide the NC interface and the PLC task,
+    confirm the assumptions the program depends on, and what is still open."""
+    rows = result.layout.rows
+    inputs = sum(1 for r in rows if r.operand[0] == "I")
+    outputs = sum(1 for r in rows if r.operand[0] == "O")
+    nc = [r for r in rows if r.direction in ("nc_to_plc", "plc_to_nc")]
+    codes = {op.code for f in program.files for op in f.ops}
+    used = {"timers": bool(result.timers), "counters": bool(result.counters), "CASE": "CASE" in codes,
+            "arithmetic": bool(codes & {"ADD", "SUB", "MUL", "DIV", "MOD"}),
+            "word loads and stores": bool(codes & {"WLD", "WST"})}
+    steps = [f"- Wire the process image: {inputs} inputs (`%IX`) and {outputs} outputs (`%QX`) are declared at the "
+             "IEC addresses of the I/O map above (column `iec_address` of io_map.csv; byte = HEIDENHAIN address div 8, "
+             "bit = address mod 8). Map them onto the target's I/O modules; the comments name the original terminals.",
+             f"- Provide the NC interface: the target must write the {sum(r.direction == 'nc_to_plc' for r in nc)} "
+             f"NC-to-PLC variables before each PLC cycle and read the {sum(r.direction == 'plc_to_nc' for r in nc)} "
+             "PLC-to-NC variables after it (section NC interface operands used; docs/import.md describes the `HH_` "
+             "interface).",
+             f"- Run the main POU in a cyclic task of {program.semantics['cycle_time_ms']} ms: timer presets are "
+             "counted in PLC cycles of this length."]
+    if result.preset_vars and not mp_file:
+        steps.append("- Give the machine-parameter file (--mp): without one every timer and counter preset is 0.")
+    confirm = sorted({aid for feature, ids in _CONFIRM_BY_USE if used[feature] for aid in ids})
+    changed = [aid for aid, _, _, is_default in program.semantics.describe() if not is_default]
+    if confirm or changed:
+        ids = ", ".join(sorted(set(confirm) | set(changed)))
+        steps.append(f"- Confirm on the machine the assumptions this program depends on: {ids} (section Assumptions "
+                     "applied; docs/assumptions.md says what each means and how to switch it with -S).")
+    if _target_limits(program):
+        steps.append("- Check the target limits above on the chosen target (string lengths).")
+    if result.untranslated:
+        steps.append(f"- Translate by hand the {len(result.untranslated)} places left out (section Not translated).")
+    if result.fallbacks:
+        steps.append(f"- Review the {len(result.fallbacks)} state-machine fallbacks: correct, but less readable.")
+    steps.append("- Prove the port: `hh2iec equiv` with scenarios of the machine's sequences (docs/scenarios.md).")
+    return steps
