@@ -31,6 +31,7 @@ from transpiler.language.semantics import Semantics, SemanticsError, make_semant
 
 if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
     from transpiler.verify.equiv import EquivalenceResult
+    from transpiler.verify.mutate import MutationResult
     from transpiler.verify.scenario import Scenario
     from transpiler.verify.simulate import SimulationResult
 
@@ -314,3 +315,85 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))
+
+
+@dataclasses.dataclass(frozen=True)
+class Mutation:
+    """The mutation analysis: every judged mutant, the score, and the ST text the mutants were made from."""
+
+    result: "MutationResult"
+    st_text: str
+    backend_note: str
+    diagnostics: tuple[Diagnostic, ...]
+
+
+def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
+           backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
+           equivalent_file: Path | None = None,
+           progress: Callable[[int, int], None] | None = None) -> Mutation:
+    """Mutants of the emitted ST judged by co-simulation under the scenarios and `random_cycles` of
+    coverage-guided stimulus (see verify/mutate.py); `count` > 0 judges a seeded sample spread over the
+    operators; `equivalent_file` lists mutants judged equivalent, which leave the denominator. Raises CompileFailed
+    on bad input, or when the unmutated translation is not equivalent under the stimulus."""
+    import os
+    import tempfile
+    import time
+    from transpiler.backends.st.check import find_iec2c
+    from transpiler.verify.cosim import builtin_side_factory
+    from transpiler.verify.equiv import choose_backend
+    from transpiler.verify.guided import generate
+    from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
+                                          judge_all, load_equivalents, mutation_sites)
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import project_names
+    from transpiler.exec.interp import compile_program
+    scenarios = [Path(p) for p in scenarios]
+    if not scenarios and random_cycles <= 0:
+        raise _usage("mutate needs at least one --scenario or --random-cycles N")
+    for path in [*scenarios, *([Path(equivalent_file)] if equivalent_file else [])]:
+        if not path.is_file():
+            raise _usage(f"file '{path}' does not exist")
+    equivalents = load_equivalents(Path(equivalent_file)) if equivalent_file else []
+    mp_path, mp, transpiled, diags = _translate(project, {"st"}, mp_file, False)
+    st_text, iec = transpiled.st_text, transpiled.result.project
+    chosen = choose_backend(backend, st_text, "project.st", iec)
+    if chosen.factory is None:
+        raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
+    if chosen.name == "matiec":
+        from transpiler.exec.compiled.matiec_side import matiec_side_factory
+        iec2c = find_iec2c()
+        side_factory = lambda text: matiec_side_factory(text, iec, iec2c)  # noqa: E731
+    else:
+        side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
+    names = project_names(project.program)
+    loaded = [load_scenario(path, names) for path in scenarios]
+    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
+    judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
+                  st_text, side_factory, compile_program(project.program), mp)
+    saved_cache = os.environ.get("HH2IEC_CACHE")
+    with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
+        # Mutant libraries are throw-away: they stay out of the user's build cache.
+        os.environ["HH2IEC_CACHE"] = cache
+        try:
+            problems = baseline_problems(judge)
+            if problems:
+                raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
+                             "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
+            sites = mutation_sites(st_text)
+            mutants = choose(sites, count, seed)
+            start = time.perf_counter()
+            verdicts = []
+            for verdict in judge_all(judge, mutants, jobs):
+                verdicts.append(verdict)
+                if progress is not None:
+                    progress(len(verdicts), len(mutants))
+            seconds = time.perf_counter() - start
+        finally:
+            if saved_cache is None:
+                os.environ.pop("HH2IEC_CACHE", None)
+            else:
+                os.environ["HH2IEC_CACHE"] = saved_cache
+    verdicts.sort(key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
+    verdicts, unmatched = apply_equivalents(verdicts, equivalents)
+    result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched)
+    return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -1,0 +1,112 @@
+"""`hh2iec mutate` (verify/mutate.py): mutation sites, judging, judged-equivalent files, reports and exit codes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from transpiler.cli.app import main
+from transpiler.diagnostics import CompileFailed
+from transpiler.verify.mutate import (EQUIVALENT, KILLED, SURVIVED, Mutant, MutationResult, Verdict,
+                                      apply_equivalents, load_equivalents, mutation_sites)
+
+ROOT = Path(__file__).resolve().parents[1]
+TIMERS = ROOT / "samples" / "constructs" / "timers"
+
+ST = """PROGRAM Main
+VAR
+    a : BOOL;
+    b : BOOL;
+    n : INT;
+END_VAR
+    a := NOT b AND TRUE; (* main.src:3 *)
+    IF n >= 24 THEN (* main.src:5 *)
+        n := 0;
+    END_IF;
+    CASE n OF
+        1: a := TRUE;
+        2: a := FALSE;
+    END_CASE;
+END_PROGRAM
+FUNCTION_BLOCK HH_LIB
+VAR
+    q : BOOL;
+END_VAR
+    q := TRUE;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_sites_cover_every_operator_and_leave_the_library_alone():
+    sites = mutation_sites(ST)
+    assert {m.operator for m in sites} == {"drop_statement", "and_or", "negation", "constant", "comparison",
+                                           "swap_case"}
+    assert all(m.pou == "Main" for m in sites)
+    lost = next(m for m in sites if m.operator == "drop_statement" and m.line == 9)
+    assert "n := n;" in lost.apply(ST).splitlines()[8]
+    comparison = next(m for m in sites if m.operator == "comparison")
+    assert "IF n > 24 THEN" in comparison.apply(ST)
+    swap = next(m for m in sites if m.operator == "swap_case")
+    text = swap.apply(ST).splitlines()
+    assert text[11].strip().startswith("2: a := TRUE") and text[12].strip().startswith("1: a := FALSE")
+    constants = {m.description.split(" at")[0] for m in sites if m.operator == "constant" and m.line == 8}
+    assert constants == {"24 -> 25", "24 -> 23"}
+
+
+def _verdict(mutant: Mutant, outcome: str) -> Verdict:
+    return Verdict(mutant, outcome, "", 0.0)
+
+
+def test_judged_equivalent_file_takes_survivors_out_of_the_denominator(tmp_path):
+    sites = mutation_sites(ST)
+    survivor, killed = sites[0], sites[1]
+    entry = tmp_path / "eq.yaml"
+    entry.write_text(f"- pou: {survivor.pou}\n  operator: {survivor.operator}\n"
+                     f"  mutation: '{survivor.description}'\n  st: '{survivor.original}'\n"
+                     f"  reason: the value written is the one already there\n"
+                     f"- pou: Main\n  operator: {killed.operator}\n  mutation: '{killed.description}'\n"
+                     f"  st: '{killed.original}'\n  reason: wrong judgement\n")
+    judged = load_equivalents(entry)
+    verdicts, unmatched = apply_equivalents([_verdict(survivor, SURVIVED), _verdict(killed, KILLED)], judged)
+    assert [v.outcome for v in verdicts] == [EQUIVALENT, KILLED]
+    assert verdicts[0].by == "the value written is the one already there"
+    assert [u.mutation for u in unmatched] == [killed.description]     # a killed 'equivalent' is reported
+    result = MutationResult(verdicts, 2, [], "builtin", 0.0, unmatched)
+    assert result.denominator == 1 and result.score == 1.0
+
+
+def test_a_malformed_equivalent_file_is_an_error_at_its_entry(tmp_path):
+    bad = tmp_path / "eq.yaml"
+    bad.write_text("- pou: Main\n  operator: comparison\n  mutation: x\n  st: y\n")
+    with pytest.raises(CompileFailed) as err:
+        load_equivalents(bad)
+    assert err.value.diagnostics[0].code == "E-USAGE" and err.value.diagnostics[0].span.line == 1
+
+
+def test_mutate_cli_on_the_timers_construct_reports_survivors_score_and_exit_code(tmp_path, capsys):
+    report, junit = tmp_path / "m.json", tmp_path / "m.xml"
+    args = ["mutate", str(TIMERS / "main.src"), "--scenario", str(TIMERS / "scenario.yaml"), "--random-cycles",
+            "200", "--backend", "builtin", "--count", "8", "--jobs", "2", "--report", str(report), "--junit",
+            str(junit)]
+    code = main([*args, "--min-score", "0"])
+    out = capsys.readouterr().out
+    data = json.loads(report.read_text())
+    assert code == 0 and len(data["mutants"]) == 8
+    assert data["counts"]["killed"] >= 1
+    assert "hh2iec mutate: score" in out
+    for m in data["mutants"]:
+        assert m["outcome"] in ("killed", "survived", "invalid", "error")
+        if m["outcome"] == "survived":
+            assert f"SURVIVED: {m['where']}" in out and f"ST line {m['st_line']}" in m["where"]
+    assert junit.read_text().count("<testcase") == 8
+    # the same run demanding a perfect score fails unless every mutant was killed
+    strict = main([*args, "--min-score", "1"])
+    capsys.readouterr()
+    assert strict == (0 if data["counts"]["killed"] == 8 - data["counts"]["invalid"] else 1)
+
+
+def test_mutate_cli_bad_input_exits_2_without_traceback(tmp_path, capsys):
+    code = main(["mutate", str(TIMERS / "main.src"), "--scenario", str(tmp_path / "none.yaml")])
+    assert code == 2 and "does not exist" in capsys.readouterr().err

@@ -1,0 +1,99 @@
+"""The `mutate` subcommand: how strong is the evidence? Mutants of the emitted ST judged by co-simulation."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+from transpiler import api
+from transpiler.atomic import write_files_atomically
+from transpiler.cli.common import EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+
+DEFAULT_MIN_SCORE = 0.9
+
+
+def register(sub: argparse._SubParsersAction, common) -> None:
+    p = sub.add_parser("mutate", help="mutate the emitted ST and report how many mutants the scenarios kill")
+    common(p)
+    p.add_argument("--scenario", type=Path, action="append", default=[], help="scenario file (repeatable)")
+    p.add_argument("--random-cycles", type=int, default=2000, metavar="N",
+                   help="cycles of coverage-guided generated stimulus on top of the scenarios (default 2000)")
+    p.add_argument("--seed", type=int, default=1, metavar="S", help="seed of the generated stimulus and of --count")
+    p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto")
+    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, metavar="J", help="mutants judged in parallel")
+    p.add_argument("--count", type=int, default=0, metavar="N",
+                   help="judge a seeded sample of N mutants spread over the operators (default: all)")
+    p.add_argument("--equivalent", type=Path, metavar="FILE",
+                   help="YAML list of mutants judged equivalent, each with its reason (left out of the score)")
+    p.add_argument("--min-score", type=float, default=DEFAULT_MIN_SCORE, metavar="F",
+                   help=f"exit 0 when killed / (non-equivalent mutants) reaches F (default {DEFAULT_MIN_SCORE})")
+    p.add_argument("--mp", type=Path, help="machine-parameter file used for the transpilation's preset defaults")
+    p.add_argument("--report", type=Path, metavar="OUT.json")
+    p.add_argument("--junit", type=Path, metavar="OUT.xml")
+    p.add_argument("--survivors", type=Path, metavar="OUT.yaml",
+                   help="write the survivors in the --equivalent format, for judging")
+    p.set_defaults(handler=cmd_mutate)
+
+
+def cmd_mutate(args: argparse.Namespace) -> int:
+    from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, OPERATORS, OUTCOMES, SURVIVED,
+                                          equivalents_yaml, report_json, report_junit, survivor_location)
+    if not args.scenario and args.random_cycles <= 0:
+        raise UsageError("mutate needs at least one --scenario or --random-cycles N")
+    if args.jobs < 1:
+        raise UsageError("--jobs must be at least 1")
+    if not 0.0 <= args.min_score <= 1.0:
+        raise UsageError("--min-score is a fraction between 0 and 1")
+    for path in [*args.scenario, *([args.equivalent] if args.equivalent else [])]:
+        if not path.is_file():
+            raise UsageError(f"file '{path}' does not exist")
+    project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
+    print_diagnostics(project.diagnostics)
+    run = api.mutate(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
+                     backend=args.backend, mp_file=args.mp, jobs=args.jobs, count=args.count,
+                     equivalent_file=args.equivalent, progress=_progress())
+    print_diagnostics(run.diagnostics)
+    if run.backend_note:
+        print(f"note: {run.backend_note}", file=sys.stderr)
+    result = run.result
+    print(f"{result.sites} mutation sites; {len(result.verdicts)} mutants judged on the {result.backend} backend "
+          f"under {len(result.scenarios)} scenarios (shortest first, until one diverges) in {result.seconds:.0f} s")
+    print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>11}" for o in OUTCOMES))
+    for op in OPERATORS:
+        mine = [v for v in result.verdicts if v.mutant.operator == op]
+        print(f"{op:<16}{len(mine):>8}" + "".join(f"{sum(1 for v in mine if v.outcome == o):>11}" for o in OUTCOMES))
+    for outcome, title in ((SURVIVED, "SURVIVED"), (ERROR, "ERROR (only exceptions, no divergence)"),
+                           (INVALID, "invalid (the mutated ST was rejected)"), (EQUIVALENT, "judged equivalent")):
+        for v in (v for v in result.verdicts if v.outcome == outcome):
+            why = f" -- {v.by}" if v.by else ""
+            print(f"{title}: {survivor_location(run.st_text, v.mutant)}: {v.mutant.operator}: "
+                  f"{v.mutant.description}: {v.mutant.original}{why}")
+    for e in result.unmatched_equivalents:
+        print(f"{e.span}: note: judged equivalent, but no surviving mutant matches it (killed or gone): "
+              f"{e.pou}: {e.mutation}: {e.st}")
+    met = result.score >= args.min_score and result.denominator > 0
+    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
+          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
+          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
+    files = {}
+    if args.report:
+        files[args.report] = report_json(result, run.st_text)
+    if args.junit:
+        files[args.junit] = report_junit(result, run.st_text)
+    if args.survivors:
+        files[args.survivors] = equivalents_yaml(result.verdicts)
+    write_files_atomically(files)
+    return EXIT_OK if met else EXIT_FAILED
+
+
+def _progress():
+    start = time.perf_counter()
+
+    def show(done: int, total: int) -> None:
+        if sys.stderr.isatty():
+            end = "\n" if done == total else ""
+            print(f"\rmutate: {done}/{total} judged ({time.perf_counter() - start:.0f} s)", end=end, file=sys.stderr)
+    return show

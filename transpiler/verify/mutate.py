@@ -1,0 +1,421 @@
+"""Mutation analysis of the evidence: how much can the scenarios (and the generated stimulus) catch?
+
+Mutants of the emitted ST, each one place in the body of one translated POU changed (the emitted HH_* library is
+left alone): an assignment or call that loses its effect, AND<->OR, a negation dropped, TRUE<->FALSE, an
+integer constant +-1, a comparison operator replaced, two neighbouring CASE branches swapped. Each mutant is
+judged by the same co-simulation as `equiv`, shortest scenario first: it is KILLED by a divergence, an operand
+missing in the translation, or a fault of the translated side (what `equiv` calls NOT EQUIVALENT); ST the
+executor rejects makes it INVALID (excluded); a mutant whose runs end only in harness exceptions is an ERROR
+(never a kill); else it SURVIVED. A file of judged-equivalent mutants (each with its reason) takes those out of
+the denominator: score = killed / (killed + survived + error - judged equivalent)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import multiprocessing
+import random
+import re
+import time
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Callable, Iterator, Mapping
+from xml.sax.saxutils import quoteattr
+
+import yaml
+
+from transpiler.backends.report.iomap import IoMap
+from transpiler.diagnostics import CompileFailed, Diagnostic, Span
+from transpiler.exec.interp import CompiledProgram
+from transpiler.exec.st_lines import st_origin
+from transpiler.ir import Program
+from transpiler.verify.cosim import StSide, cosimulate
+from transpiler.verify.scenario import NameTable, Scenario
+
+KILLED, SURVIVED, INVALID, ERROR, EQUIVALENT = "killed", "survived", "invalid", "error", "equivalent"
+OUTCOMES = (KILLED, SURVIVED, EQUIVALENT, ERROR, INVALID)
+OPERATORS = ("drop_statement", "and_or", "negation", "constant", "comparison", "swap_case")
+
+POU_START = re.compile(r"^(FUNCTION_BLOCK|PROGRAM|FUNCTION)\s+(\w+)")
+POU_END = re.compile(r"^END_(FUNCTION_BLOCK|PROGRAM|FUNCTION)\b")
+COMMENT = re.compile(r"\(\*.*?\*\)")
+ASSIGNMENT = re.compile(r"^(\s*)([\w.\[\] +-]+?)\s*:=.*;\s*$")
+CALL = re.compile(r"^\s*\w+\(\);\s*$")
+CASE_LABEL = re.compile(r"^(\s*)(\d+)(\s*:)")
+INTEGER = re.compile(r"(?<![\w#.])\d+(?![\w#.])")
+COMPARISONS = MappingProxyType({"<>": "=", "<=": "<", ">=": ">", "=": "<>", "<": "<=", ">": ">="})
+COMPARISON = re.compile(r"<>|<=|>=|(?<![:<>])=|<(?![>=])|>(?!=)")
+
+
+@dataclasses.dataclass(frozen=True)
+class Mutant:
+    """One mutation: the changed lines (0-based index -> new text, None = deleted) of the ST text."""
+
+    operator: str
+    line: int                                   # 1-based line of the ST text
+    pou: str
+    description: str
+    original: str                               # the code of the mutated line before the change (stripped)
+    changes: tuple[tuple[int, str | None], ...]
+
+    def apply(self, st_text: str) -> str:
+        lines = st_text.splitlines()
+        for index, text in self.changes:
+            lines[index] = text
+        return "\n".join(line for line in lines if line is not None) + "\n"
+
+    @property
+    def key(self) -> tuple[str, str, str, str]:
+        """What a judged-equivalent entry matches: stable when the ST moves by some lines."""
+        return (self.pou.upper(), self.operator, self.description, self.original)
+
+
+def _code_part(line: str) -> tuple[str, str]:
+    """The line without its trailing comments (mutations never touch comments) and the rest."""
+    m = COMMENT.search(line)
+    return (line, "") if m is None else (line[:m.start()], line[m.start():])
+
+
+def _masked(code: str) -> str:
+    """The code with string literals blanked out, so that sites are only found outside them (positions kept)."""
+    return re.sub(r"'[^']*'", lambda m: " " * len(m.group(0)), code)
+
+
+def body_lines(st_text: str) -> Iterator[tuple[int, str, str]]:
+    """(index, POU name, line) of every code line in the bodies of translated POUs."""
+    pou, in_body = None, False
+    for index, line in enumerate(st_text.splitlines()):
+        start = POU_START.match(line)
+        if start:
+            pou, in_body = start.group(2), False
+            continue
+        if POU_END.match(line):
+            pou = None
+            continue
+        if pou is None or pou.upper().startswith("HH_"):
+            continue
+        if line.strip() == "END_VAR":
+            in_body = True
+            continue
+        if in_body and line.strip() and not re.match(r"\s*VAR", line) and _code_part(line)[0].strip():
+            yield index, pou, line
+
+
+def _replace_at(line: str, start: int, end: int, new: str) -> str:
+    return line[:start] + new + line[end:]
+
+
+def mutation_sites(st_text: str) -> list[Mutant]:
+    """Every single-place mutation of the translated bodies, in file order."""
+    lines = st_text.splitlines()
+    out: list[Mutant] = []
+
+    def add(operator: str, index: int, pou: str, description: str, new_line: str | None,
+            extra: tuple[tuple[int, str], ...] = ()) -> None:
+        out.append(Mutant(operator, index + 1, pou, description, _code_part(lines[index])[0].strip(),
+                          ((index, new_line), *extra)))
+
+    bodies = list(body_lines(st_text))
+    for index, pou, line in bodies:
+        code, rest = _code_part(line)
+        plain = _masked(code)
+        assignment = ASSIGNMENT.match(code)
+        if assignment:
+            # `x := x;` rather than deleting the line: a statement list may not be empty
+            target = assignment.group(2)
+            add("drop_statement", index, pou, "assignment loses its effect",
+                f"{assignment.group(1)}{target} := {target};" + rest)
+        elif CALL.match(code):
+            add("drop_statement", index, pou, "call dropped", None)
+        for m in re.finditer(r"\b(AND|OR)\b", plain):
+            new = "OR" if m.group(1) == "AND" else "AND"
+            add("and_or", index, pou, f"{m.group(1)} -> {new} at column {m.start() + 1}",
+                _replace_at(code, m.start(), m.end(), new) + rest)
+        for m in re.finditer(r"\bNOT\s+", plain):
+            add("negation", index, pou, f"NOT dropped at column {m.start() + 1}",
+                _replace_at(code, m.start(), m.end(), "") + rest)
+        for m in re.finditer(r"\b(TRUE|FALSE)\b", plain):
+            new = "FALSE" if m.group(1) == "TRUE" else "TRUE"
+            add("negation", index, pou, f"{m.group(1)} -> {new} at column {m.start() + 1}",
+                _replace_at(code, m.start(), m.end(), new) + rest)
+        if not CASE_LABEL.match(code):
+            for m in INTEGER.finditer(plain):
+                value = int(m.group(0))
+                for delta in (1, -1):
+                    if value + delta >= 0:
+                        add("constant", index, pou, f"{value} -> {value + delta} at column {m.start() + 1}",
+                            _replace_at(code, m.start(), m.end(), str(value + delta)) + rest)
+        for m in COMPARISON.finditer(plain):
+            new = COMPARISONS[m.group(0)]
+            add("comparison", index, pou, f"'{m.group(0)}' -> '{new}' at column {m.start() + 1}",
+                _replace_at(code, m.start(), m.end(), new) + rest)
+    # Two neighbouring branches of one CASE exchange their labels, so each body runs for the other's value.
+    labels = [(index, pou, CASE_LABEL.match(_code_part(line)[0])) for index, pou, line in bodies]
+    labels = [(index, pou, m) for index, pou, m in labels if m]
+    for (i1, pou1, m1), (i2, pou2, m2) in zip(labels, labels[1:]):
+        if pou1 != pou2 or m1.group(1) != m2.group(1):
+            continue
+        first = lines[i1][:m1.start(2)] + m2.group(2) + lines[i1][m1.end(2):]
+        second = lines[i2][:m2.start(2)] + m1.group(2) + lines[i2][m2.end(2):]
+        add("swap_case", i1, pou1, f"CASE branches {m1.group(2)} and {m2.group(2)} swapped", first, ((i2, second),))
+    return out
+
+
+def choose(mutants: list[Mutant], count: int, seed: int) -> list[Mutant]:
+    """A seeded sample spread evenly over the operators (all of an operator when it has fewer sites)."""
+    if count <= 0 or count >= len(mutants):
+        return list(mutants)
+    rng = random.Random(seed)
+    by_op = {op: [m for m in mutants if m.operator == op] for op in OPERATORS}
+    chosen: list[Mutant] = []
+    remaining = count
+    for n, op in enumerate(sorted(by_op, key=lambda o: len(by_op[o]))):
+        share = remaining // (len(OPERATORS) - n)
+        picked = rng.sample(by_op[op], min(share, len(by_op[op])))
+        chosen += picked
+        remaining -= len(picked)
+    return sorted(chosen, key=lambda m: (m.line, m.operator, m.description))
+
+
+# ---------------------------------------------------------------------------------------------
+# Judged-equivalent mutants
+
+
+@dataclasses.dataclass(frozen=True)
+class JudgedEquivalent:
+    pou: str
+    operator: str
+    mutation: str
+    st: str
+    reason: str
+    span: Span
+
+    @property
+    def key(self) -> tuple[str, str, str, str]:
+        return (self.pou.upper(), self.operator, self.mutation, self.st)
+
+
+def load_equivalents(path: Path) -> list[JudgedEquivalent]:
+    """The checked-in list of mutants judged equivalent: a YAML list of {pou, operator, mutation, st, reason};
+    raises CompileFailed (E-USAGE at the entry) on a malformed file."""
+    def fail(line: int, message: str) -> CompileFailed:
+        return CompileFailed([Diagnostic.of("E-USAGE", Span(str(path), line, 1), message)])
+    try:
+        text = path.read_text(encoding="utf-8")
+        nodes = yaml.compose(text)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise fail(1, f"cannot read the equivalent-mutants file: {exc}") from None
+    except yaml.YAMLError as exc:
+        line = exc.problem_mark.line + 1 if getattr(exc, "problem_mark", None) else 1
+        raise fail(line, f"the equivalent-mutants file is not valid YAML: {getattr(exc, 'problem', exc)}") from None
+    data = yaml.safe_load(text) if nodes is not None else []
+    if not isinstance(data, list):
+        raise fail(1, "the equivalent-mutants file must be a list of {pou, operator, mutation, st, reason}")
+    out = []
+    for i, entry in enumerate(data):
+        line = nodes.value[i].start_mark.line + 1
+        fields = ("pou", "operator", "mutation", "st", "reason")
+        if not isinstance(entry, dict) or set(entry) != set(fields) or not all(
+                isinstance(entry[f], str) and entry[f].strip() for f in fields):
+            raise fail(line, "each entry needs exactly pou, operator, mutation, st and reason, all non-empty text")
+        if entry["operator"] not in OPERATORS:
+            raise fail(line, f"unknown operator '{entry['operator']}' (one of {', '.join(OPERATORS)})")
+        out.append(JudgedEquivalent(entry["pou"], entry["operator"], entry["mutation"], entry["st"].strip(),
+                                    entry["reason"].strip(), Span(str(path), line, 1)))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Judging
+
+
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+    mutant: Mutant
+    outcome: str
+    by: str                      # the killing scenario and how, a message, or the reason of a judged equivalent
+    seconds: float
+
+
+@dataclasses.dataclass
+class Judge:
+    """Everything a worker needs to judge a mutant: the program, its scenarios (validated on the unmutated ST)
+    and how to build an ST executor from a text (`side_factory(text)`; raises on a text it cannot build)."""
+
+    program: Program
+    iomap: IoMap
+    names: NameTable
+    scenarios: list[Scenario]
+    st_text: str
+    side_factory: Callable[[str], Callable[[], StSide]]
+    compiled: CompiledProgram | None = None
+    base_mp: Mapping | None = None
+
+    def __call__(self, mutant: Mutant) -> Verdict:
+        start = time.perf_counter()
+        try:
+            factory = self.side_factory(mutant.apply(self.st_text))
+        except CompileFailed as exc:
+            return Verdict(mutant, INVALID, f"rejected by the ST executor's compiler: {_message(exc)}",
+                           time.perf_counter() - start)
+        except Exception as exc:  # noqa: BLE001 - a mutant that cannot be built is invalid, with its message
+            return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
+        first_error = None
+        for scenario in self.scenarios:
+            try:
+                result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
+                                    base_mp=self.base_mp)
+            except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
+                first_error = first_error or f"{scenario.name}: {_message(exc)}"
+                continue
+            how = None
+            if result.divergence is not None:
+                how = f"{result.divergence.name} differs at cycle {result.divergence.cycle}"
+            elif result.missing:
+                how = f"{len(result.missing)} operands missing in the translation"
+            elif result.error is not None and result.error_side == "translated":
+                how = f"fault of the translation: {result.error}"
+            if how is not None:
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start)
+            if result.error is not None:
+                first_error = first_error or f"{scenario.name}: {result.error}"
+        if first_error is not None:
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start)
+        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start)
+
+
+def _message(exc: BaseException) -> str:
+    """An exception as one short line: its type and the first line of its message."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0][:200]}" if text else type(exc).__name__
+
+
+def baseline_problems(judge: Judge) -> list[str]:
+    """Runs of the unmutated translation that are not equivalent: mutation results would mean nothing."""
+    factory = judge.side_factory(judge.st_text)
+    problems = []
+    for scenario in judge.scenarios:
+        r = cosimulate(judge.program, factory, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                       base_mp=judge.base_mp)
+        if not r.equivalent:
+            problems.append(f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}")
+    return problems
+
+
+def _worker(judge: Judge, mutants: list[Mutant], tasks, results) -> None:
+    """A forked process: judges mutants by index until it takes the end marker."""
+    while (index := tasks.get()) is not None:
+        verdict = judge(mutants[index])
+        results.put((index, verdict.outcome, verdict.by, verdict.seconds))
+
+
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
+    """Verdicts as they come in; with jobs > 1 the judge is shared with forked workers (only results are pickled)."""
+    if jobs <= 1 or len(mutants) <= 1:
+        for mutant in mutants:
+            yield judge(mutant)
+        return
+    context = multiprocessing.get_context("fork")
+    tasks, results = context.Queue(), context.Queue()
+    for index in range(len(mutants)):
+        tasks.put(index)
+    for _ in range(jobs):
+        tasks.put(None)
+    workers = [context.Process(target=_worker, args=(judge, mutants, tasks, results), daemon=True)
+               for _ in range(jobs)]
+    for w in workers:
+        w.start()
+    try:
+        for _ in mutants:
+            index, outcome, by, seconds = results.get()
+            yield Verdict(mutants[index], outcome, by, seconds)
+    finally:
+        for w in workers:
+            if w.is_alive():
+                w.terminate()
+            w.join()
+
+
+@dataclasses.dataclass
+class MutationResult:
+    verdicts: list[Verdict]
+    sites: int                                  # mutation sites in the translation (before --count)
+    scenarios: list[str]
+    backend: str
+    seconds: float
+    unmatched_equivalents: list[JudgedEquivalent] = dataclasses.field(default_factory=list)
+
+    def count(self, outcome: str) -> int:
+        return sum(1 for v in self.verdicts if v.outcome == outcome)
+
+    @property
+    def denominator(self) -> int:
+        """Mutants that ran and are not judged equivalent (invalid ones are no programs at all)."""
+        return self.count(KILLED) + self.count(SURVIVED) + self.count(ERROR)
+
+    @property
+    def score(self) -> float:
+        return self.count(KILLED) / self.denominator if self.denominator else 0.0
+
+
+def apply_equivalents(verdicts: list[Verdict], equivalents: list[JudgedEquivalent]
+                      ) -> tuple[list[Verdict], list[JudgedEquivalent]]:
+    """Survivors named in the judged-equivalent list become EQUIVALENT (with the reason); entries that match no
+    survivor are returned (a kill of a 'judged equivalent' mutant is worth a look: the judgement was wrong)."""
+    by_key = {e.key: e for e in equivalents}
+    used = set()
+    out = []
+    for v in verdicts:
+        entry = by_key.get(v.mutant.key)
+        if entry is not None and v.outcome == SURVIVED:
+            used.add(entry.key)
+            v = dataclasses.replace(v, outcome=EQUIVALENT, by=entry.reason)
+        out.append(v)
+    return out, [e for e in equivalents if e.key not in used]
+
+
+def survivor_location(st_text: str, mutant: Mutant) -> str:
+    """`POU X, ST line N, from file:line` (the traceability tag above the line)."""
+    return st_origin(st_text, mutant.line)
+
+
+def report_json(result: MutationResult, st_text: str) -> str:
+    data = {"backend": result.backend, "score": round(result.score, 4), "sites": result.sites,
+            "judged": len(result.verdicts), "seconds": round(result.seconds, 1), "scenarios": result.scenarios,
+            "counts": {o: result.count(o) for o in OUTCOMES},
+            "mutants": [{"outcome": v.outcome, "operator": v.mutant.operator, "pou": v.mutant.pou,
+                         "st_line": v.mutant.line, "where": survivor_location(st_text, v.mutant),
+                         "st": v.mutant.original, "mutation": v.mutant.description, "by": v.by,
+                         "seconds": round(v.seconds, 3)} for v in result.verdicts],
+            "unmatched_equivalents": [{"at": str(e.span), "pou": e.pou, "mutation": e.mutation, "st": e.st}
+                                      for e in result.unmatched_equivalents]}
+    return json.dumps(data, indent=2) + "\n"
+
+
+def report_junit(result: MutationResult, st_text: str) -> str:
+    """One test case per mutant: a survivor is a failure, an error an error, invalid/equivalent skipped."""
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<testsuite name={quoteattr("hh2iec mutate (" + result.backend + ")")} tests="{len(result.verdicts)}" '
+             f'failures="{result.count(SURVIVED)}" errors="{result.count(ERROR)}" '
+             f'skipped="{result.count(INVALID) + result.count(EQUIVALENT)}" time="{result.seconds:.3f}">']
+    for v in result.verdicts:
+        name = f"{survivor_location(st_text, v.mutant)}: {v.mutant.operator}: {v.mutant.description}"
+        lines.append(f'  <testcase classname="hh2iec.mutate" name={quoteattr(name)} time="{v.seconds:.3f}">')
+        if v.outcome == SURVIVED:
+            lines.append(f"    <failure message={quoteattr('survived: ' + v.mutant.original)}/>")
+        elif v.outcome == ERROR:
+            lines.append(f"    <error message={quoteattr(v.by)}/>")
+        elif v.outcome in (INVALID, EQUIVALENT):
+            lines.append(f"    <skipped message={quoteattr(v.outcome + ': ' + v.by)}/>")
+        lines.append("  </testcase>")
+    lines.append("</testsuite>")
+    return "\n".join(lines) + "\n"
+
+
+def equivalents_yaml(verdicts: list[Verdict]) -> str:
+    """Survivors in the format of the judged-equivalent file, with a reason still to be written."""
+    entries: list[dict[str, Any]] = [{"pou": v.mutant.pou, "operator": v.mutant.operator,
+                                      "mutation": v.mutant.description, "st": v.mutant.original,
+                                      "reason": "TODO: why this mutation cannot change behaviour"}
+                                     for v in verdicts if v.outcome == SURVIVED]
+    return yaml.safe_dump(entries, sort_keys=False, width=120, allow_unicode=True)
