@@ -124,6 +124,7 @@ class _StDriver:
         # The input latch rewrites every input the program reads, every cycle, as the interpreter's phase 2 does:
         # a program write to an input is lost (A-33), also for inputs the stimulus never drives.
         self.process_inputs: dict[str, int] = {str(ref): 0 for ref in inputs}
+        self._latched: tuple[list[str], list[Accessor], Callable[[], list]] | None = None
 
     def write(self, operand: str, value) -> None:
         acc = self.iomap.accessor(operand)
@@ -137,21 +138,40 @@ class _StDriver:
     def latch_input(self, operand: str, value: int) -> None:
         """Also rewrite `operand` every cycle from now on (unless it is latched already): an input the program stored
         to through the index is compared, and the interpreter's latch restores it from the process image."""
-        self.process_inputs.setdefault(operand, value)
+        if operand not in self.process_inputs:
+            self.process_inputs[operand] = value
+            self._latched = None
+
+    def _latch(self) -> None:
+        """Phase 2 on the ST side: every input back to its process-image value. The inputs are read in one call
+        and only the ones that differ (the stimulus changed them, or the program wrote one) are written: the same
+        state as writing all of them, without one executor call per input and cycle."""
+        if self._latched is None:
+            operands = [op for op in self.process_inputs if self.iomap.accessor(op) is not None]
+            accessors = [self.iomap.accessor(op) for op in operands]
+            self._latched = (operands, accessors, side_reader(self.side, accessors))
+        operands, accessors, read = self._latched
+        wanted = self.process_inputs
+        for operand, acc, held in zip(operands, accessors, read()):
+            value = wanted[operand]
+            if held != value:
+                acc.write(self.side, value)
 
     def cycle(self, cycle: int, writes: Iterable, actions: Iterable) -> None:
         for w in writes:
             ref = w.ref
             if ref.kind == "I":
-                self.process_inputs[str(ref)] = int(w.value)
+                operand = str(ref)
+                if operand not in self.process_inputs:
+                    self._latched = None
+                self.process_inputs[operand] = int(w.value)
             else:
                 self.write(str(ref), w.value)
         for action in actions:
             self.nc.enqueue(action)
         for kind, addr, value in self.nc.phase(cycle, lambda m: int(self.read(f"M{m}") or 0)):
             self.write(f"{kind}{addr}", value)
-        for operand, value in self.process_inputs.items():
-            self.write(operand, value)
+        self._latch()
         self.side.run_cycle()
 
 
