@@ -119,9 +119,11 @@ def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
         print("co-simulation, matiec backend: skipped (iec2c not found; set MATIEC_HOME)")
     figures = {}
     for backend, (count, factory) in factories.items():
-        scenario = random_scenario(result.program, names, count, seed=3)
+        scenario = random_scenario(result.program, names, count, seed=3, machine_parameters=SAMPLE.parent / "MP_data.mp")
         # as `equiv` runs it: the reference with coverage; the loop's own time (res.seconds, setup excluded)
         res = cosimulate(result.program, factory, io_map_of(out.result), scenario, names, coverage=True)
+        if res.error:
+            print(f"co-simulation, {backend} backend: {res.error}")
         rate = res.cycles_run / res.seconds if res.seconds else 0.0
         target = COSIM_TARGETS[backend]
         print(f"co-simulation, sample project, {backend} backend (interpreter with coverage included): "
