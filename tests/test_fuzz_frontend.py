@@ -101,7 +101,7 @@ def test_ten_thousand_nested_ifs(tmp_path):
     depth = 10_000
     text = "DEFINE A = 1\n" + "#if A = 1\n" * depth + "L I1\n= O1\n" + "#endif\n" * depth + "EM\n"
     assert errors(_only_diagnostics(tmp_path, {"main.src": text})) == []
-    unbalanced = "#if A = 1\n" * depth + "EM\n"
+    unbalanced = "DEFINE A = 1\n" + "#if A = 1\n" * depth + "EM\n"   # (defined: an undefined A without a cfg is E-CFG-MISSING)
     assert {e.code for e in errors(_only_diagnostics(tmp_path, {"main.src": unbalanced}))} == {"E-PP-NEST"}
 
 
