@@ -110,6 +110,14 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += ["", "### State-machine fallbacks (irreducible control flow)", ""]
         for f in result.fallbacks:
             lines.append(f"- `{f.pou}` at {f.span}: {f.reason}")
+    lines += ["", "### Data stack", ""]
+    if result.dynamic_stack:
+        lines.append("These POUs keep the emulated data stack (HH_STACK, HH_SP) because its depth is not the same "
+                     "on every path or call there; every other subprogram passes its PS/PL operands as "
+                     "VAR_INPUT/VAR_OUTPUT:")
+        lines += [f"- `{pou}` at {span}: {reason}" for pou, reason, span in result.dynamic_stack]
+    else:
+        lines.append("No POU emulates the data stack: every PS/PL passes through VAR_INPUT/VAR_OUTPUT or local variables.")
     lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
               "|---|---|---|---|---|---|"]
     for r in result.layout.rows:

@@ -17,9 +17,11 @@ from transpiler.frontend.resolve import routine_body
 from transpiler.backends.st import library
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
-from transpiler.backends.st.names import TEMP_PREFIX, NameTable
+from transpiler.backends.st.interfaces import StackAnalysis
+from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.routine import REG_TYPES, Emitter, RoutineContext, Unsupported
+from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
 
 GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
@@ -50,6 +52,8 @@ class StResult:
     counters: tuple[int, ...]
     presets: Mapping[str, int]          # preset variable -> value in cycles
     preset_vars: Mapping[tuple[int, int], str]   # (MP number, index) -> preset variable
+    # POUs that still move the emulated data stack, with the reason its depth is not static there
+    dynamic_stack: tuple[tuple[str, str, Span], ...] = ()
 
 
 class StBackend:
@@ -89,6 +93,10 @@ class StBackend:
         self.layout = layout
         self.liveness = Liveness(self.program)
         self.stack: tuple[str, str] | None = None
+        self.stack_analysis = StackAnalysis(self.program)
+        self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
+        self.real_stack_users: dict[str, tuple[int, int]] = {}
+        self.current_key: tuple[int, int] = (0, 0)
         # Routine entries by file: op indices are per file, so one dict keyed by index alone let the routines of
         # different files that start at the same index overwrite each other.
         entries_by_file: dict[int, dict[int, CallTarget]] = {}
@@ -119,7 +127,43 @@ class StBackend:
                              header_comment=self._header())
         return StResult(project, layout, self.names, tuple(self.fallbacks), tuple(self.untranslated),
                         {**self.pou_names, (0, 0): self.main_pou},
-                        tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars)
+                        tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars,
+                        self._dynamic_stack())
+
+    def _dynamic_stack(self) -> tuple[tuple[str, str, Span], ...]:
+        out = []
+        for pou, key in sorted(self.real_stack_users.items()):
+            why = self.stack_analysis.dynamic.get(key)
+            if why is not None:
+                out.append((pou, why.reason, why.span))
+        return tuple(out)
+
+    def _interface(self, key: tuple[int, int]):
+        """The stack interface of a routine with a static stack depth (None: it keeps the emulated stack)."""
+        iface = self.stack_analysis.interfaces.get(key)
+        if iface is not None and key == (0, 0):
+            # What the main program leaves on the stack is dropped at the end of the cycle: no outputs.
+            iface = dataclasses.replace(iface, results=())
+        return iface
+
+    def _names_of_interface(self, key: tuple[int, int]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """VAR_INPUT and VAR_OUTPUT names: legal, distinct, and no global or POU name (a local would hide it)."""
+        if key not in self.interface_names:
+            iface = self._interface(key)
+            taken = {g.upper() for g in self.layout.globals} | RESERVED | {n.upper() for n in self.pou_names.values()}
+            taken |= {n.upper() for n in self.instance_names.values()} | {self.main_pou.upper()}
+            chosen: list[str] = []
+            for wanted, _ in iface.params + iface.results:
+                name = legalise(wanted)[0]
+                base, n = name, 2
+                while name.upper() in taken or name.upper().startswith(TEMP_PREFIX.upper()) and name[3:].isdigit():
+                    name = f"{base}_{n}"
+                    n += 1
+                taken.add(name.upper())
+                chosen.append(name)
+            k = len(iface.params)
+            self.interface_names[key] = (tuple(chosen[:k]), tuple(chosen[k:]))
+        return self.interface_names[key]
 
     def _header(self) -> str:
         p = self.program
@@ -157,6 +201,7 @@ class StBackend:
             arr = self.layout.add_register("stack", "HH_STACK", tname, "data stack (PS/PL), 16-bit words")
             sp = self.layout.add_register("sp", "HH_SP", "INT", "data stack pointer (number of words)")
             self.stack = (arr, sp)
+        self.real_stack_users.setdefault(self.pou_names.get(self.current_key, self.main_pou), self.current_key)
         return self.stack
 
     def _kfield(self, o: Operand) -> str:
@@ -199,6 +244,35 @@ class StBackend:
             callees.add(target.key)
             return f"{self.instance_names[target.key]}()"
 
+        iface = self._interface(key)
+        slots: dict[tuple[int, str], str] = {}
+        executors: list[Executor] = []
+
+        def slot(depth: int, kind: str) -> str:
+            if (depth, kind) not in slots:
+                slots[(depth, kind)] = f"stack{depth}_{kind}"
+            return slots[(depth, kind)]
+
+        def executor() -> Executor:
+            static = None
+            if iface is not None:
+                params, results = self._names_of_interface(key)
+                static = StaticStack(iface, params, results, slot)
+            executors.append(Executor(ctx, static))
+            return executors[-1]
+
+        def interface_call(op, i: int, live: frozenset[str]) -> bool:
+            target = op.call
+            callee = self._interface(target.key) if target is not None and not target.is_module else None
+            if callee is None or callee.empty:
+                return False
+            callees.add(target.key)
+            params, results = self._names_of_interface(target.key)
+            span = file.ops[i].span
+            executors[-1].call_interface(self.instance_names[target.key], callee, params, results, live,
+                                         f"(* {span.file}:{span.line} *)")
+            return True
+
         accessors: dict[str, str] = {}
 
         def bit_accessor(kind: str) -> str:
@@ -210,18 +284,20 @@ class StBackend:
                              self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor)
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
-                           self.liveness.exit(key), lambda i: self.liveness.at(key, i))
+                           self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
+        self.current_key = key
         structured = True
         try:
-            Structurer(info, Executor(ctx)).region(min(body) if body else 0, (max(body) + 1) if body else 0)
+            Structurer(info, executor()).region(min(body) if body else 0, (max(body) + 1) if body else 0)
         except NotStructured as exc:
             structured = False
             self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
             emitter = Emitter()
             temps.clear()
             callees.clear()
+            slots.clear()
             ctx.out = emitter
-            state_machine(info, Executor(ctx))
+            state_machine(info, executor())
         except Unsupported as exc:
             where = exc.span or (file.ops[body[0]].span if body else Span(file.path, 1))
             self.untranslated.append((where, f"{exc} (the whole of {pou_name} is left out)"))
@@ -238,13 +314,23 @@ class StBackend:
         local = [IecVar(self.instance_names[c], self.pou_names[c]) for c in sorted(callees)]
         local += [IecVar(inst, self.layout.bit_access[kind], comment=f"indexed access to {kind} operands")
                   for kind, inst in sorted(accessors.items())]
+        local += [IecVar(name, SLOT_TYPES[kind], comment=f"data stack entry {depth} of this routine")
+                  for (depth, kind), name in sorted(slots.items())]
         local += [IecVar(n, t) for n, t in temps]
         if not structured:
             local.append(IecVar("HH_STATE", "DINT", comment="state of the irreducible control flow"))
-        if not local and not is_main and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
+        if not local and not is_main and (iface is None or iface.empty) and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
             # matiec rejects a FUNCTION_BLOCK without any declaration.
             local.append(IecVar("HH_UNUSED", "BOOL", comment="placeholder: the subprogram has no data of its own"))
         sections = []
+        if iface is not None and not iface.empty:
+            params, results = self._names_of_interface(key)
+            if params:
+                sections.append(VarSection("VAR_INPUT", tuple(
+                    IecVar(n, SLOT_TYPES[k], comment="pushed by the caller (PS)") for n, (_, k) in zip(params, iface.params))))
+            if results:
+                sections.append(VarSection("VAR_OUTPUT", tuple(
+                    IecVar(n, SLOT_TYPES[k], comment="pulled by the caller (PL)") for n, (_, k) in zip(results, iface.results))))
         if local:
             sections.append(VarSection("VAR", tuple(local)))
         first = file.ops[min(body)].span.line if body else 1

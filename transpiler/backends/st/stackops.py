@@ -1,11 +1,43 @@
-"""The data stack: pushes stay symbolic until a boundary, then go to the stack array as 16-bit words; pops read it back."""
+"""The data stack: pushes stay symbolic until a boundary, then go to the stack array as 16-bit words; pops read it back.
+
+In a routine whose stack depth the analysis of `interfaces` proved static, nothing goes to the stack array: at a
+boundary each entry goes to the variable of its depth (`StaticStack.slot`: a VAR_OUTPUT where the routine's
+results end up, else a local), the parameters arrive as VAR_INPUT, and a call of a routine with an interface
+passes the entries it pulls as inputs and pushes its outputs.
+"""
 
 from __future__ import annotations
+
+import dataclasses
+from typing import Callable
 
 from transpiler.ir import Op
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.exprs import Expr
-from transpiler.backends.st.routine import ExecutorPart
+from transpiler.backends.st.interfaces import StackInterface
+from transpiler.backends.st.liveness import REGS
+from transpiler.backends.st.routine import ExecutorPart, Unsupported
+
+SLOT_TYPES = {"bit": "BOOL", "val": "DINT"}
+
+
+@dataclasses.dataclass
+class StaticStack:
+    """The stack of a routine with a static depth: its interface, final names, and where each depth is kept."""
+
+    interface: StackInterface
+    params: tuple[str, ...]          # VAR_INPUT names, in the interface's order (caller's push order)
+    results: tuple[str, ...]         # VAR_OUTPUT names, bottom first
+    local: Callable[[int, str], str]  # (depth, kind) -> a local variable of the routine for that depth
+
+    def slot(self, depth: int, kind: str) -> str:
+        results = self.interface.results
+        if depth < len(results) and results[depth][1] == kind:
+            return self.results[depth]
+        return self.local(depth, kind)
+
+    def initial(self) -> list[tuple[str, Expr]]:
+        return [(kind, E.var(name, SLOT_TYPES[kind])) for name, (_, kind) in zip(self.params, self.interface.params)]
 
 
 class StackMixin(ExecutorPart):
@@ -26,9 +58,13 @@ class StackMixin(ExecutorPart):
         out.line(f"{stack}[{sp} + 1] := HH_HIWORD({v.text});")
         out.line(f"{sp} := {sp} + 2;")
 
+    static: StaticStack | None = None
+
     def _pop(self, kind: str) -> Expr:
         if self.s.stack and self.s.stack[-1][0] == kind:
             return self.s.stack.pop()[1]
+        if self.static is not None:
+            raise Unsupported(f"internal: the stack analysis expected a {kind} on the data stack here")
         self.flush_stack()
         stack, sp = self.ctx.stack_names()
         out = self.ctx.out
@@ -67,3 +103,46 @@ class StackMixin(ExecutorPart):
     def op_PLL(self, op): self.s.set("LA", self._pop("bit"))
     def op_PSX(self, op): self.s.stack.append(("val", self.s.reg("X")))
     def op_PLX(self, op): self.s.set("X", self._pop("val"))
+
+    # ---- static depth (see the module docstring)
+
+    def sync_stack(self, index: int) -> None:
+        """Before op `index`: after a path that ended (RETURN, EXIT) the entries are those of the other paths, which
+        left every entry in the variable of its depth."""
+        if self.static is None:
+            return
+        expected = self.static.interface.stack_at.get(index)
+        if expected is not None and tuple(k for k, _ in self.s.stack) != expected:
+            self.s.stack = [(k, E.var(self.static.slot(d, k), SLOT_TYPES[k])) for d, k in enumerate(expected)]
+
+    def flush_stack(self) -> None:
+        if self.static is None:
+            super().flush_stack()   # type: ignore[misc]
+            return
+        for d in range(len(self.s.stack)):
+            kind, value = self.s.stack[d]
+            slot = self.static.slot(d, kind)
+            if value.var is not None and value.var.upper() == slot.upper():
+                continue
+            self.prepare_write(slot.upper())    # type: ignore[attr-defined]
+            value = self.s.stack[d][1]
+            self.ctx.out.line(f"{slot} := {value.text};")
+            self.s.stack[d] = (kind, E.var(slot, SLOT_TYPES[kind]))
+
+    def call_interface(self, instance: str, interface: StackInterface, params: tuple[str, ...],
+                       results: tuple[str, ...], live: frozenset[str], tag: str) -> None:
+        """CM of a routine with an interface: the entries it pulls become its inputs, its outputs are pushed."""
+        for reg in REGS:
+            if reg in live:
+                self.materialize(reg)       # type: ignore[attr-defined]
+            else:
+                self.s.regs[reg] = None
+        args = [self._pop(kind) for _, kind in reversed(interface.params)][::-1]
+        # Entries below the arguments may read what the callee writes: they go to their variables first.
+        self.flush_stack()
+        self.prepare_write(instance.upper())     # type: ignore[attr-defined]
+        text = ", ".join(f"{name} := {arg.text}" for name, arg in zip(params, args))
+        self.ctx.out.line(f"{instance}({text}); {tag}")
+        self.forget()                       # type: ignore[attr-defined]
+        for name, (_, kind) in zip(results, interface.results):
+            self.s.stack.append((kind, E.var(f"{instance}.{name}", SLOT_TYPES[kind])))

@@ -35,6 +35,8 @@ class RoutineInfo:
     other_entries: dict[int, CallTarget]   # LBLs that start other routines (fall-through -> call + return)
     exit_live: frozenset[str]
     live_in: Callable[[int], frozenset[str]]
+    # CM of a routine with a stack interface (see interfaces.py): emits the call and returns True, else False.
+    interface_call: Callable[[Op, int, frozenset[str]], bool] | None = None
 
 
 class Structurer:
@@ -144,6 +146,9 @@ class Structurer:
                 continue
             if op.code in ("EM", "EMT", "EMF"):
                 i = self._end(i, hi)
+                continue
+            if op.code == "CALL" and self.info.interface_call is not None and self.info.interface_call(op, i, self._live(i)):
+                i += 1
                 continue
             if op.code in ("CALL", "CALLT", "CALLF"):
                 self._call(op, i)
@@ -438,7 +443,9 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
                 ex.flush(all_regs)
                 next_state = "-1"
                 break
-            if op.code in ("CALL", "CALLT", "CALLF"):
+            if op.code == "CALL" and info.interface_call is not None and info.interface_call(op, i, structurer._live(i)):
+                pass
+            elif op.code in ("CALL", "CALLT", "CALLF"):
                 structurer._call(op, i)
             elif op.code == "CASE":
                 structurer._case(op, i)

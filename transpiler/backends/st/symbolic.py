@@ -11,20 +11,25 @@ from transpiler.backends.st.ops_logic import LogicOpsMixin
 from transpiler.backends.st.ops_string import StringOpsMixin
 from transpiler.backends.st.ops_word import WordOpsMixin
 from transpiler.backends.st.routine import RoutineContext, SymbolicState, Unsupported
-from transpiler.backends.st.stackops import StackMixin
+from transpiler.backends.st.stackops import StackMixin, StaticStack
 
 
 class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringOpsMixin,
                ArithmeticMixin, OperandMixin, InFlightMixin):
     """Translates straight-line ops; control-flow ops are left to the structurer, which calls the hooks it shares."""
 
-    def __init__(self, ctx: RoutineContext):
+    def __init__(self, ctx: RoutineContext, static: StaticStack | None = None):
         self.ctx = ctx
         self.s = SymbolicState(ctx)
         self.index = 0
+        # A routine with a static stack depth starts with its parameters on the symbolic stack (see stackops).
+        self.static = static
+        if static is not None:
+            self.s.stack = static.initial()
 
     def run(self, op: Op, index: int) -> None:
         self.index = index
+        self.sync_stack(index)
         for text in op.comments:
             self.ctx.out.comment(text)
         handler = getattr(self, "op_" + op.code, None)
