@@ -2,6 +2,7 @@
 #include "hh_modules.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 typedef struct {
     int32_t number;
@@ -126,6 +127,42 @@ void hh_sys_free(hh_sys *sys)
     free(sys->overrides);
     free(sys->tables);
     free(sys);
+}
+
+/* A deep copy of `sys` (NULL when memory is exhausted): the co-simulation gives the translated program a
+ * system context of its own that starts exactly where the reference interpreter's does. */
+static void *copy_items(const void *items, size_t n, size_t size)
+{
+    void *out;
+    if (n == 0 || items == NULL)
+        return NULL;
+    out = malloc(n * size);
+    if (out != NULL)
+        memcpy(out, items, n * size);
+    return out;
+}
+
+hh_sys *hh_sys_clone(const hh_sys *sys)
+{
+    hh_sys *copy;
+    if (sys == NULL)
+        return NULL;
+    copy = (hh_sys *)malloc(sizeof *copy);
+    if (copy == NULL)
+        return NULL;
+    *copy = *sys;
+    copy->mps = (mp_entry *)copy_items(sys->mps, sys->n_mps, sizeof *sys->mps);
+    copy->overrides = (override_entry *)copy_items(sys->overrides, sys->n_overrides, sizeof *sys->overrides);
+    copy->tables = (table_entry *)copy_items(sys->tables, sys->n_tables, sizeof *sys->tables);
+    copy->cap_mps = sys->n_mps;
+    copy->cap_overrides = sys->n_overrides;
+    copy->cap_tables = sys->n_tables;
+    if ((sys->n_mps && copy->mps == NULL) || (sys->n_overrides && copy->overrides == NULL)
+            || (sys->n_tables && copy->tables == NULL)) {
+        hh_sys_free(copy);
+        return NULL;
+    }
+    return copy;
 }
 
 /* `items` with room for element n (doubling, `first` elements at first), or NULL when memory is

@@ -107,6 +107,8 @@ int hh_module_call_ctx(hh_sys *sys, int32_t number, int32_t caller, const int32_
 /* NULL when cycle_time_ms <= 0 or memory is exhausted. */
 hh_sys *hh_sys_new(int32_t cycle_time_ms);
 void hh_sys_free(hh_sys *sys);
+/* A deep copy with the same configuration, clock and model state (free it with hh_sys_free). */
+hh_sys *hh_sys_clone(const hh_sys *sys);
 
 /* Machine parameter number.index = mantissa * 10^-decimals (0.125 -> 125, 3), as loaded
  * from the MP file or the scenario; 9031 later overwrites this run-time value.  0, or -1 for

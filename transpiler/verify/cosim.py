@@ -285,6 +285,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     stimulus = stimulus or build_stimulus(scenario, names)
     machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled, base_mp=base_mp)
     side = make_side()
+    getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
     comparison = comparison_for(program, names, iomap)
     scenario_mp, _ = machine_parameters(scenario, diags)
@@ -348,13 +349,18 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
     from transpiler.exec.stexec import StRuntimeError, load_st
+    from transpiler.exec.compiled.sysfb import SysBinding
     project = load_st(st_text, filename)
 
     class _Side:
         name = "builtin"
 
         def __init__(self) -> None:
-            self.rt = project.instantiate()
+            self.sys = SysBinding(st_text)
+            self.rt = project.instantiate(self.sys.externals() or None)
+
+        def attach_machine(self, machine) -> None:
+            self.sys.attach(machine)
 
         def get(self, path: str):
             return self.rt.get(path)
@@ -368,5 +374,6 @@ def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable
             except StRuntimeError as exc:
                 where = f" ({st_origin(st_text, exc.span.line)})" if exc.span is not None else ""
                 raise StRuntimeError(f"{exc.message}{where}", exc.span) from None
+            self.sys.tick()
 
     return _Side

@@ -193,15 +193,13 @@ class Structurer:
     def _call(self, op: Op, i: int) -> None:
         if op.call is None or op.call.file < 0 and not op.call.is_module:
             raise Unsupported("unresolved call", op.span)
-        self.ex.flush(self._live(i) | frozenset(["LA"] if op.code != "CALL" else []))
         if op.call.is_module:
-            try:
-                text = self.ex.ctx.module_call(op.call.module)
-            except Unsupported as exc:
-                exc.span = exc.span or op.span
-                raise
-        else:
-            text = self.info.call_name(op.call)
+            # A module call takes its parameters from the data stack and pushes its results (modcalls.py).
+            self.ex.index = i
+            self.ex.ctx.module_call(self.ex, op, self._live(i))
+            return
+        self.ex.flush(self._live(i) | frozenset(["LA"] if op.code != "CALL" else []))
+        text = self.info.call_name(op.call)
         if op.code == "CALL":
             self.out.line(f"{text}; {self._tag(i)}")
         else:

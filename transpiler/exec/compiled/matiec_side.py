@@ -17,6 +17,7 @@ from transpiler.backends.iec_model import IecProject
 from transpiler.backends.report.iomap import Place
 from transpiler.backends.st.check import matiec_home
 from transpiler.exec.st_lines import loop_sites
+from transpiler.exec.compiled.sysfb import HARNESS_C, SysBinding, patch_pous
 
 SCALARS = {"BOOL": "BOOL", "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT", "USINT": "USINT",
            "UINT": "UINT", "UDINT": "UDINT", "BYTE": "BYTE", "WORD": "WORD", "DWORD": "DWORD"}
@@ -96,7 +97,7 @@ def harness_source(project: IecProject) -> str:
              "    return s->len;", "}", ""]
     sput += ["    }", "    if (!s) return;", "    size_t n = strlen(text);", "    if (n > STR_MAX_LEN) n = STR_MAX_LEN;",
              "    memcpy(s->body, text, n);", "    s->len = (__strlen_t)n;", "}", ""]
-    return "\n".join(lines + get + put + sget + sput + BULK_READ + GUARDED_RUN)
+    return "\n".join(lines + get + put + sget + sput + BULK_READ + GUARDED_RUN + HARNESS_C)
 
 
 # One call per cycle reads every compared operand: a column is (variable id, index, width, big endian); width 0 reads
@@ -180,6 +181,9 @@ def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
         shutil.rmtree(work, ignore_errors=True)
         raise MatiecBuildError(f"iec2c failed: {(run.stdout + run.stderr).strip()[:2000]}")
     (gen / "hh_harness.c").write_text(harness, encoding="utf-8")
+    pous = gen / "POUS.c"
+    if pous.is_file():      # the HH_Sys FBs run the shim's model (sysfb.py)
+        pous.write_text(patch_pous(pous.read_text(encoding="utf-8"), SysBinding(st_text).c_bodies()), encoding="utf-8")
     sources = [str(gen / "hh_harness.c")] + sorted(str(p) for p in gen.glob("*.c")
                                                    if p.name not in ("POUS.c", "hh_harness.c"))
     cc = subprocess.run(["gcc", "-shared", "-fPIC", "-O1", "-fwrapv", "-Wno-unused-function", "-w",
@@ -196,8 +200,16 @@ def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
     return lib
 
 
+def bind_sys(lib: ctypes.CDLL, sys: SysBinding, machine: object) -> None:
+    """The HH_Sys FBs of the library call the shim's model on a copy of the machine's system context."""
+    sys.attach(machine)
+    fn, handle, rule = sys.call_pointer()
+    lib.hh_sysfb_bind(ctypes.c_void_p(fn), ctypes.c_void_p(handle), rule)
+
+
 def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Callable[[], object]:
     """Build the library once; each call gives the program re-initialised (config_init__, cleared I/O)."""
+    # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.
     lib_path = build_library(st_text, project, iec2c)
     lib = ctypes.CDLL(str(lib_path))
     lib.hh_get.restype = ctypes.c_longlong
@@ -233,6 +245,8 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
 
         def __init__(self) -> None:
             lib.hh_init()
+            self.sys = SysBinding(st_text)
+            self.attach_machine = lambda machine: bind_sys(lib, self.sys, machine)
 
         def get(self, path: str):
             n, index, typ, shape = locate(path)
@@ -253,6 +267,7 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
             if lib.hh_run_guarded(CYCLE_BUDGET_MS):
                 raise CycleOverrun(f"the cycle did not end within {CYCLE_BUDGET_MS / 1000:g} s (an endless loop); "
                                    "the ST lines that loop: " + ", ".join(loops or ["none found"]))
+            self.sys.tick()
 
         def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
             """Reads all places in one C call (texts, which C cannot return as numbers, one by one)."""
