@@ -59,6 +59,10 @@ def test_module_calls_are_fb_calls_with_named_arguments(project: Path, tmp_path:
     assert "W104 := DINT_TO_INT(" in st and ".VALUE);" in st
     # The error word follows only a failed call, the marker every call.
     assert "M4203 := " in st and ".FAULT THEN" in st and "HH_STACK" not in st
+    report = (tmp_path / "out" / "report.md").read_text()
+    section = report.split("## What the target must provide")[1].split("\n## ")[0]
+    assert "### HH_ReadMP (module 9032, data)" in section and "- Called at: main.src:9" in section
+    assert "### HH_EnableDrives (module 9161, machine)" in section and "24 called in a submit or spawn job" in section
 
 
 @pytest.mark.parametrize("backend", ["builtin", "matiec"])

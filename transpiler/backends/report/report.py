@@ -5,6 +5,7 @@ everything not translated."""
 from __future__ import annotations
 
 from transpiler.backends.iec_model import Pou
+from transpiler.backends.report.target import target_must_provide
 from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
 from transpiler.backends.st.backend import StResult
 from transpiler.backends.st.liveness import use_def
@@ -128,6 +129,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
+    lines += ["", "## What the target must provide", ""] + target_must_provide(program, result)
     lines += ["", "## Timers and counters", ""]
     for name, cycles in sorted(result.presets.items()):
         lines.append(f"- `{name}` = {cycles} cycles")
