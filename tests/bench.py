@@ -150,7 +150,23 @@ def bench_mutants(count: int = MUTANTS) -> dict:
     return {"mutants_per_minute": round(per_minute, 1)}
 
 
-BENCHES: dict[str, Callable[..., object]] = {"mutants": bench_mutants, "frontend": bench_frontend, "interpreter": bench_interpreter,
+def bench_readability() -> list[dict]:
+    """Readability of the emitted ST (matiec dialect) for the sample and every construct project."""
+    from transpiler import api
+    from transpiler.backends.st.readability import measure
+    mains = [SAMPLE] + sorted((ROOT / "samples" / "constructs").glob("*/main.src"))
+    out = []
+    for main in mains:
+        project = api.load_project(api.project_options(main))
+        st = api.transpile(project, formats=("st",)).st_text
+        figure = measure(st, project.program.instruction_count())
+        label = "sample" if main == SAMPLE else main.parent.name
+        print(f"readability, {label}: {figure.line()}")
+        out.append({"project": label, **figure.__dict__})
+    return out
+
+
+BENCHES: dict[str, Callable[..., object]] = {"readability": bench_readability, "mutants": bench_mutants, "frontend": bench_frontend, "interpreter": bench_interpreter,
                                              "transpile": bench_transpile, "cosim": bench_cosim}
 
 

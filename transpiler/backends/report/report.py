@@ -4,6 +4,8 @@ everything not translated."""
 
 from __future__ import annotations
 
+from transpiler.backends.st.readability import measure
+from transpiler.backends.st.writer import render_st
 from transpiler.backends.iec_model import Pou
 from transpiler.backends.report.target import target_must_provide
 from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
@@ -119,6 +121,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += [f"- `{pou}` at {span}: {reason}" for pou, reason, span in result.dynamic_stack]
     else:
         lines.append("No POU emulates the data stack: every PS/PL passes through VAR_INPUT/VAR_OUTPUT or local variables.")
+    lines += ["", "### Readability", "", measure(render_st(result.project), program.instruction_count()).line() + "."]
     lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
               "|---|---|---|---|---|---|"]
     for r in result.layout.rows:

@@ -81,7 +81,14 @@ def to_dint(e: Expr) -> Expr:
     return Expr(f"{e.typ}_TO_DINT({e.text})", "DINT", e.deps, e.lo, e.hi)
 
 
+_COMPARE = MappingProxyType({"=": lambda x, y: x == y, "<>": lambda x, y: x != y, "<": lambda x, y: x < y,
+                             "<=": lambda x, y: x <= y, ">": lambda x, y: x > y, ">=": lambda x, y: x >= y})
+
+
 def binop(op: str, a: Expr, b: Expr, typ: str, prec: int, lo: int | None = None, hi: int | None = None) -> Expr:
+    # A comparison of two literals is decided here: `HH_LA := 1 <= 24;` reads as a question the program never asks.
+    if op in _COMPARE and a.const is not None and b.const is not None:
+        return bool_const(_COMPARE[op](a.const, b.const))
     # Left-associative: the right operand needs parentheses at equal precedence.
     text = f"{a.wrap(prec)} {op} {b.wrap(prec + 1)}"
     rlo, rhi = RANGES.get(typ, (0, 0))
@@ -122,10 +129,17 @@ def _balanced(text: str) -> bool:
 
 
 def b_and(a: Expr, b: Expr) -> Expr:
+    # Expressions only read variables, so a constant side decides or drops out without losing an effect.
+    for x, y in ((a, b), (b, a)):
+        if x.bool_const is not None:
+            return y if x.bool_const else bool_const(False)
     return binop("AND", a, b, "BOOL", PREC_AND, 0, 1)
 
 
 def b_or(a: Expr, b: Expr) -> Expr:
+    for x, y in ((a, b), (b, a)):
+        if x.bool_const is not None:
+            return bool_const(True) if x.bool_const else y
     return binop("OR", a, b, "BOOL", PREC_OR, 0, 1)
 
 

@@ -1,0 +1,71 @@
+"""Clean-up of the emitted ST: constant comparisons folded, boolean constants simplified (exprs.py), temporaries
+read once by the next statement propagated (passes.py), and the readability figure that watches all of it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from transpiler import api
+from transpiler.backends.iec_model import IecVar, Pou, VarSection
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st.passes import propagate_temporaries
+from transpiler.backends.st.readability import measure
+
+ROOT = Path(__file__).resolve().parent.parent
+SAMPLE = ROOT / "samples" / "basic_program" / "Main_PGM.src"
+
+
+def test_comparison_of_two_literals_is_folded():
+    assert E.binop("<=", E.int_const(1), E.int_const(24), "BOOL", E.PREC_CMP).bool_const is True
+    assert E.binop("=", E.int_const(3), E.int_const(4), "BOOL", E.PREC_EQ).text == "FALSE"
+    x = E.var("x", "DINT")
+    assert E.binop("<=", x, E.int_const(24), "BOOL", E.PREC_CMP).text == "x <= 24"
+
+
+def test_boolean_constants_drop_out():
+    a = E.var("a", "BOOL")
+    assert E.b_and(E.bool_const(True), a).text == "a"
+    assert E.b_and(a, E.bool_const(False)).text == "FALSE"
+    assert E.b_or(E.bool_const(False), a).text == "a"
+    assert E.b_or(a, E.bool_const(True)).text == "TRUE"
+
+
+def _fb(body: str, temps: list[str]) -> Pou:
+    local = tuple(IecVar(t, "BOOL") for t in temps) + (IecVar("keep", "BOOL"),)
+    return Pou("F", "FUNCTION_BLOCK", (VarSection("VAR", local),), body)
+
+
+def test_temporary_read_once_by_the_next_statement_is_propagated():
+    pou = propagate_temporaries(_fb("tmp1 := a AND b;\nIF tmp1 THEN\n    x := TRUE;\nEND_IF;\ny := NOT tmp2;", ["tmp1", "tmp2"]))
+    assert pou.body.startswith("IF (a AND b) THEN") and "tmp1" not in pou.body
+    assert [v.name for v in pou.sections[0].vars] == ["tmp2", "keep"]
+
+
+def test_temporary_read_in_a_loop_condition_or_later_stays():
+    body = "tmp1 := a;\nWHILE tmp1 DO\n    a := FALSE;\nEND_WHILE;\ntmp2 := b;\nb := FALSE;\nc := tmp2;"
+    pou = propagate_temporaries(_fb(body, ["tmp1", "tmp2"]))
+    assert pou.body == body
+
+
+def test_temporary_read_twice_stays():
+    body = "tmp1 := a;\nx := tmp1 AND tmp1;"
+    assert propagate_temporaries(_fb(body, ["tmp1"])).body == body
+
+
+def test_sample_has_no_unfolded_constant_comparison_and_no_stack_lines():
+    project = api.load_project(api.project_options(SAMPLE))
+    out = api.transpile(project, formats=("st",))
+    assert "1 <= 24" not in out.st_text
+    figure = measure(out.st_text, project.program.instruction_count())
+    assert figure.stack_lines == 0 and figure.statements > 0
+    assert figure.per_instruction <= 1.2
+    assert "### Readability" in out.files["report.md"].decode()
+
+
+def test_readability_counts_what_it_says():
+    st = ("FUNCTION_BLOCK F\nVAR_EXTERNAL\n    HH_SP : INT;\n    A : BOOL;\nEND_VAR\n"
+          "    (* comment *)\n    HH_SP := HH_SP - 1;\n    tmp1 := HH_BIT(A, 3);\n    A := tmp1;\nEND_FUNCTION_BLOCK\n")
+    figure = measure(st, 4)
+    assert (figure.statements, figure.stack_lines, figure.temp_lines, figure.helper_calls, figure.var_external_lines) \
+        == (3, 1, 2, 1, 2)
+    assert figure.per_instruction == 0.75

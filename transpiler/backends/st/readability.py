@@ -1,0 +1,62 @@
+"""The readability figure of emitted ST: how much of it is the program and how much is machinery (the emulated
+data stack, temporaries, helper calls, VAR_EXTERNAL lists), so that a change that makes the output worse is seen
+(`make bench`, report.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+from transpiler.backends.st.names import TEMP_PREFIX
+from transpiler.backends.st.writer import extract_pou_bodies
+
+_COMMENT = re.compile(r"\(\*.*?\*\)")
+_TEMP = re.compile(r"(?<![A-Za-z0-9_])" + TEMP_PREFIX + r"[0-9]+(?![A-Za-z0-9_])", re.I)
+_HELPER = re.compile(r"(?<![A-Za-z0-9_.])HH_[A-Z0-9_]+\(")
+_STACK = re.compile(r"\bHH_(SP|STACK)\b")
+
+
+@dataclasses.dataclass(frozen=True)
+class Readability:
+    instructions: int           # source instructions (labels not counted)
+    statements: int             # ST statement lines of the POUs translated from the program (no comments,
+                                # declarations or blank lines; the HH_ library not counted)
+    stack_lines: int            # statement lines that touch the emulated data stack
+    temp_lines: int             # statement lines that read or write a temporary
+    helper_calls: int           # calls of HH_ helper functions in those statements
+    var_external_lines: int     # declaration lines inside VAR_EXTERNAL blocks (whole file)
+
+    @property
+    def per_instruction(self) -> float:
+        return self.statements / self.instructions if self.instructions else 0.0
+
+    def line(self) -> str:
+        return (f"{self.statements} ST statement lines for {self.instructions} source instructions "
+                f"({self.per_instruction:.2f} per instruction), {self.stack_lines} stack lines, "
+                f"{self.temp_lines} temporary lines, {self.helper_calls} helper calls, "
+                f"{self.var_external_lines} VAR_EXTERNAL lines")
+
+
+def measure(st_text: str, instructions: int) -> Readability:
+    statements = stack = temps = helpers = 0
+    for name, body in extract_pou_bodies(st_text).items():
+        if name.upper().startswith("HH_"):
+            continue
+        for line in body.split("\n"):
+            code = _COMMENT.sub("", line).strip()
+            if not code:
+                continue
+            statements += 1
+            stack += bool(_STACK.search(code))
+            temps += bool(_TEMP.search(code))
+            helpers += len(_HELPER.findall(code))
+    externals = 0
+    inside = False
+    for line in st_text.split("\n"):
+        if line.strip() == "VAR_EXTERNAL":
+            inside = True
+        elif line.strip() == "END_VAR":
+            inside = False
+        elif inside and _COMMENT.sub("", line).strip():
+            externals += 1
+    return Readability(instructions, statements, stack, temps, helpers, externals)
