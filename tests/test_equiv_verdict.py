@@ -183,3 +183,20 @@ def test_the_report_lists_what_was_compared_and_nothing_is_missing_on_a_whole_tr
     for run in report["runs"]:
         assert run["missing_in_translation"] == [] and run["excluded"] == []
         assert len(run["compared"]) == run["compared_operands"] > 0
+
+
+def test_vcd_holds_both_executors_side_by_side(tmp_path, capsys):
+    """One dump per run with a scope per side, so GTKWave shows original and translation in one window."""
+    folder = CONSTRUCTS / "timers"
+    code, _, _ = _run(["equiv", folder / "main.src", "--scenario", folder / "scenario.yaml", "--vcd", tmp_path / "vcd"],
+                      capsys)
+    assert code == 0
+    assert sorted(p.name for p in (tmp_path / "vcd").iterdir()) == ["timers.vcd"]
+    text = (tmp_path / "vcd" / "timers.vcd").read_text()
+    assert "$scope module original $end" in text and "$scope module translated $end" in text
+    # T48 runs in cycles 3, 4, 5 after the pulse at 2 (the scenario's expectations): both scopes show it rise at 60 ms.
+    header, _, body = text.partition("$enddefinitions $end")
+    ids = [line.split()[3] for line in header.splitlines() if line.strip().startswith("$var") and " T48 " in line]
+    assert len(ids) == 2
+    changes_at_60 = body.split("#60\n")[1].split("#")[0].split()
+    assert all(f"1{i}" in changes_at_60 for i in ids)

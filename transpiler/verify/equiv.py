@@ -18,7 +18,7 @@ from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, c
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
 from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
-from transpiler.verify.traces import TraceRecorder
+from transpiler.verify.traces import TraceRecorder, write_vcd_scopes
 
 SHRINK_BUDGET = 150
 
@@ -331,10 +331,13 @@ def report_junit(result: EquivalenceResult) -> str:
 
 def write_vcd(folder: Path, scenario: Scenario, res: CosimResult, traces: list, program: Program,
                names: NameTable, iomap: IoMap) -> None:
+    """One VCD per run: the compared operands of both executors side by side (scopes `original`, `translated`)."""
     columns = list(comparison_for(program, names, iomap).columns)
     folder.mkdir(parents=True, exist_ok=True)
+    sides = {}
     for side, pick in (("original", 1), ("translated", 2)):
         rec = TraceRecorder(columns)
         for row in traces:
             rec.record(row[0], list(row[pick]))
-        rec.write_vcd(folder / f"{scenario.name}.{side}.vcd", res.machine.cycle_time_ms if res.machine else 20)
+        sides[side] = rec
+    write_vcd_scopes(folder / f"{scenario.name}.vcd", sides, res.machine.cycle_time_ms if res.machine else 20)

@@ -7,7 +7,7 @@ import csv
 import os
 import tempfile
 from pathlib import Path
-from typing import IO, Iterator, Sequence
+from typing import IO, Iterator, Mapping, Sequence
 
 from vcd import VCDWriter
 
@@ -71,22 +71,34 @@ class TraceRecorder:
 
         The value recorded after cycle n is dumped at time n * cycle_time_ms (timescale 1 ms).
         """
-        with atomic_text_file(path) as handle:
-            # a fixed date keeps the file reproducible for the same trace
-            with VCDWriter(handle, timescale="1 ms", date="", version="hh2iec") as writer:
-                variables = [self._register(writer, scope, name, ref) for name, ref in self.columns]
-                last_time = 0
-                for cycle, row in self.rows:
-                    last_time = cycle * cycle_time_ms
-                    for (_, ref), var, value in zip(self.columns, variables, row):
-                        writer.change(var, last_time, _vcd_value(ref, value))
-                writer.close(last_time + cycle_time_ms if self.rows else None)
+        write_vcd_scopes(path, {scope: self}, cycle_time_ms)
 
     @staticmethod
     def _register(writer: VCDWriter, scope: str, name: str, ref: OperandRef):  # noqa: ANN205 (pyvcd Variable)
         if ref.kind == "S":
             return writer.register_var(scope, name, "string", init="")
         return writer.register_var(scope, name, "wire", size=WIDTHS.get(ref.kind, 1))
+
+
+def write_vcd_scopes(path: Path, traces: Mapping[str, TraceRecorder], cycle_time_ms: int = 20) -> None:
+    """Traces of the same cycles in one value-change dump, one scope each: the original and the translation side by
+    side in one GTKWave window. Rows are taken cycle by cycle from every trace, so the times never go back."""
+    with atomic_text_file(path) as handle:
+        # a fixed date keeps the file reproducible for the same trace
+        with VCDWriter(handle, timescale="1 ms", date="", version="hh2iec") as writer:
+            scopes = [(trace, [TraceRecorder._register(writer, scope, name, ref) for name, ref in trace.columns])
+                      for scope, trace in traces.items()]
+            last_time = 0
+            cycles = max((len(trace.rows) for trace in traces.values()), default=0)
+            for index in range(cycles):
+                for trace, variables in scopes:
+                    if index >= len(trace.rows):
+                        continue
+                    cycle, row = trace.rows[index]
+                    last_time = cycle * cycle_time_ms
+                    for (_, ref), var, value in zip(trace.columns, variables, row):
+                        writer.change(var, last_time, _vcd_value(ref, value))
+            writer.close(last_time + cycle_time_ms if cycles else None)
 
 
 def _vcd_value(ref: OperandRef, value: int | str) -> int | str:
