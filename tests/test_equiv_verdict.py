@@ -200,3 +200,17 @@ def test_vcd_holds_both_executors_side_by_side(tmp_path, capsys):
     assert len(ids) == 2
     changes_at_60 = body.split("#60\n")[1].split("#")[0].split()
     assert all(f"1{i}" in changes_at_60 for i in ids)
+
+
+def test_werror_fails_simulate_and_equiv_on_warnings_of_their_own(tmp_path, capsys):
+    """--werror covers more than the front end: a scenario warning (a random pattern that matches nothing) fails
+    equiv and simulate, each with exit 2 and E-WERROR, and equiv prints no verdict."""
+    folder = CONSTRUCTS / "logic_chain"
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text((folder / "scenario.yaml").read_text() + "random:\n  seed: 1\n  inputs: [NO_SUCH_INPUT_*]\n")
+    code, _, err = _run(["equiv", folder / "main.src", "--scenario", scenario], capsys)
+    assert code == 0 and "warning[E-SCENARIO-UNUSED]" in err
+    code, out, err = _run(["equiv", folder / "main.src", "--scenario", scenario, "--werror"], capsys)
+    assert code == 2 and "error[E-WERROR]" in err and "EQUIVALENT" not in out
+    code, _, err = _run(["simulate", folder / "main.src", "--scenario", scenario, "--werror"], capsys)
+    assert code == 2 and "error[E-WERROR]" in err

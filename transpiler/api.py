@@ -176,6 +176,14 @@ def machine_parameters_of(project: Project, mp_file: Path | None = None, *, allo
     return path, values, diags
 
 
+def _fail_on_warnings(project: Project, diags: Diagnostics, what: str, runtime: Iterable = ()) -> None:
+    """--werror: any warning (a diagnostic, or a runtime warning of the interpreter) becomes an E-WERROR error."""
+    runtime = list(runtime)
+    count = len(diags.warnings) + len(runtime)
+    if project.options.werror and count and not diags.has_errors():
+        diags.report("E-WERROR", NO_SPAN, f"{count} warning(s) {what} and --werror", *(w.render() for w in runtime))
+
+
 def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool):
     """Run the back ends with the project's machine parameters; raises on any error."""
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
@@ -186,8 +194,7 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
                      "no machine-parameter file (*.mp) beside the main program and no --mp: the timer and counter "
                      "presets of the translation are 0")
-    if project.options.werror and diags.warnings and not diags.has_errors():
-        diags.report("E-WERROR", NO_SPAN, f"{len(diags.warnings)} warning(s) of the translation and --werror")
+    _fail_on_warnings(project, diags, "of the translation")
     diags.raise_if_errors()    # a partial translation is never written or compared as if it were whole
     return path, mp, out, diags
 
@@ -247,6 +254,8 @@ def simulate(project: Project, scenario: Path) -> Simulation:
         run = run_scenario(project.program, loaded, names, stimulus, diags=diags)
     except ShimUnavailable as exc:
         raise CompileFailed(list(diags.items) + [Diagnostic.of("E-TOOL", Span(str(scenario), 1, 1), str(exc))]) from None
+    _fail_on_warnings(project, diags, "of the simulation", run.warnings)
+    diags.raise_if_errors()
     return Simulation(loaded, run, tuple(diags.items))
 
 
@@ -279,6 +288,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     from transpiler.verify.guided import generate
     from transpiler.verify.scenario import load_scenario
     from transpiler.verify.simulate import project_names
+    from transpiler.verify.stimulus import build_stimulus
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
         raise _usage("equiv needs at least one --scenario or --random-cycles N")
@@ -304,6 +314,11 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     loaded = [load_scenario(path, names) for path in scenarios]
+    for scenario in loaded:     # their warnings, as simulate shows them (the co-simulation builds its own stimulus)
+        diags.extend(scenario.warnings)
+        diags.extend(build_stimulus(scenario, names).diagnostics)
+    _fail_on_warnings(project, diags, "of the scenarios")
+    diags.raise_if_errors()
     if random_cycles > 0:
         # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
         loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
@@ -346,6 +361,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                                           judge_all, load_equivalents, mutation_sites)
     from transpiler.verify.scenario import load_scenario
     from transpiler.verify.simulate import project_names
+    from transpiler.verify.stimulus import build_stimulus
     from transpiler.exec.interp import compile_program
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
@@ -367,6 +383,11 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
         side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
     names = project_names(project.program)
     loaded = [load_scenario(path, names) for path in scenarios]
+    for scenario in loaded:     # their warnings, as simulate shows them (the co-simulation builds its own stimulus)
+        diags.extend(scenario.warnings)
+        diags.extend(build_stimulus(scenario, names).diagnostics)
+    _fail_on_warnings(project, diags, "of the scenarios")
+    diags.raise_if_errors()
     loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), mp)
