@@ -184,6 +184,20 @@ def _fail_on_warnings(project: Project, diags: Diagnostics, what: str, runtime: 
         diags.report("E-WERROR", NO_SPAN, f"{count} warning(s) {what} and --werror", *(w.render() for w in runtime))
 
 
+def _load_scenarios(project: Project, paths: list[Path], names, diags: Diagnostics) -> list:
+    """The scenario files bound to the project, their warnings collected as simulate shows them (the co-simulation
+    builds its own stimulus later); raises on an error, or on a warning under --werror."""
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.stimulus import build_stimulus
+    loaded = [load_scenario(path, names) for path in paths]
+    for scenario in loaded:
+        diags.extend(scenario.warnings)
+        diags.extend(build_stimulus(scenario, names).diagnostics)
+    _fail_on_warnings(project, diags, "of the scenarios")
+    diags.raise_if_errors()
+    return loaded
+
+
 def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool):
     """Run the back ends with the project's machine parameters; raises on any error."""
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
@@ -239,8 +253,8 @@ def simulate(project: Project, scenario: Path) -> Simulation:
     """Run the original program under a scenario file (expectations checked, trace kept)."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify.scenario import load_scenario
-    from transpiler.verify.simulate import project_names, run_scenario
     from transpiler.verify.stimulus import build_stimulus
+    from transpiler.verify.simulate import project_names, run_scenario
     scenario = Path(scenario)
     if not scenario.is_file():
         raise _usage(f"scenario file '{scenario}' does not exist")
@@ -286,9 +300,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify.equiv import choose_backend, run_equivalence
     from transpiler.verify.guided import generate
-    from transpiler.verify.scenario import load_scenario
     from transpiler.verify.simulate import project_names
-    from transpiler.verify.stimulus import build_stimulus
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
         raise _usage("equiv needs at least one --scenario or --random-cycles N")
@@ -313,12 +325,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
-    loaded = [load_scenario(path, names) for path in scenarios]
-    for scenario in loaded:     # their warnings, as simulate shows them (the co-simulation builds its own stimulus)
-        diags.extend(scenario.warnings)
-        diags.extend(build_stimulus(scenario, names).diagnostics)
-    _fail_on_warnings(project, diags, "of the scenarios")
-    diags.raise_if_errors()
+    loaded = _load_scenarios(project, scenarios, names, diags)
     if random_cycles > 0:
         # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
         loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
@@ -359,9 +366,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     from transpiler.verify.guided import generate
     from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
                                           judge_all, load_equivalents, mutation_sites)
-    from transpiler.verify.scenario import load_scenario
     from transpiler.verify.simulate import project_names
-    from transpiler.verify.stimulus import build_stimulus
     from transpiler.exec.interp import compile_program
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
@@ -382,12 +387,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     else:
         side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
     names = project_names(project.program)
-    loaded = [load_scenario(path, names) for path in scenarios]
-    for scenario in loaded:     # their warnings, as simulate shows them (the co-simulation builds its own stimulus)
-        diags.extend(scenario.warnings)
-        diags.extend(build_stimulus(scenario, names).diagnostics)
-    _fail_on_warnings(project, diags, "of the scenarios")
-    diags.raise_if_errors()
+    loaded = _load_scenarios(project, scenarios, names, diags)
     loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), mp)
