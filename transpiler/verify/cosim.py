@@ -12,7 +12,7 @@ from transpiler.exec.interp.state import byte_cells
 from transpiler.exec.st_lines import st_origin
 from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.backends.report.iomap import Accessor, IoMap
+from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
@@ -346,6 +346,33 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     return result
 
 
+def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
+    """The values of `places` in the built-in executor's runtime as the io map's accessors read them (BOOL as 0/1,
+    integers as they are, multi-byte operands combined from their bytes and sign-extended, texts as str), from one
+    generated read of every variable involved instead of one path lookup per operand and cycle."""
+    paths: list[str] = []
+    plan: list[tuple[int, int, bool, bool]] = []          # (first path, width, big endian, text)
+    for place in places:
+        plan.append((len(paths), place.width, place.big_endian, place.text))
+        if place.width == 0:
+            paths.append(place.path)
+        else:
+            array, base = place.path[:-1].split("[")
+            paths.extend(f"{array}[{int(base) + k}]" for k in range(place.width))
+    raw = rt.reader(paths)
+    items = []
+    for first, width, big, text in plan:
+        if width == 0:
+            items.append(f"{'str' if text else 'int'}(v[{first}])")
+            continue
+        parts = [f"((v[{first + (width - 1 - k if big else k)}] & 255) << {8 * k})" for k in range(width)]
+        sign = 1 << (8 * width - 1)
+        items.append(f"((({' | '.join(parts)}) ^ {sign}) - {sign})")
+    env = {"raw": raw}
+    exec(compile("def read():\n    v = raw()\n    return [" + ", ".join(items) + "]\n", "<cosim-reader>", "exec"), env)
+    return env["read"]
+
+
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
     from transpiler.exec.stexec import StRuntimeError, load_st
@@ -367,6 +394,9 @@ def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable
 
         def set(self, path: str, value) -> None:
             self.rt.set(path, value)
+
+        def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
+            return runtime_reader(self.rt, places)
 
         def run_cycle(self) -> None:
             try:

@@ -10,6 +10,12 @@ from transpiler.exec.stexec.pou_base import PouBase
 from transpiler.exec.stexec.pycode import Ex
 
 
+# A CASE with more arms than this, all disjoint intervals, becomes a binary search (case_tree); leaves of at most
+# _CASE_LEAF intervals are tested in a row.
+_CASE_TREE_MIN = 8
+_CASE_LEAF = 4
+
+
 class StatementCompiler(PouBase):
     """Statements other than loops and calls: assignment, IF, CASE, EXIT, CONTINUE and RETURN."""
 
@@ -88,6 +94,10 @@ class StatementCompiler(PouBase):
         var = self.temp("_c")
         self.flush_pre()
         self.emit(f"{var} = {sel.code}")
+        arms = self.case_intervals(s, sel.ty, is_enum)
+        if arms is not None and len(arms) > _CASE_TREE_MIN:
+            self.case_tree(s, var, arms, sel.ty)
+            return
         kw = "if"
         for labels, body in s.elems:
             conds = []
@@ -117,6 +127,78 @@ class StatementCompiler(PouBase):
             self.indent += 1
             self.stmts(s.orelse)
             self.indent -= 1
+
+    def case_intervals(self, s: n.Case, sty: T.Type, is_enum: bool) -> Optional[list[tuple[int, int, int]]]:
+        """(lo, hi, arm) sorted by lo when every arm's labels form one interval and no two arms overlap, else None
+        (the if/elif chain keeps the first-match rule of overlapping labels). Labels are only checked here; the
+        errors of bad labels are reported once, by the chain or the tree that follows."""
+        out = []
+        for arm, (labels, _body) in enumerate(s.elems):
+            ranges = []
+            for lab in labels:
+                if lab.enum is not None:
+                    return None
+                if is_enum or lab.lo > lab.hi:
+                    return None
+                ranges.append((lab.lo, lab.hi))
+            if not ranges:
+                return None
+            ranges.sort()
+            lo, hi = ranges[0]
+            for a, b in ranges[1:]:
+                if a > hi + 1:
+                    return None              # two intervals: the arm's body would be emitted twice
+                hi = max(hi, b)
+            out.append((lo, hi, arm))
+        out.sort()
+        if any(b[0] <= a[1] for a, b in zip(out, out[1:])):
+            return None
+        return out
+
+    def case_tree(self, s: n.Case, var: str, arms: list[tuple[int, int, int]], sty: T.Type) -> None:
+        """A CASE of many disjoint intervals as a binary search over them: log2(arms) comparisons instead of one per
+        arm before the match (an indexed-access helper has hundreds of arms and runs hundreds of times a cycle).
+        The ELSE part runs once after the tree, when a flag says no interval matched."""
+        for labels, _body in s.elems:
+            for lab in labels:
+                if self.case_label(lab, sty, False) is None:       # the range checks of the chain
+                    return
+        flag = self.temp("_m") if s.orelse is not None else None
+        if flag is not None:
+            self.emit(f"{flag} = True")
+        self._case_node(s, var, arms, flag)
+        if flag is not None:
+            self.emit(f"if not {flag}:", s.span)
+            self.indent += 1
+            self.stmts(s.orelse)
+            self.indent -= 1
+
+    def _case_node(self, s: n.Case, var: str, arms: list[tuple[int, int, int]], flag: Optional[str]) -> None:
+        if len(arms) <= _CASE_LEAF:
+            kw = "if"
+            for lo, hi, arm in arms:
+                labels, body = s.elems[arm]
+                test = f"{var} == {lo}" if lo == hi else f"{lo} <= {var} <= {hi}"
+                self.emit(f"{kw} {test}:", labels[0].span if labels else s.span)
+                kw = "elif"
+                self.indent += 1
+                self.stmts(body)
+                self.indent -= 1
+            if flag is not None:
+                self.emit("else:")
+                self.indent += 1
+                self.emit(f"{flag} = False")
+                self.indent -= 1
+            return
+        mid = len(arms) // 2
+        self.emit(f"if {var} < {arms[mid][0]}:")
+        self.indent += 1
+        self._case_node(s, var, arms[:mid], flag)
+        self.indent -= 1
+        self.emit("else:")
+        self.indent += 1
+        self._case_node(s, var, arms[mid:], flag)
+        self.indent -= 1
 
     def case_label(self, lab: n.CaseLabel, sty: T.Type, is_enum: bool) -> Optional[tuple[int, int]]:
         b = T.base(sty)
