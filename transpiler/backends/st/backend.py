@@ -14,10 +14,10 @@ from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, Ie
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
-from transpiler.backends.st import library
+from transpiler.backends.st import hh_sys, library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
-from transpiler.backends.st.interfaces import StackAnalysis
+from transpiler.backends.st.interfaces import Effect, StackAnalysis
 from transpiler.backends.st import passes
 from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
@@ -94,7 +94,8 @@ class StBackend:
         self.layout = layout
         self.liveness = Liveness(self.program)
         self.stack: tuple[str, str] | None = None
-        self.stack_analysis = StackAnalysis(self.program)
+        self.stack_analysis = StackAnalysis(self.program, _module_effect)
+        self.modules_used: set[int] = set()
         self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
         self.real_stack_users: dict[str, tuple[int, int]] = {}
         self.current_key: tuple[int, int] = (0, 0)
@@ -113,6 +114,7 @@ class StBackend:
         main = self._with_services(main, layout)
         user_pous = [self._bit_accessor_pou(kind) for kind in sorted(layout.bit_access)] + self._order(pous)
         lib = [p for name, p in helpers.items() if name in self._helper_closure()]
+        lib += [hh_sys.fb_pou(n) for n in sorted(self.modules_used)]
         fbs = []
         if layout.timers:
             fbs.append(library.timer_fb(self.semantics))
@@ -217,8 +219,9 @@ class StBackend:
             self.layout.globals[name] = GlobalVar(name, tname, "kfield", initial=init, comment=f"KFIELD {o.text}")
         return self.kfields[key]
 
-    def _module_call(self, number: int) -> str:
-        raise Unsupported(f"PLC module {number} (module calls are not translated yet)")
+    def _module_call(self, ex: Executor, op, live: frozenset[str]) -> None:
+        in_job = self.layout.add_register("in_job", modcalls.IN_JOB_VAR, "BOOL", "TRUE while a submit job runs")
+        modcalls.emit_module_call(ex, op, live, in_job, self.modules_used)
 
     def _routine(self, key: tuple[int, int], file_entries: dict[int, CallTarget]) -> Pou:
         """One POU; `file_entries` are the routine entries of the routine's file (by op index)."""
@@ -454,6 +457,12 @@ class StBackend:
         inst = self.names.name("instance", f"PLC_{self.main_pou}")
         return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
                              (Task(task, cycle, 0),), (ProgramInstance(inst, task, self.main_pou),), tuple(sections))
+
+
+def _module_effect(number: int) -> Effect | None:
+    """What a CM of a PLC module does to the data stack, for the stack analysis (modcalls.py)."""
+    effect = modcalls.stack_effect(number)
+    return Effect(*effect) if effect is not None else None
 
 
 def _with_externals(pou: Pou, globals_by_upper: Mapping[str, IecVar]) -> Pou:
