@@ -253,7 +253,7 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
     `base_mp` are the machine parameters the translation was made with (see cosim.cosimulate)."""
     outcomes: list[Outcome] = []
     coverage_sets: list = []
-    reference = compile_program(program, coverage=True)
+    reference = compile_program(program, coverage=True, exact=False)      # fast code, exact coverage
     for scenario in scenarios:
         traces: list = []
         record = (lambda c, a, b: traces.append((c, a, b))) if vcd_dir else None

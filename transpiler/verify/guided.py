@@ -66,7 +66,6 @@ class Search:
                                     base_mp=self.base_mp)
         except (CompileFailed, ValueError):
             return None
-        branches = machine.runtime.branches
         local: set = set()
         new: set = set()
         last_new, count, ok = -1, 0, 0
@@ -79,11 +78,11 @@ class Search:
             if report.faults:
                 break
             ok = cycle + 1
-            if len(branches) != count:
-                # The set only grows; the difference is taken only in the rare cycles in which it did.
-                fresh = branches - local
+            if machine.branch_outcome_count != count:
+                # The count only grows; the outcomes are fetched only in the rare cycles in which it did.
+                fresh = machine.branch_outcomes() - local
                 local |= fresh
-                count = len(branches)
+                count = machine.branch_outcome_count
                 fresh -= self.seen
                 if fresh:
                     new |= fresh
@@ -114,7 +113,10 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
             i = rng.choice(nc_events)
             events[i] = Event(cycle=events[i].cycle, nc=NcAction(**corners.nc_action(rng, events[i].nc.kind)))
         elif choice < 0.5:
-            events.append(Event(cycle=at, nc=NcAction(**corners.nc_action(rng))))
+            # half of the inserted jobs are M functions when the program decodes a table of them: each decoded
+            # number is a CASE entry of its own, a dozen targets a uniform pick of the job kind rarely reaches
+            kind = "m_function" if corners.tables and rng.random() < 0.5 else None
+            events.append(Event(cycle=at, nc=NcAction(**corners.nc_action(rng, kind))))
         elif choice < 0.62 and (corners.foreign_words or corners.foreign_markers):
             if corners.foreign_words and (not corners.foreign_markers or rng.random() < 0.6):
                 name, kind = rng.choice(corners.foreign_words)
@@ -187,7 +189,7 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         return []
     rng = random.Random(seed)
     corners = harvest(program, names)
-    search = Search(program, names, corners, compile_program(program, coverage=True), base_mp)
+    search = Search(program, names, corners, compile_program(program, coverage=True, exact=False), base_mp)
     limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
     corpus: list[Scenario] = []
     for scenario in seeds:

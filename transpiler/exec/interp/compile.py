@@ -69,14 +69,20 @@ class CompiledProgram:
         return self.line_ops[lineno - 1] if 0 < lineno <= len(self.line_ops) else -1
 
 
-def compile_program(program: Program, *, exact: bool = False, coverage: bool = False) -> CompiledProgram:
-    """Generate and compile the program: `exact` counts every instruction, `coverage` (implies exact) records ops and branches."""
+def compile_program(program: Program, *, exact: bool | None = None, coverage: bool = False) -> CompiledProgram:
+    """Generate and compile the program: `exact` counts every instruction, `coverage` records ops and branches.
+    `exact` defaults to `coverage`. Coverage is exact in either variant: with exact=False the ops of a straight-line
+    stretch are marked together when it ends and the watchdog budget is pre-counted, and the machine re-runs a cycle
+    that overruns or faults with an exact variant that also records coverage (Machine.program_phase), so coverage
+    costs little more than the fast variant."""
+    if exact is None:
+        exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
     native = (sys.byteorder == "little") == program.semantics.little_endian
-    gen = _Generator(program, exact=exact or coverage, coverage=coverage, native=native)
+    gen = _Generator(program, exact=exact, coverage=coverage, native=native)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
-    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact or coverage, coverage)
+    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage)
 
 
 def _entries(program: Program) -> list[set[int]]:
@@ -203,6 +209,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         ops = code.ops[first:end]
         if not self.exact:
             self._precount(ops, 0, indent, base + first)
+        # The fast variant marks the ops of a straight-line stretch as executed in one slice store just before its
+        # exit (each op on its own in the exact variant): a fault inside the stretch leaves its ops unmarked, so
+        # coverage may miss ops of a faulting cycle but never claims an op that did not run.
+        pending: list[int] = []
         for offset, op in enumerate(ops):
             opid = base + first + offset
             if counts_as_instruction(op):
@@ -210,16 +220,39 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                     self.out(indent, "n += 1", opid)
                     self.out(indent, f"if n > {self.budget}: _watchdog()", opid)
                 if self.coverage:
-                    self.out(indent, f"_hit[{opid}] = 1", opid)
+                    if self.exact:
+                        self.out(indent, f"_hit[{opid}] = 1", opid)
+                    else:
+                        pending.append(opid)
+            # CAN may end the running job from inside the stretch (JobCancelled): its marks go first as well
+            if pending and (op.code in _EXITS_COND or op.code in _EXITS_UNCOND or op.code == "CAN"):
+                self._mark(indent, pending)
+                pending = []
             self._op(op, opid, f, seg_of, indent)
             if op.code in _EXITS_UNCOND:
                 return                       # the rest of the block is unreachable
             if op.code in _EXITS_COND and not self.exact and offset + 1 < len(ops):
                 self._precount(ops, offset + 1, indent, opid + 1)
+        if pending:
+            self._mark(indent, pending)
         if k + 1 < len(starts):
             self.out(indent, f"b = {k + 1}")
         else:
             self.out(indent, "_falloff()")
+
+    def _mark(self, indent: int, opids: list[int]) -> None:
+        """Coverage marks of `opids` (ascending), one slice store per run of consecutive ids."""
+        run_start = prev = opids[0]
+        for opid in [*opids[1:], None]:
+            if opid is not None and opid == prev + 1:
+                prev = opid
+                continue
+            if prev == run_start:
+                self.out(indent, f"_hit[{run_start}] = 1", run_start)
+            else:
+                self.out(indent, f"_hit[{run_start}:{prev + 1}] = {bytes([1] * (prev + 1 - run_start))!r}", run_start)
+            if opid is not None:
+                run_start = prev = opid
 
     def _precount(self, ops: tuple[Op, ...], start: int, indent: int, opid: int) -> None:
         """Fast variant: count the straight-line instructions up to the next exit once, before running them."""

@@ -259,7 +259,8 @@ class Machine:
 
     def program_phase(self, cycle: int, report: CycleReport | None = None) -> None:
         """Phases 4 and 5. A budget overrun seen by the fast code's pre-count re-runs both phases from a snapshot
-        with per-instruction counting, replaying the module calls, so the watchdog fault is exact."""
+        with per-instruction counting, replaying the module calls, so the watchdog fault is exact (with coverage, a
+        cycle that faults is re-run the same way, so that coverage is exact up to the fault)."""
         report = report or self._report
         self._report = report
         rt = self.runtime
@@ -270,8 +271,18 @@ class Machine:
         snap = (self.state.snapshot(), self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings))
         rt.module_log = []
         rt.replay = None
+        faults = len(report.faults)
         try:
             self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
+            if not (self.coverage_enabled and len(report.faults) > faults):
+                return
+            # The fast code marks coverage per straight-line stretch when the stretch ends; a fault inside one
+            # would leave the ops it ran unmarked. The faulting cycle (at most one: the machine halts) runs again
+            # exactly, recording every op up to the fault, and records the same fault.
+            del self.faults[len(self.faults) - (len(report.faults) - faults):]
+            del report.faults[faults:]
+            self.halted = False
+            raise BudgetExceeded
         except BudgetExceeded:
             state, regs, jobs, unknown, warned = snap
             self.state.restore(state)
@@ -290,8 +301,9 @@ class Machine:
 
     def _exact_variant(self) -> tuple[CompiledProgram, tuple, Any, Any]:
         if self._exact is None:
-            compiled = compile_program(self.program, exact=True)
-            funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), False))
+            # with coverage when the machine records it: the ops of the overrunning cycle's last blocks count too
+            compiled = compile_program(self.program, exact=True, coverage=self.coverage_enabled)
+            funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), self.coverage_enabled))
             self._exact = (compiled, funcs, get, set_)
         return self._exact
 
@@ -387,6 +399,17 @@ class Machine:
         self.warnings.append(warning)
 
     # ------------------------------------------------------------------ coverage and summaries
+
+    @property
+    def branch_outcome_count(self) -> int:
+        """How many distinct (op, outcome) pairs of conditional jumps, calls, module ends and CASE entries this
+        machine has taken so far; it only grows, so a caller watching for new outcomes compares it each cycle and
+        asks for branch_outcomes() only when it changed (0 without coverage)."""
+        return len(self.runtime.branches)
+
+    def branch_outcomes(self) -> frozenset[tuple[int, int]]:
+        """The distinct (op id, outcome) pairs taken so far, as a snapshot (op ids as in the compiled program)."""
+        return frozenset(self.runtime.branches)
 
     @property
     def coverage(self) -> Coverage:

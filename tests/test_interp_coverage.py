@@ -1,0 +1,71 @@
+"""Coverage recorded by the interpreter's fast variant (marks per straight-line stretch, pre-counted watchdog)
+is the exact variant's (a mark per op, counted per instruction), and Machine's public accessors of branch
+outcomes agree with its coverage."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+
+from transpiler.exec.interp import Machine, compile_program
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
+from transpiler.language.semantics import make_semantics
+
+ROOT = Path(__file__).resolve().parents[1]
+PROJECTS = [ROOT / "samples" / "basic_program" / "Main_PGM.src",
+            ROOT / "samples" / "constructs" / "indexed" / "main.src",
+            ROOT / "samples" / "constructs" / "jumps_loop" / "main.src"]
+
+
+def _program(main: Path):
+    result = compile_project(ProjectOptions(main=main), make_semantics("itnc530", {}))
+    assert result.ok
+    return result.program
+
+
+def _run(program, exact: bool, seed: int, cycles: int) -> Machine:
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=exact), coverage=True)
+    rng = random.Random(seed)
+    for cycle in range(cycles):
+        writes = [("I", rng.randrange(64), rng.randrange(2)) for _ in range(3)]
+        report = machine.run_cycle(cycle, writes)
+        if report.faults:
+            break
+    return machine
+
+
+@pytest.mark.parametrize("main", PROJECTS, ids=lambda p: p.parent.name)
+def test_fast_coverage_is_the_exact_coverage(main: Path) -> None:
+    program = _program(main)
+    for seed in (1, 2):
+        fast, exact = _run(program, False, seed, 300), _run(program, True, seed, 300)
+        assert fast.coverage.branches == exact.coverage.branches
+        # a faulting cycle may leave the ops of its last stretch unmarked in the fast variant, never more
+        assert fast.coverage.executed <= exact.coverage.executed
+        if not fast.halted:
+            assert fast.coverage.executed == exact.coverage.executed
+        assert fast.coverage.executed, "nothing recorded"
+
+
+def test_branch_outcome_accessors_follow_the_run() -> None:
+    program = _program(PROJECTS[0])
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=False), coverage=True)
+    counts = []
+    for cycle in range(50):
+        machine.run_cycle(cycle, [("I", cycle % 64, cycle & 1)])
+        counts.append(machine.branch_outcome_count)
+    assert counts == sorted(counts) and counts[-1] > 0
+
+    outcomes = machine.branch_outcomes()
+    assert len(outcomes) == counts[-1]
+    index = compile_program(program, coverage=True).op_index
+    assert {(index[op], outcome) for op, outcome in outcomes} == \
+        {(at, outcome) for at, seen in machine.coverage.branches.items() for outcome in seen}
+
+def test_coverage_alone_still_means_the_exact_variant() -> None:
+    program = _program(PROJECTS[2])
+    assert compile_program(program, coverage=True).exact
+    assert not compile_program(program, coverage=True, exact=False).exact
