@@ -17,8 +17,9 @@ ROOT = Path(__file__).resolve().parents[1]
 CONSTRUCTS = ROOT / "samples" / "constructs"
 
 MAIN_WITH_MODULE = "USES sub.src\nEXTERN Read_pos\nL I1\n= O1\nCM Read_pos\nEM\n"
-# A subprogram that calls a pure module (9054, hex to bytes of word memory): the ST back end does not translate it.
-SUB_WITH_MODULE = "GLOBAL Read_pos\nLBL Read_pos\nL K1\n= M100\nPS K0\nPS K200\nCM 9054\nL M100\n= O2\nEM\n"
+# A subprogram that calls the pure module 9019 (data stack depth, which the ST's static stack does not have): the
+# ST back end does not translate it.
+SUB_WITH_MODULE = "GLOBAL Read_pos\nLBL Read_pos\nL K1\n= M100\nPS K0\nPL D204\nCM 9019\nPL D200\nL M100\n= O2\nEM\n"
 
 
 def _run(args: list, capsys) -> tuple[int, str, str]:
@@ -40,7 +41,7 @@ def test_untranslated_code_is_an_error_at_its_line(tmp_path, capsys):
     main_src = _write(tmp_path, {"main.src": MAIN_WITH_MODULE, "sub.src": SUB_WITH_MODULE})
     code, _, err = _run(["transpile", main_src, "--out", tmp_path / "out"], capsys)
     assert code == 2
-    assert "sub.src:7:1: error[E-UNSUPPORTED]" in err and "9054" in err
+    assert "sub.src:7:1: error[E-UNSUPPORTED]" in err and "9019" in err
     assert not (tmp_path / "out").exists(), "nothing partial is written"
 
 
@@ -57,7 +58,7 @@ def test_allowed_untranslated_code_is_written_with_the_list_first_and_never_equi
     code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated"], capsys)
     assert code == 1 and "hh2iec equiv: NOT EQUIVALENT" in out and "NOT TRANSLATED: sub.src:7:1" in out
     # A lost routine whose effect no compared operand shows: every run agrees, and still no EQUIVALENT.
-    _write(tmp_path, {"sub.src": "GLOBAL Read_pos\nLBL Read_pos\nPS K0\nPS K200\nCM 9054\nEM\n"})
+    _write(tmp_path, {"sub.src": "GLOBAL Read_pos\nLBL Read_pos\nPS K0\nPL D204\nCM 9019\nPL D200\nEM\n"})
     code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated",
                          "--report", tmp_path / "equiv.json"], capsys)
     assert code == 1

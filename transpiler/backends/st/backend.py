@@ -14,7 +14,7 @@ from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, Ie
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
-from transpiler.backends.st import hh_sys, library, modcalls
+from transpiler.backends.st import library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Effect, StackAnalysis
@@ -114,7 +114,7 @@ class StBackend:
         main = self._with_services(main, layout)
         user_pous = [self._bit_accessor_pou(kind) for kind in sorted(layout.bit_access)] + self._order(pous)
         lib = [p for name, p in helpers.items() if name in self._helper_closure()]
-        lib += [hh_sys.fb_pou(n) for n in sorted(self.modules_used)]
+        lib += modcalls.library_pous(self.modules_used, self.semantics.profile.string_len)
         fbs = []
         if layout.timers:
             fbs.append(library.timer_fb(self.semantics))
@@ -221,7 +221,9 @@ class StBackend:
 
     def _module_call(self, ex: Executor, op, live: frozenset[str]) -> None:
         in_job = self.layout.add_register("in_job", modcalls.IN_JOB_VAR, "BOOL", "TRUE while a submit job runs")
-        modcalls.emit_module_call(ex, op, live, in_job, self.modules_used)
+        # 9050 writes the decimal character of MP7280 (0 comma, else point), as the interpreter does.
+        point = "," if self.mp.get((7280, 0)) == 0 else "."
+        modcalls.emit_module_call(ex, op, live, in_job, self.modules_used, point)
 
     def _routine(self, key: tuple[int, int], file_entries: dict[int, CallTarget]) -> Pou:
         """One POU; `file_entries` are the routine entries of the routine's file (by op index)."""

@@ -5,13 +5,19 @@ A *data* or *machine* module is a call of its `HH_Sys` FUNCTION_BLOCK (hh_sys.py
 Its parameters are the entries the symbolic data stack holds (the pushes of the caller, usually static), so
 `PS K9032 ... CM 9032 PL W102` reads `inst(NUMBER := ..., INDEX := ..., IN_JOB := ...); W102 := inst.VALUE`.
 Where the caller's stack is dynamic the parameters come from the emulated stack and the results go back to it.
-Pure modules are not translated yet: they are E-UNSUPPORTED at their line.
+A *pure* module (9050, 9052-9054, 9070) is a call of its block in the generated library (pure_lib.py): the
+caller reads the string contents (and whether the string numbers are valid) into the block and stores its TEXT
+into the destination string when the call did not fail; 9053/9054 get the byte memory as VAR_IN_OUT, which
+exists only where the program keeps all of its memory in the byte array. 9019 (stack depth), 9006 and the
+conditional calls CMT/CMF stay E-UNSUPPORTED at their line.
 """
 
 from __future__ import annotations
 
 from transpiler.ir import Op, Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.iec_model import Pou
+from transpiler.backends.st import hh_sys, pure_lib
 from transpiler.backends.st.hh_sys import FAULT, FAULT_CODE, IN_JOB, interface
 from transpiler.backends.st.liveness import REGS
 from transpiler.backends.st.routine import Unsupported
@@ -34,16 +40,23 @@ def translatable(number: int) -> str | None:
     row = MODULE_TABLE.get(number)
     if row is None:
         return f"PLC module {number} has no row in the module table"
-    if row.kind == PURE:
+    if row.kind == PURE and number not in pure_lib.PURE_TRANSLATED:
         return f"PLC module {number} ({row.st_name}, a pure module) is not translated yet"
     if row.number == 9006:
         return "PLC module 9006 (additional timers T96-T999) is not translated yet"
     return None
 
 
-def emit_module_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int]) -> None:
+def library_pous(used: set[int], string_len: int) -> list[Pou]:
+    """The library blocks of the modules `used`: the generated pure ones, then the HH_Sys interface blocks."""
+    return pure_lib.pure_pous(used, string_len) + [hh_sys.fb_pou(n) for n in sorted(used)
+                                                   if MODULE_TABLE[n].kind != PURE]
+
+
+def emit_module_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], decimal_point: str = ".") -> None:
     """Translate `op` (an unconditional CM of a module) with the symbolic executor `ex`; `in_job` is the global
-    that is TRUE while a submit job runs; the module number goes into `used` (the library needs its FB)."""
+    that is TRUE while a submit job runs; the module number goes into `used` (the library needs its FB);
+    `decimal_point` is the character 9050 writes (MP7280)."""
     number = op.call.module
     why = translatable(number)
     if why is not None:
@@ -51,6 +64,9 @@ def emit_module_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[in
     if op.code != "CALL":
         raise Unsupported(f"conditional call of PLC module {number} ({op.mnemonic})", op.span)
     row = MODULE_TABLE[number]
+    if row.kind == PURE:
+        _emit_pure(ex, op, live, used, decimal_point)
+        return
     itf = interface(number)
     ctx = ex.ctx
     for reg in REGS:
@@ -90,3 +106,109 @@ def _error_marker(ex, inst: str) -> None:
     for lhs, value in assignments:
         ex.ctx.out.line(f"    {lhs} := {value.text};")
     ex.ctx.out.line("END_IF;")
+
+
+def _prepare(ex, live: frozenset[str], nparams: int) -> list[E.Expr]:
+    """Registers the call may clobber saved, the parameters popped (push order), the rest of the stack flushed."""
+    for reg in REGS:
+        if reg in live:
+            ex.materialize(reg)
+        else:
+            ex.s.regs[reg] = None
+    args = [E.to_dint(ex._pop("val")) for _ in range(nparams)][::-1]
+    ex.flush_stack()
+    return args
+
+
+class _StringRef:
+    """A string number given to a pure module: whether it is valid (ST BOOL text) and its variable (or None)."""
+
+    def __init__(self, ex, arg: E.Expr, span):
+        layout = ex.ctx.layout
+        count = layout.profile.ranges.size("S")
+        if arg.const is not None:
+            self.ok = "TRUE" if 0 <= arg.const < count else "FALSE"
+            self.var = None
+            if self.ok == "TRUE":
+                if layout.string_array is not None or arg.const in layout._string_var:
+                    self.var = layout.string_lvalue(Operand("S", arg.const), None).text
+                else:
+                    # A string only module calls touch: it still holds what one call writes for the next.
+                    self.var = layout.add_register(f"str:S{arg.const}", f"HH_S{arg.const}", "STRING",
+                                                   f"string S{arg.const} (used only by PLC module calls)")
+            return
+        if layout.string_array is None:
+            raise Unsupported("a PLC module's string number computed at run time in a program without indexed "
+                              "string access", span)
+        index = ex.ctx.temp("DINT")
+        ex.ctx.out.line(f"{index} := {arg.text};")
+        self.ok = f"({index} >= 0 AND {index} < {count})"
+        self.var = f"{layout.string_array}[{index}]"
+
+    def read(self, ex) -> str:
+        """A STRING temporary with the contents ('' for an invalid number: the module fails before reading)."""
+        if self.var is None:
+            return "''"
+        if self.ok == "TRUE":
+            return self.var
+        tmp = ex.ctx.temp("STRING")
+        ex.ctx.out.line(f"{tmp} := '';")
+        ex.ctx.out.line(f"IF {self.ok} THEN {tmp} := {self.var}; END_IF;")
+        return tmp
+
+    def write(self, ex, inst: str, value: str) -> None:
+        if self.var is None:
+            return
+        ex.prepare_write(E.base_name(self.var).upper())
+        ex.ctx.out.line(f"IF NOT {inst}.{FAULT} THEN")
+        ex.ctx.out.line(f"    {self.var} := {inst}.{value};")
+        ex.ctx.out.line("END_IF;")
+
+
+def _emit_pure(ex, op: Op, live: frozenset[str], used: set[int], point: str) -> None:
+    """A pure module: its library block with the string contents in, the destination string written back."""
+    # Kept whole (~60 lines): one branch per module, each a handful of lines that share the call's temporaries.
+    number = op.call.module
+    row = MODULE_TABLE[number]
+    ctx = ex.ctx
+    layout = ctx.layout
+    span = op.span
+    if number in pure_lib.NEEDS_MEMORY and (layout.mem_array is None or layout._mem_var):
+        raise Unsupported(f"PLC module {number} reads or writes the byte memory, which this program does not keep "
+                          "in one byte array (only programs with indexed memory access do)", span)
+    args = _prepare(ex, live, row.nparams)
+    inst = ctx.temp(pure_lib.fb_name(number))
+    used.add(number)
+    mem_size = layout.profile.ranges.size("B")
+    tag = f"(* CM {number} {row.st_name}  {span.file}:{span.line} *)"
+    outputs: tuple[str, ...] = ()
+    if number == 9050:
+        ref = _StringRef(ex, args[2], span)
+        ctx.out.line(f"{inst}(MANTISSA := {args[0].text}, EXPONENT := {args[1].text}, STRING_OK := {ref.ok}, "
+                     f"POINT := '{point}'); {tag}")
+        ref.write(ex, inst, "TEXT")
+    elif number == 9052:
+        ref = _StringRef(ex, args[0], span)
+        ctx.out.line(f"{inst}(TEXT := {ref.read(ex)}, STRING_OK := {ref.ok}); {tag}")
+        outputs = ("VALUE", "EXPONENT")
+    elif number == 9070:
+        src, dst = _StringRef(ex, args[0], span), _StringRef(ex, args[1], span)
+        ok = src.ok if dst.ok == "TRUE" else dst.ok if src.ok == "TRUE" else f"{src.ok} AND {dst.ok}"
+        ctx.out.line(f"{inst}(TEXT := {src.read(ex)}, STRINGS_OK := {ok}); {tag}")
+        dst.write(ex, inst, "NUMBER_TEXT")
+        outputs = ("OFFSET",)
+    elif number == 9053:
+        ref = _StringRef(ex, args[1], span)
+        ctx.out.line(f"{inst}(ADDRESS := {args[0].text}, COUNT := {args[2].text}, STRING_OK := {ref.ok}, "
+                     f"MEM_SIZE := {mem_size}, MEM := {layout.mem_array}); {tag}")
+        ref.write(ex, inst, "TEXT")
+    else:   # 9054
+        ref = _StringRef(ex, args[0], span)
+        text = ref.read(ex)
+        ex.prepare_write(layout.mem_array.upper())
+        ctx.out.line(f"{inst}(TEXT := {text}, STRING_OK := {ref.ok}, ADDRESS := {args[1].text}, "
+                     f"MEM_SIZE := {mem_size}, MEM := {layout.mem_array}); {tag}")
+    _error_marker(ex, inst)
+    ex.forget()
+    for name in reversed(outputs):
+        ex.s.stack.append(("val", E.var(f"{inst}.{name}", "DINT")))

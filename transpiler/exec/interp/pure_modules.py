@@ -45,10 +45,15 @@ def format_number(mantissa: int, exponent: int, point: str) -> str:
     return sign + whole + (point + frac if frac else "")
 
 
+def _digit(c: str) -> bool:
+    # Only 0-9: str.isdigit() also accepts Latin-1 superscripts such as '\xb2', which int() then refuses.
+    return c in "0123456789"
+
+
 def parse_number(text: str) -> tuple[int, int, int, int] | None:
     """(mantissa, exponent, start offset, end offset) of the first number in text (sign, digits, one '.' or ','), None if none."""
     i, n = 0, len(text)
-    while i < n and not (text[i].isdigit() or (text[i] in "+-" and i + 1 < n and text[i + 1].isdigit())):
+    while i < n and not (_digit(text[i]) or (text[i] in "+-" and i + 1 < n and _digit(text[i + 1]))):
         i += 1
     if i == n:
         return None
@@ -57,7 +62,7 @@ def parse_number(text: str) -> tuple[int, int, int, int] | None:
     if text[i] in "+-":
         i += 1
     digits, frac, seen_point = "", 0, False
-    while i < n and (text[i].isdigit() or (text[i] in ".," and not seen_point)):
+    while i < n and (_digit(text[i]) or (text[i] in ".," and not seen_point)):
         if text[i] in ".,":
             seen_point = True
         else:
