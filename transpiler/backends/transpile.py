@@ -11,6 +11,7 @@ from typing import Mapping
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 from transpiler.backends.st.backend import StBackend, StResult
+from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
 from transpiler.backends.report.report import render_io_map, render_report
 
 
@@ -35,6 +36,13 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         files["project.st"] = st_text.encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_xml(project)
+    # The HH_Sys interface library also as files of its own, for the target IDE (sys_library.py).
+    library = library_project(project)
+    if library is not None:
+        if "st" in formats:
+            files[LIB_ST] = render_library_st(library).encode("utf-8")
+        if "xml" in formats:
+            files[LIB_XML] = render_xml(library)
     files["report.md"] = render_report(program, result, diags, mp_name).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

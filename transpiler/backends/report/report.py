@@ -8,6 +8,7 @@ from transpiler.backends.st.readability import measure
 from transpiler.backends.st.writer import render_st
 from transpiler.backends.iec_model import Pou
 from transpiler.backends.report.target import target_must_provide
+from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project
 from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
 from transpiler.backends.st.backend import StResult
 from transpiler.backends.st.liveness import use_def
@@ -133,6 +134,10 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
     lines += ["", "## What the target must provide", ""] + target_must_provide(program, result)
+    if library_project(result.project) is not None:
+        lines += ["", f"The same FUNCTION_BLOCKs, and nothing else, are written as the library files `{LIB_ST}` (ST) and "
+                  f"`{LIB_XML}` (PLCopen XML) next to this report (with the ST and XML output formats), to import "
+                  "into the target IDE (CODESYS, TwinCAT) and implement there."]
     lines += ["", "## Timers and counters", ""]
     for name, cycles in sorted(result.presets.items()):
         lines.append(f"- `{name}` = {cycles} cycles")
