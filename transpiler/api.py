@@ -198,12 +198,13 @@ def _load_scenarios(project: Project, paths: list[Path], names, diags: Diagnosti
     return loaded
 
 
-def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool):
+def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool,
+               target: str = "matiec"):
     """Run the back ends with the project's machine parameters; raises on any error."""
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
     path, mp, diags = machine_parameters_of(project, mp_file, allowed=allowed)
     diags.raise_if_errors()
-    out = transpile_program(project.program, diags, mp, formats, mp_file=path)
+    out = transpile_program(project.program, diags, mp, formats, mp_file=path, target=target)
     if path is None and out.result.preset_vars:
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
                      "no machine-parameter file (*.mp) beside the main program and no --mp: the timer and counter "
@@ -214,15 +215,19 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
 
 
 def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_file: Path | None = None,
-              validate_xml: bool = True, allow_untranslated: bool = False) -> Transpilation:
+              validate_xml: bool = True, allow_untranslated: bool = False, target: str = "matiec") -> Transpilation:
     """Translate to ST / PLCopen XML plus report.md and io_map.csv. Raises HH2IECError on bad machine
     parameters, on code the back end cannot translate (E-UNSUPPORTED, unless `allow_untranslated`: then each
     is a warning and report.md opens with the list), or when the XML does not validate against the cached TC6
-    schema (a bug in hh2iec)."""
+    schema (a bug in hh2iec). `target` (matiec, openplc, codesys, twincat) picks the dialect of project.st
+    and project.xml (docs/import.md)."""
     formats = {f.strip().lower() for f in formats if f.strip()}
     if not formats or formats - {"st", "xml"}:
         raise _usage(f"formats are st, xml or both, not '{','.join(sorted(formats))}'")
-    path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated)
+    from transpiler.backends.st.dialect import TARGETS
+    if target not in TARGETS:
+        raise _usage(f"target is one of {', '.join(TARGETS)}, not '{target}'")
+    path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated, target)
     validated = False
     if "xml" in formats and validate_xml:
         from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate

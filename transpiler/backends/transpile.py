@@ -11,6 +11,7 @@ from typing import Mapping
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 from transpiler.backends.st.backend import StBackend, StResult
+from transpiler.backends.st.dialect import DEFAULT_TARGET, for_target, target_section
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
 from transpiler.backends.report.report import render_io_map, render_report
 
@@ -23,19 +24,22 @@ class Transpiled:
 
 
 def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
-                      formats: set[str], mp_file: Path | None = None) -> Transpiled:
-    """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv."""
-    from transpiler.backends.plcopen.writer import render_xml
-    from transpiler.backends.st.writer import render_st
+                      formats: set[str], mp_file: Path | None = None, target: str = DEFAULT_TARGET) -> Transpiled:
+    """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv; `target` picks the
+    dialect of project.st and project.xml (st/dialect.py). `st_text` is always the matiec text: that is what the
+    co-simulation runs."""
+    from transpiler.backends.plcopen.writer import render_target_xml, render_xml
+    from transpiler.backends.st.writer import render_st, render_target_st
     mp_name = mp_file.name if mp_file is not None else None
     result = StBackend(program, diags, mp, mp_file=mp_name).build()
     project = result.project
     files: dict[str, bytes] = {}
     st_text = render_st(project)
+    laid_out = for_target(project, target)
     if "st" in formats:
-        files["project.st"] = st_text.encode("utf-8")
+        files["project.st"] = render_target_st(laid_out).encode("utf-8")
     if "xml" in formats:
-        files["project.xml"] = render_xml(project)
+        files["project.xml"] = render_target_xml(laid_out)
     # The HH_Sys interface library also as files of its own, for the target IDE (sys_library.py).
     library = library_project(project)
     if library is not None:
@@ -43,6 +47,6 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
             files[LIB_ST] = render_library_st(library).encode("utf-8")
         if "xml" in formats:
             files[LIB_XML] = render_xml(library)
-    files["report.md"] = render_report(program, result, diags, mp_name).encode("utf-8")
+    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

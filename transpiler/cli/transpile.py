@@ -18,6 +18,9 @@ def register(sub, common) -> None:
     p.add_argument("--format", default="st,xml", help="which of st,xml to write (default both)")
     p.add_argument("--mp", type=Path, help="machine-parameter file for timer/counter presets "
                    "(default: the one *.mp file beside MAIN)")
+    p.add_argument("--target", choices=("matiec", "openplc", "codesys", "twincat"), default="matiec",
+                   help="dialect of project.st/project.xml: matiec (default; also Beremiz), openplc (matiec's text), "
+                   "codesys or twincat (global variable lists, no VAR_EXTERNAL; see docs/import.md)")
     p.add_argument("--allow-untranslated", action="store_true",
                    help="write the output even where code cannot be translated (a warning per place; report.md "
                    "opens with the list)")
@@ -31,7 +34,8 @@ def cmd_transpile(args: argparse.Namespace) -> int:
     if not formats or formats - {"st", "xml"}:
         raise UsageError(f"--format takes st, xml or st,xml, not '{args.format}'")
     project = project_from_args(args)
-    out = api.transpile(project, formats=formats, mp_file=args.mp, allow_untranslated=args.allow_untranslated)
+    out = api.transpile(project, formats=formats, mp_file=args.mp, allow_untranslated=args.allow_untranslated,
+                        target=args.target)
     if "xml" in formats and not out.xml_validated:
         from transpiler.backends.plcopen.xsd import FETCH_HINT
         print(f"note: the PLCopen schema is not cached, project.xml was not validated. {FETCH_HINT}", file=sys.stderr)
@@ -41,7 +45,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
         print(f"{args.out}:1:1: error[E-TOOL]: cannot write output: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print_diagnostics(project.diagnostics + out.diagnostics)
-    print(f"hh2iec transpile: wrote {', '.join(sorted(out.files))} to {args.out} "
+    print(f"hh2iec transpile: wrote {', '.join(sorted(out.files))} for {args.target} to {args.out} "
           f"({out.pou_count} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
           f"{len(out.result.untranslated)} not translated)")
     return EXIT_OK

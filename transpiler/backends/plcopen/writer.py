@@ -17,6 +17,7 @@ from datetime import datetime, timezone
 from lxml import etree
 
 from transpiler.backends.iec_model import DataType, IecProject, IecVar, Pou, VarSection
+from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.st.writer import check_formattable
 
 NS = "http://www.plcopen.org/xml/tc6_0201"
@@ -26,6 +27,10 @@ SOURCEMAP_DATA_NAME = "https://hh2iec.invalid/sourcemap"
 COMPANY_NAME = "hh2iec"
 PRODUCT_NAME = "hh2iec"
 REPLACEMENT = "\ufffd"
+# CODESYS and TwinCAT 3 (whose PLC is CODESYS-based) export and import their global variable lists and POU
+# attributes in project addData under these names; the TC6 schema lets addData hold any element.
+GVL_DATA_NAME = "http://www.3s-software.com/plcopenxml/globalvars"
+ATTRIBUTES_DATA_NAME = "http://www.3s-software.com/plcopenxml/attributes"
 
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 
@@ -289,6 +294,34 @@ def render_xml(project: IecProject, creation: datetime | None = None) -> bytes:
     for pou in project.pous:
         _pou(pous, pou)
     _instances(root, project)
+    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+
+
+def render_target_xml(target: TargetProject, creation: datetime | None = None) -> bytes:
+    """The project in `target.dialect`'s XML flavour: for a GVL target the POUs have no externalVars, the
+    configuration keeps its task and instance, and each global variable list is a `globalVars` in the project's
+    addData where the CODESYS/TwinCAT importers look for it (with the qualified_only attribute)."""
+    if target.dialect.xml_globals == "configuration":
+        return render_xml(target.project, creation)
+    root = etree.fromstring(render_xml(target.project, creation))
+    add_data = _sub(root, "addData")
+    for gvl in target.gvls:
+        # One data element per list: a TC6 data element holds exactly one child.
+        data = _sub(add_data, "data", name=GVL_DATA_NAME, handleUnknown="implementation")
+        qualifiers = {(s.constant, s.retain) for s in gvl.sections}
+        if len(qualifiers) > 1:
+            raise ValueError(f"global variable list {gvl.name} mixes CONSTANT/RETAIN sections")
+        constant, retain = qualifiers.pop() if qualifiers else (False, False)
+        flags = {k: "true" for k, on in (("constant", constant), ("retain", retain)) if on}
+        element = _sub(data, "globalVars", name=gvl.name, **flags)
+        for section in gvl.sections:
+            for var in section.vars:
+                _variable(element, var)
+        if gvl.qualified_only:
+            attributes = _sub(_sub(_sub(element, "addData"), "data", name=ATTRIBUTES_DATA_NAME,
+                                   handleUnknown="implementation"), "Attributes")
+            _sub(attributes, "Attribute", Name="qualified_only", Value="")
+    etree.indent(root, space="  ")
     return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
 import jinja2
 
 from transpiler.backends.iec_model import IecProject, IecVar, VarSection, st_comment
+from transpiler.backends.st.dialect import TargetProject
 from transpiler.resources import data_dir
 BODY_INDENT = "    "
 
@@ -106,6 +108,34 @@ def render_st(project: IecProject) -> str:
     check_formattable(project)
     text = _environment().get_template("project.st.j2").render(project=project)
     return text.rstrip("\n") + "\n"
+
+
+def render_target_st(target: TargetProject) -> str:
+    """The project as `target.dialect` lays it out (the matiec layout is exactly render_st's)."""
+    if target.dialect.st_template == "project.st.j2":
+        return render_st(target.project)
+    check_formattable(target.project)
+    for gvl in target.gvls:
+        for section in gvl.sections:
+            section_header(section)
+    gvls = target.gvls
+    if target.dialect.inline_initialised_arrays:
+        arrays = {t.name: t for t in target.project.types if t.kind == "array"}
+        gvls = tuple(dataclasses.replace(g, sections=tuple(dataclasses.replace(s, vars=tuple(
+            _inline_array(v, arrays) for v in s.vars)) for s in g.sections)) for g in gvls)
+    text = _environment().get_template(target.dialect.st_template).render(
+        project=target.project, gvls=gvls, dialect=target.dialect)
+    return text.rstrip("\n") + "\n"
+
+
+def _inline_array(var: IecVar, arrays: dict) -> IecVar:
+    """An initialised global of a named array type declared with the array spec itself (blark, which parses as
+    TwinCAT does, takes `[..]` initialisers only after an ARRAY spec); the XML keeps the named type."""
+    data_type = arrays.get(var.type)
+    if data_type is None or var.initial is None:
+        return var
+    dims = ", ".join(f"{d.lo}..{d.hi}" for d in data_type.dims)
+    return dataclasses.replace(var, type=f"ARRAY[{dims}] OF {data_type.base}")
 
 
 def extract_pou_bodies(st_text: str) -> dict[str, str]:

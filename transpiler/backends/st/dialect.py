@@ -1,0 +1,142 @@
+"""One table per target: how the same IecProject is laid out for matiec (Beremiz, OpenPLC), CODESYS and TwinCAT 3.
+
+A target overrides tables, not control flow: the ST back end builds one project; `for_target` only moves the
+globals of a GVL target out of the configuration into named global variable lists, drops the VAR_EXTERNAL
+lists (CODESYS and TwinCAT see a GVL from every POU) and qualifies each reference with its list's name
+(the lists carry `{attribute 'qualified_only'}`, so an unqualified reference would not compile there).
+See docs/import.md for what each target gets.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from types import MappingProxyType
+
+from transpiler.backends.iec_model import Configuration, IecProject, Pou, VarSection
+
+
+@dataclasses.dataclass(frozen=True)
+class Dialect:
+    name: str
+    # matiec needs VAR_EXTERNAL in every POU that names a global and the globals in the CONFIGURATION.
+    externals: bool
+    # The ST layout (a template of templates/st) and the PLCopen XML home of the globals.
+    st_template: str
+    xml_globals: str              # "configuration" (TC6 globalVars) or "3s_addData" (CODESYS/TwinCAT GVLs)
+    qualified_only: bool = False
+    # Initialised array globals written with their ARRAY spec in the ST (see writer._inline_array).
+    inline_initialised_arrays: bool = False
+
+
+TARGETS = MappingProxyType({
+    "matiec": Dialect("matiec", externals=True, st_template="project.st.j2", xml_globals="configuration"),
+    # OpenPLC v3 runs matiec (with -f -l -p -r -R -a): the same text is right for it.
+    "openplc": Dialect("openplc", externals=True, st_template="project.st.j2", xml_globals="configuration"),
+    "codesys": Dialect("codesys", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
+                       qualified_only=True, inline_initialised_arrays=True),
+    "twincat": Dialect("twincat", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
+                       qualified_only=True, inline_initialised_arrays=True),
+})
+
+DEFAULT_TARGET = "matiec"
+
+# The global groups of the back end (their section comments) and the list each lands in on a GVL target:
+# one list per source area, inputs and outputs together as the I/O list.
+GVL_BY_TITLE = MappingProxyType({
+    "Inputs (process image)": "GVL_IO",
+    "Outputs (process image)": "GVL_IO",
+    "NC interface (NC <-> PLC operands)": "GVL_NC",
+    "Markers": "GVL_Markers",
+    "Timer and counter operands": "GVL_TimersCounters",
+    "Byte memory: bytes, words, double words": "GVL_Words",
+    "Strings": "GVL_Strings",
+    "Machine parameters (presets in PLC cycles)": "GVL_MachineParams",
+    "Constant fields (KFIELD tables)": "GVL_Constants",
+    "Accumulators, index register, data stack": "GVL_Registers",
+})
+
+
+@dataclasses.dataclass(frozen=True)
+class Gvl:
+    """One global variable list: its name and its sections (the back end's groups that land in it)."""
+
+    name: str
+    sections: tuple[VarSection, ...]
+    qualified_only: bool
+
+
+@dataclasses.dataclass(frozen=True)
+class TargetProject:
+    """The project as a target sees it: for a GVL target the configuration has no globals and `gvls` holds them."""
+
+    dialect: Dialect
+    project: IecProject
+    gvls: tuple[Gvl, ...] = ()
+
+
+def dialect(target: str) -> Dialect:
+    """The table of `target`; ValueError names the known targets."""
+    try:
+        return TARGETS[target]
+    except KeyError:
+        raise ValueError(f"unknown target '{target}' (known: {', '.join(TARGETS)})") from None
+
+
+def gvl_name(section: VarSection) -> str:
+    """The list a global section lands in; a group the table does not know gets a name from its comment."""
+    title = section.comment or "Globals"
+    return GVL_BY_TITLE.get(title) or "GVL_" + "".join(w.capitalize() for w in re.findall(r"[A-Za-z0-9]+", title))
+
+
+def for_target(project: IecProject, target: str) -> TargetProject:
+    """`project` laid out for `target` (the matiec project is returned unchanged)."""
+    chosen = dialect(target)
+    if chosen.externals:
+        return TargetProject(chosen, project)
+    by_name: dict[str, list[VarSection]] = {}
+    for section in project.configuration.globals:
+        by_name.setdefault(gvl_name(section), []).append(section)
+    gvls = tuple(Gvl(name, tuple(sections), chosen.qualified_only) for name, sections in by_name.items())
+    owner = {v.name.upper(): g.name for g in gvls for s in g.sections for v in s.vars}
+    pous = tuple(_without_externals(pou, owner, chosen.qualified_only) for pou in project.pous)
+    config = dataclasses.replace(project.configuration, globals=())
+    return TargetProject(chosen, dataclasses.replace(project, pous=pous, configuration=config), gvls)
+
+
+# Comments, strings, typed or numeric literals (`16#FF`, `T#10ms`, `1.5E3`), member access (`fb.out`: the
+# part after the dot is no global) and plain identifiers, in this order so that only the last alternative
+# ever names a variable.
+_TOKEN = re.compile(r"(?P<skip>\(\*.*?\*\)|'(?:\$.|[^'$])*'|[A-Za-z0-9_]+#[A-Za-z0-9_.#]+|\d[A-Za-z0-9_.]*"
+                    r"|\.\s*[A-Za-z_][A-Za-z0-9_]*)|(?P<ident>[A-Za-z_][A-Za-z0-9_]*)", re.S)
+
+
+def _without_externals(pou: Pou, owner: dict[str, str], qualify: bool) -> Pou:
+    """`pou` without its VAR_EXTERNAL lists; with `qualify`, each global it names is written `GVL.name`."""
+    sections = tuple(s for s in pou.sections if s.kind != "VAR_EXTERNAL")
+    if len(sections) == len(pou.sections):
+        return pou
+    if not qualify:
+        return dataclasses.replace(pou, sections=sections)
+    local = {v.name.upper() for s in sections for v in s.vars}
+
+    def rewrite(match: re.Match) -> str:
+        name = match.group("ident")
+        if name is None or name.upper() in local or name.upper() not in owner:
+            return match.group(0)
+        return f"{owner[name.upper()]}.{name}"
+
+    return dataclasses.replace(pou, sections=sections, body=_TOKEN.sub(rewrite, pou.body))
+
+
+def target_section(target: TargetProject) -> str:
+    """The closing section of report.md: which target the files are for and where its globals live."""
+    lines = ["", f"## Target: {target.dialect.name}", ""]
+    if target.dialect.externals:
+        lines.append("Globals in the CONFIGURATION's VAR_GLOBAL blocks; each POU that names one declares it in "
+                     "VAR_EXTERNAL (matiec needs that).")
+    else:
+        lines.append("Globals in global variable lists (qualified_only: references are written `GVL.name`), no "
+                     "VAR_EXTERNAL; create the cyclic task in the IDE's task configuration.")
+        lines += [""] + [f"- {g.name}: " + ", ".join(s.comment or "globals" for s in g.sections) for g in target.gvls]
+    return "\n".join(lines) + "\n"
