@@ -16,7 +16,7 @@ from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
-from transpiler.verify.simulate import build_machine, machine_parameters, operand_writers, program_operands
+from transpiler.verify.simulate import build_machine, effective_machine_parameters, operand_writers, program_operands
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations
 
 
@@ -283,13 +283,13 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures)."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
-    machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled, base_mp=base_mp)
+    parameters = effective_machine_parameters(scenario, diags, base_mp)
+    machine = build_machine(program, scenario, diags, coverage=coverage, compiled=compiled, parameters=parameters)
     side = make_side()
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
     comparison = comparison_for(program, names, iomap)
-    scenario_mp, _ = machine_parameters(scenario, diags)
-    mismatches = preset_mismatches(side, iomap, program, {**(base_mp or {}), **scenario_mp}, cycle_time)
+    mismatches = preset_mismatches(side, iomap, program, parameters[0], cycle_time)
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
     translated = side_reader(side, accessors)

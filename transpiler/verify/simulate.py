@@ -49,14 +49,8 @@ def operand_writers(program: Program) -> dict[OperandRef, list[Span]]:
 
 def program_operands(program: Program) -> tuple[set[OperandRef], set[OperandRef], set[OperandRef]]:
     """(every operand named by an instruction, the ones the program writes, the outputs it uses)."""
-    used: set[OperandRef] = set()
-    written: set[OperandRef] = set()
-    for code in program.files:
-        for op in code.ops:
-            refs = _operand_refs(op)
-            used.update(refs)
-            if op.code in _WRITES:
-                written.update(r for r in refs if r.kind != "X")
+    used = {ref for code in program.files for op in code.ops for ref in _operand_refs(op)}
+    written = set(operand_writers(program))     # one rule for "written" (the index register X is never named here)
     outputs = {r for r in used if r.kind == "O"}
     return used, written, outputs
 
@@ -133,13 +127,21 @@ class SimulationResult:
     fault_span: Span | None = None          # where to point for a fault without a program location
 
 
+def effective_machine_parameters(scenario: Scenario, diags: Diagnostics, base_mp: Mapping | None = None
+                                 ) -> tuple[dict[tuple[int, int], Decimal], dict]:
+    """`base_mp` (the machine parameters the translation was made with) overridden by the scenario's own."""
+    mp, spans = machine_parameters(scenario, diags)
+    return {**(base_mp or {}), **mp}, spans
+
+
 def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, coverage: bool = False,
-                  compiled: CompiledProgram | None = None, base_mp: Mapping | None = None) -> Machine:
+                  compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
+                  parameters: tuple[dict, dict] | None = None) -> Machine:
     """A machine set up from the scenario (MPs, cycle time, module results); raises CompileFailed on bad input.
     `compiled` (the program compiled once by the caller) saves compiling it again for every scenario; `base_mp`
-    (the project's machine parameters) applies where the scenario sets no value of its own."""
-    mp, spans = machine_parameters(scenario, diags)
-    mp = {**(base_mp or {}), **mp}
+    (the project's machine parameters) applies where the scenario sets no value of its own; `parameters` are
+    those already read by effective_machine_parameters (so the MP file is read once per run)."""
+    mp, spans = parameters if parameters is not None else effective_machine_parameters(scenario, diags, base_mp)
     diags.raise_if_errors()
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:
