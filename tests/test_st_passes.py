@@ -384,3 +384,11 @@ def test_a_value_in_flight_is_saved_before_its_source_is_overwritten():
     save = next(n for n, line in enumerate(lines) if line.endswith(":= M1;"))
     assert save < lines.index("M1 := M2;")
     assert lines[-1] == f"M3 := {lines[save].split(' :=')[0]};"
+
+
+def test_bits_of_a_constant_word_are_written_as_true_and_false():
+    # Catches: B= of a constant word left as HH_BIT(0, k) calls (an unfolded constant), or the bit order reversed.
+    lines = routine_lines(program_of([op("WLD", Operand("K", 5)), op("STBITS", M(10), nbits=4), op("EM")]))
+    assert lines == ["M10 := TRUE;", "M11 := FALSE;", "M12 := TRUE;", "M13 := FALSE;"]
+    lines = routine_lines(program_of([op("WLD", W(0)), op("STBITS", M(10), nbits=2), op("EM")]))
+    assert lines == ["tmp1 := INT_TO_DINT(W0);", "M10 := HH_BIT(tmp1, 0);", "M11 := HH_BIT(tmp1, 1);"]
