@@ -122,6 +122,10 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += [f"- `{pou}` at {span}: {reason}" for pou, reason, span in result.dynamic_stack]
     else:
         lines.append("No POU emulates the data stack: every PS/PL passes through VAR_INPUT/VAR_OUTPUT or local variables.")
+    if result.jobs_program is not None:
+        lines += ["", "### Submit jobs", "", f"`{result.jobs_program}` runs in the same task right after the main "
+                  "program and calls the queued jobs one after the other (keep that order on the target):", ""]
+        lines += [f"- job {number}: `{pou}` ({span.file}:{span.line})" for number, pou, span in result.submit_jobs]
     lines += ["", "### Readability", "", measure(render_st(result.project), program.instruction_count()).line() + "."]
     lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
               "|---|---|---|---|---|---|"]

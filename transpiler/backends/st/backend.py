@@ -14,7 +14,8 @@ from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, Ie
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
-from transpiler.backends.st import library, modcalls
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Effect, StackAnalysis
@@ -29,7 +30,7 @@ GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "O
                 "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
                 "memory": "Byte memory: bytes, words, double words", "string": "Strings",
                 "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
-                "register": "Accumulators, index register, data stack"})
+                "register": "Accumulators, index register, data stack", "jobs": jobs.GLOBALS_TITLE})
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
 
@@ -55,6 +56,9 @@ class StResult:
     preset_vars: Mapping[tuple[int, int], str]   # (MP number, index) -> preset variable
     # POUs that still move the emulated data stack, with the reason its depth is not static there
     dynamic_stack: tuple[tuple[str, str, Span], ...] = ()
+    # Submit jobs: (job number, POU of the job subprogram, where its label is), and the POU that runs them
+    submit_jobs: tuple[tuple[int, str, Span], ...] = ()
+    jobs_program: str | None = None
 
 
 class StBackend:
@@ -76,7 +80,7 @@ class StBackend:
     # ---- naming
 
     def _reserve_pou_names(self, helpers: Mapping[str, Pou]) -> None:
-        for name in [*helpers, "HH_TIMER", "HH_COUNTER"]:
+        for name in [*helpers, "HH_TIMER", "HH_COUNTER", jobs.QUEUE_FB, jobs.QUEUE_INTS, jobs.QUEUE_FLAGS]:
             self.names.reserve(name, f"lib:{name}")
         self.main_pou = self.names.name("pou:main", self.main_name_wanted)
         self.pou_names: dict[tuple[int, int], str] = {}
@@ -99,6 +103,8 @@ class StBackend:
         self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
         self.real_stack_users: dict[str, tuple[int, int]] = {}
         self.current_key: tuple[int, int] = (0, 0)
+        self.job_plan = jobs.plan_jobs(self.program)
+        self.job_queue: str | None = None
         # Routine entries by file: op indices are per file, so one dict keyed by index alone let the routines of
         # different files that start at the same index overwrite each other.
         entries_by_file: dict[int, dict[int, CallTarget]] = {}
@@ -120,18 +126,30 @@ class StBackend:
             fbs.append(library.timer_fb(self.semantics))
         if layout.counters:
             fbs.append(library.counter_fb(self.semantics))
-        types = tuple(self._types(layout))
-        config = self._configuration(layout)
+        job_types: list[DataType] = []
+        if self.job_queue is not None:
+            fbs.append(jobs.queue_fb(self.semantics["submit_model"]))
+            job_types = jobs.queue_types(self.semantics["submit_model"])
+        job_program = self._jobs_program(layout) if self.job_plan.used else None
+        types = tuple(self._types(layout)) + tuple(job_types)
+        config = self._configuration(layout, job_program)
         # Only the POUs translated from the program read globals: the library ones use their own variables
         # (and a FUNCTION may not declare VAR_EXTERNAL).
         globals_by_upper = {v.name.upper(): v for s in config.globals for v in s.vars}
-        program_pous = [_with_externals(p, globals_by_upper) for p in user_pous + [main]]
+        program_pous = [_with_externals(p, globals_by_upper)
+                        for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
         return StResult(project, layout, self.names, tuple(self.fallbacks), tuple(self.untranslated),
                         {**self.pou_names, (0, 0): self.main_pou},
                         tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars,
-                        self._dynamic_stack())
+                        self._dynamic_stack(), self._submit_jobs(),
+                        job_program.name if job_program is not None else None)
+
+    def _submit_jobs(self) -> tuple[tuple[int, str, Span], ...]:
+        files = self.program.files
+        return tuple((number, self.pou_names[key], files[key[0]].ops[key[1]].span)
+                     for key, number in sorted(self.job_plan.numbers.items(), key=lambda item: item[1]))
 
     def _dynamic_stack(self) -> tuple[tuple[str, str, Span], ...]:
         out = []
@@ -287,7 +305,8 @@ class StBackend:
             return accessors[kind]
 
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
-                             self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor)
+                             self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor,
+                             self.job_plan.routine(key, self._job_queue))
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
@@ -443,7 +462,39 @@ class StBackend:
             out.append(DataType(name, "array", elem, (ArrayDim(lo, hi),)))
         return out + self.types
 
-    def _configuration(self, layout: Layout) -> Configuration:
+    def _job_queue(self) -> str:
+        """The global instance of the submit-job queue (declared on first use)."""
+        if self.job_queue is None:
+            self.job_queue = self.layout.add_register("jobs", "HH_Jobs", jobs.QUEUE_FB,
+                                                      "queued and running submit jobs", group="jobs")
+        return self.job_queue
+
+    def _jobs_program(self, layout: Layout) -> Pou:
+        """The PROGRAM that runs the queued jobs after the main program, each with its own registers and error
+        markers (see jobs.py); built after every routine, so it saves exactly the variables that exist."""
+        own: list[jobs.OwnValue] = []
+        for reg, clear in (("LA", "FALSE"), ("WA", "0"), ("X", "0"), ("SA", "''")):
+            name = self.names.get(f"reg:{reg}")
+            if name is not None and name in layout.globals:
+                own.append(jobs.OwnValue(name, clear, REG_TYPES[reg][0]))
+        itf = self.semantics.profile.interface
+        for addr in (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err):
+            if addr is not None and ("M", addr) in layout._bit_var:
+                own.append(jobs.OwnValue(layout._bit_var[("M", addr)], "FALSE", "BOOL"))
+        word = itf.module_err_code_word
+        if word is not None and (("W", word) in layout._mem_var or layout.mem_array is not None):
+            for lhs, zero in layout.write_value(Operand("W", word), None, E.int_const(0)):
+                own.append(jobs.OwnValue(lhs, zero.text, "BYTE" if "[" in lhs else "INT"))
+        name = self.names.name("pou:jobs", "HH_SubmitJobs")
+        instances = {number: self.instance_names[key] for key, number in self.job_plan.numbers.items()}
+        types = {self.instance_names[key]: self.pou_names[key] for key in self.job_plan.numbers}
+        labels = {self.instance_names[key]: f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}"
+                  for key in self.job_plan.numbers}
+        return jobs.jobs_program(name, self._job_queue(), self.semantics["submit_model"], instances, types, labels,
+                                 own, self.stack[1] if self.stack is not None else None, self.names.get("in_job"),
+                                 lambda wanted: self.names.name(f"jobs:{wanted}", wanted))
+
+    def _configuration(self, layout: Layout, job_program: Pou | None) -> Configuration:
         groups: dict[str, list[IecVar]] = {}
         for g in layout.globals.values():
             groups.setdefault(g.group, []).append(IecVar(g.name, g.type, g.initial, g.address, g.comment))
@@ -457,8 +508,13 @@ class StBackend:
         cycle = int(self.semantics["cycle_time_ms"])
         task = self.names.name("task", "HH_Cycle")
         inst = self.names.name("instance", f"PLC_{self.main_pou}")
+        programs = [ProgramInstance(inst, task, self.main_pou)]
+        if job_program is not None:
+            # In the same task after the main program: the jobs run in phase 5 of the cycle.
+            programs.append(ProgramInstance(self.names.name("instance:jobs", f"PLC_{job_program.name}"), task,
+                                            job_program.name))
         return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
-                             (Task(task, cycle, 0),), (ProgramInstance(inst, task, self.main_pou),), tuple(sections))
+                             (Task(task, cycle, 0),), tuple(programs), tuple(sections))
 
 
 def _module_effect(number: int) -> Effect | None:

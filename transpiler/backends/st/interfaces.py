@@ -254,9 +254,7 @@ class StackAnalysis:
             for t in op.case_targets:
                 self._call(walk, state, t, op, conditional=True)
             return state
-        if code in _JOBS:
-            raise _NotStatic(f"submit jobs ({op.mnemonic}) are not analysed", op.span)
-        return state
+        return state        # SUBM, RPLY and CAN do not touch the data stack
 
     def _call(self, walk: _Walk, state, target: CallTarget, op: Op, conditional: bool):
         if target.is_module:

@@ -47,6 +47,10 @@ class NameTable:
         self._taken[name.upper()] = key
         self._by_key[key] = name
 
+    def get(self, key: str) -> str | None:
+        """The name handed out for `key`, or None when none was."""
+        return self._by_key.get(key)
+
     def name(self, key: str, wanted: str) -> str:
         """The IEC name for `key` (stable: the same key always gets the same name)."""
         if key in self._by_key:

@@ -80,7 +80,7 @@ class RoutineContext:
     def __init__(self, layout: Layout, emitter: Emitter, live_after: Callable[[int], frozenset[str]],
                  register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
                  kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
-                 module_call: Callable[[int], str], semantics, bit_accessor: Callable[[str], str]):
+                 module_call: Callable[[int], str], semantics, bit_accessor: Callable[[str], str], jobs=None):
         self.layout = layout
         self.out = emitter
         self.live_after = live_after
@@ -92,6 +92,7 @@ class RoutineContext:
         self.module_call = module_call
         self.semantics = semantics
         self.bit_accessor = bit_accessor
+        self.jobs = jobs                    # jobs.RoutineJobs of this routine (None: SUBM/RPLY/CAN not translated)
         self.flag_markers = semantics.profile.interface
 
 

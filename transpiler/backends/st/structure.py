@@ -158,8 +158,6 @@ class Structurer:
                 self._case(op, i)
                 i += 1
                 continue
-            if op.code in ("SUBM", "RPLY", "CAN"):
-                raise Unsupported(f"submit jobs ({op.mnemonic})", op.span)
             self.ex.run(op, i)
             i += 1
 
@@ -447,8 +445,6 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
                 structurer._call(op, i)
             elif op.code == "CASE":
                 structurer._case(op, i)
-            elif op.code in ("SUBM", "RPLY", "CAN"):
-                raise Unsupported(f"submit jobs ({op.mnemonic})", op.span)
             else:
                 ex.run(op, i)
             i += 1

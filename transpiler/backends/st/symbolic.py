@@ -7,6 +7,7 @@ from transpiler.backends.st.arith import ArithmeticMixin
 from transpiler.backends.st.inflight import InFlightMixin
 from transpiler.backends.st.operands import OperandMixin
 from transpiler.backends.st.ops_bracket import BracketOpsMixin
+from transpiler.backends.st.ops_jobs import JobOpsMixin
 from transpiler.backends.st.ops_logic import LogicOpsMixin
 from transpiler.backends.st.ops_string import StringOpsMixin
 from transpiler.backends.st.ops_word import WordOpsMixin
@@ -14,7 +15,7 @@ from transpiler.backends.st.routine import RoutineContext, SymbolicState, Unsupp
 from transpiler.backends.st.stackops import StackMixin, StaticStack
 
 
-class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringOpsMixin,
+class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringOpsMixin, JobOpsMixin,
                ArithmeticMixin, OperandMixin, InFlightMixin):
     """Translates straight-line ops; control-flow ops are left to the structurer, which calls the hooks it shares."""
 

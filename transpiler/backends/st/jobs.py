@@ -1,0 +1,291 @@
+"""Submit jobs (SUBM, RPLY, CAN) in the ST: one global queue block, and a second PROGRAM that runs the jobs.
+
+The control runs a submitted subprogram in the background; the simulation model the translation keeps (A-45, see
+docs/assumptions.md) runs the queued jobs after the main program, in the order they were queued, each to its end,
+within the same cycle (`submit_model = same_cycle`) or from the next cycle on (`next_cycle`). The ST does the same:
+
+- `HH_JOB_QUEUE` (one global instance) holds up to 8 queued jobs with identifiers 1..255; SUBM, RPLY and CAN are
+  calls of it with a command number, their result is its RESULT output.
+- The PROGRAM `HH_SubmitJobs` runs in the same task right after the main program (phase 5 of the cycle). Each
+  job starts with cleared accumulators, index register, data stack and error markers, and the main program's
+  values are put back afterwards, as the control keeps them apart.
+- CAN of the running job ends that job at once; the translation supports it where the CAN is in the job's own
+  subprogram (a RETURN), and reports E-UNSUPPORTED where it is in a subprogram the job calls.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+from transpiler.backends.iec_model import ArrayDim, DataType, IecVar, Pou, VarSection
+from transpiler.frontend.flow import routine_body
+from transpiler.backends.st.routine import Unsupported
+from transpiler.ir import CallTarget, Op, Program
+
+QUEUE_FB = "HH_JOB_QUEUE"
+GLOBALS_TITLE = "Submit-job queue"
+QUEUE_INTS, QUEUE_FLAGS = "T_HH_JOB_INTS", "T_HH_JOB_FLAGS"
+MAX_QUEUED = 8
+MAX_ID = 255
+# Commands of the queue block (its CMD input).
+SUBMIT, REPLY, CANCEL, TAKE, ENDED, PHASE_END = 1, 2, 3, 4, 5, 6
+
+
+@dataclasses.dataclass(frozen=True)
+class JobPlan:
+    """The program's job subprograms: their numbers in the queue, and where CAN can end the running job."""
+
+    numbers: dict[tuple[int, int], int]          # routine key -> job number 1..N (order of the source)
+    labels: dict[tuple[int, int], str]
+    called_in_jobs: frozenset[tuple[int, int]]  # routines a job reaches by CM (CASE, fall-through)
+
+    @property
+    def used(self) -> bool:
+        return bool(self.numbers)
+
+    def routine(self, key: tuple[int, int], queue: Callable[[], str]) -> "RoutineJobs":
+        return RoutineJobs(self, key, queue)
+
+
+class RoutineJobs:
+    """What the translation of one routine needs to know about jobs: the queue, the job numbers, and whether a
+    CAN there can end the running job with a RETURN (only in a job's own subprogram, when no job calls it: there
+    the RETURN would end a callee, not the job)."""
+
+    def __init__(self, plan: JobPlan, key: tuple[int, int], queue: Callable[[], str]):
+        self._plan = plan
+        self._queue = queue
+        self.is_job = key in plan.numbers
+        self.called_in_job = key in plan.called_in_jobs
+
+    @property
+    def queue(self) -> str:
+        """The queue instance's name (declared on first use)."""
+        return self._queue()
+
+    def number(self, op: Op) -> int:
+        if op.call is None or op.call.file < 0 or op.call.key not in self._plan.numbers:
+            raise Unsupported("SUBM of a label that is not a subprogram of the project", op.span)
+        return self._plan.numbers[op.call.key]
+
+
+def _callees(op: Op):
+    if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
+        yield op.call
+    elif op.code == "CASE":
+        yield from (t for t in op.case_targets if t is not None and t.file >= 0)
+
+
+def plan_jobs(program: Program) -> JobPlan:
+    """Number the SUBM targets of `program` and find the routines the jobs call."""
+    roots: dict[tuple[int, int], CallTarget] = {}
+    for f in program.files:
+        for op in f.ops:
+            if op.code == "SUBM" and op.call is not None and op.call.file >= 0:
+                roots.setdefault(op.call.key, op.call)
+    numbers = {key: n for n, key in enumerate(sorted(roots), start=1)}
+    entries = {r.key: r for r in program.routines}
+    reached: set[tuple[int, int]] = set()
+    todo = list(roots.values())
+    seen: set[tuple[int, int]] = set()
+    while todo:
+        r = todo.pop()
+        if r.key in seen:
+            continue
+        seen.add(r.key)
+        ops = program.files[r.file].ops
+        for i in routine_body(program.files, r):
+            entered = list(_callees(ops[i]))
+            # Falling through into another routine's label runs that routine as a callee as well.
+            if i != r.index and (r.file, i) in entries:
+                entered.append(entries[(r.file, i)])
+            for t in entered:
+                reached.add(t.key)
+                todo.append(entries.get(t.key, t))
+    return JobPlan(numbers, {k: roots[k].label for k in numbers}, frozenset(reached))
+
+
+@dataclasses.dataclass(frozen=True)
+class OwnValue:
+    """A variable of which the main program and each job have their own value: saved before a job, set to
+    `clear` for it, restored after it."""
+
+    target: str
+    clear: str
+    typ: str
+
+
+def jobs_program(name: str, queue: str, model: str, instances: dict[int, str], types: dict[str, str],
+                 labels: dict[str, str], own: list[OwnValue], stack_pointer: str | None, in_job: str | None,
+                 local_name: Callable[[str], str]) -> Pou:
+    """The PROGRAM `name` that runs the queued jobs: job number -> instance in `instances` (FB type in `types`,
+    described by `labels`); `own` are the variables each job has its own copy of; `stack_pointer` and `in_job`
+    the data stack pointer and the in-job flag where the program has them; `local_name` gives unique names."""
+    saved = [(v, local_name(f"main_{v.target.replace('[', '_').replace(']', '')}")) for v in own]
+    lines = [f"{queue}(CMD := {TAKE});",
+             f"WHILE {queue}.RESULT <> 0 DO"]
+    body = [f"{local} := {v.target};" for v, local in saved]
+    body += [f"{v.target} := {v.clear};" for v, _ in saved]
+    if stack_pointer is not None:
+        body.append(f"{stack_pointer} := 0;")
+    if in_job is not None:
+        body.append(f"{in_job} := TRUE;")
+    body.append(f"CASE {queue}.RESULT OF")
+    for number, inst in sorted(instances.items()):
+        body.append(f"    {number}: {inst}(); (* {labels[inst]} *)")
+    body.append("END_CASE;")
+    if in_job is not None:
+        body.append(f"{in_job} := FALSE;")
+    body += [f"{v.target} := {local};" for v, local in saved]
+    body += [f"{queue}(CMD := {ENDED});", f"{queue}(CMD := {TAKE});"]
+    lines += ["    " + line for line in body] + ["END_WHILE;"]
+    if model != "same_cycle":
+        lines.append(f"{queue}(CMD := {PHASE_END});")
+    local = [IecVar(inst, types[inst], comment=f"job {number}") for number, inst in sorted(instances.items())]
+    local += [IecVar(local, v.typ, comment=f"the main program's {v.target} while a job runs") for v, local in saved]
+    return Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "\n".join(lines), comment=(
+        "Phase 5 of the PLC cycle: the submit jobs the main program queued run now, one after the other, each to "
+        "its end. A job starts with cleared accumulators, index register, data stack and error markers; the main "
+        "program's are put back after it."))
+
+
+def queue_types(model: str) -> list[DataType]:
+    """The array types the queue block declares its state with (named: the PLCopen XML needs named types)."""
+    types = [DataType(QUEUE_INTS, "array", "INT", (ArrayDim(1, MAX_QUEUED),), comment="queued jobs (job queue)")]
+    if model != "same_cycle":
+        types.append(DataType(QUEUE_FLAGS, "array", "BOOL", (ArrayDim(1, MAX_QUEUED),),
+                              comment="flags of the queued jobs (job queue)"))
+    return types
+
+
+def queue_fb(model: str) -> Pou:
+    """HH_JOB_QUEUE for `submit_model` `model` (same_cycle: a job runs in the cycle that queued it)."""
+    # Kept whole (~100 lines): the block's ST listing, one command per CASE entry, read best in one piece.
+    next_cycle = model != "same_cycle"
+    shift = ["QUEUED_JOB[I] := QUEUED_JOB[I + 1];", "QUEUED_ID[I] := QUEUED_ID[I + 1];"]
+    keep = ["QUEUED_JOB[K] := QUEUED_JOB[I];", "QUEUED_ID[K] := QUEUED_ID[I];"]
+    queue_now = ["QUEUED_NOW[COUNT] := TRUE;"] if next_cycle else []
+    if next_cycle:
+        shift.append("QUEUED_NOW[I] := QUEUED_NOW[I + 1];")
+        keep.append("QUEUED_NOW[K] := QUEUED_NOW[I];")
+    ready = "K = 0 AND NOT QUEUED_NOW[I]" if next_cycle else "K = 0"
+
+    def block(lines: list[str], depth: int) -> list[str]:
+        return ["    " * depth + line for line in lines]
+
+    body = [
+        "CASE CMD OF",
+        f"    {SUBMIT}: (* SUBM: queue job JOB *)",
+        "        RESULT := 0;",
+        f"        IF RUNNING_ID = 0 AND COUNT < {MAX_QUEUED} THEN",
+        "            (* the next identifier that no queued job holds *)",
+        "            K := NEXT_ID;",
+        "            REPEAT",
+        "                FREE := TRUE;",
+        "                FOR I := 1 TO COUNT DO",
+        "                    IF QUEUED_ID[I] = K THEN",
+        "                        FREE := FALSE;",
+        "                    END_IF;",
+        "                END_FOR;",
+        "                IF NOT FREE THEN",
+        f"                    K := K MOD {MAX_ID} + 1;",
+        "                END_IF;",
+        "            UNTIL FREE",
+        "            END_REPEAT;",
+        f"            NEXT_ID := K MOD {MAX_ID} + 1;",
+        "            COUNT := COUNT + 1;",
+        "            QUEUED_JOB[COUNT] := JOB;",
+        "            QUEUED_ID[COUNT] := K;",
+        *block(queue_now, 3),
+        "            RESULT := INT_TO_DINT(K);",
+        "        END_IF;",
+        f"    {REPLY}: (* RPLY: 1 running, 2 waiting in the queue, 0 finished or unknown *)",
+        "        RESULT := 0;",
+        "        IF RUNNING_ID <> 0 AND INT_TO_DINT(RUNNING_ID) = ID THEN",
+        "            RESULT := 1;",
+        "        ELSE",
+        "            FOR I := 1 TO COUNT DO",
+        "                IF INT_TO_DINT(QUEUED_ID[I]) = ID THEN",
+        "                    RESULT := 2;",
+        "                END_IF;",
+        "            END_FOR;",
+        "        END_IF;",
+        f"    {CANCEL}: (* CAN: the job leaves the queue; RESULT 1 when it is the running one, which ends now *)",
+        "        K := 0;",
+        "        FOR I := 1 TO COUNT DO",
+        "            IF INT_TO_DINT(QUEUED_ID[I]) <> ID THEN",
+        "                K := K + 1;",
+        *block(keep, 4),
+        "            END_IF;",
+        "        END_FOR;",
+        "        COUNT := K;",
+        "        RESULT := 0;",
+        "        IF RUNNING_ID <> 0 AND INT_TO_DINT(RUNNING_ID) = ID THEN",
+        "            RESULT := 1;",
+        "        END_IF;",
+        f"    {TAKE}: (* the first queued job that may run now becomes the running one; RESULT its JOB, 0 none *)",
+        "        RESULT := 0;",
+        "        K := 0;",
+        "        FOR I := 1 TO COUNT DO",
+        f"            IF {ready} THEN",
+        "                K := I;",
+        "            END_IF;",
+        "        END_FOR;",
+        "        IF K > 0 THEN",
+        "            RESULT := INT_TO_DINT(QUEUED_JOB[K]);",
+        "            RUNNING_ID := QUEUED_ID[K];",
+        "            FOR I := K TO COUNT - 1 DO",
+        *block(shift, 4),
+        "            END_FOR;",
+        "            COUNT := COUNT - 1;",
+        "        END_IF;",
+        f"    {ENDED}: (* the running job reached its end *)",
+        "        RUNNING_ID := 0;",
+    ]
+    if next_cycle:
+        body += [f"    {PHASE_END}: (* end of the job phase: what was queued in this cycle may run in the next one *)",
+                 "        FOR I := 1 TO COUNT DO",
+                 "            QUEUED_NOW[I] := FALSE;",
+                 "        END_FOR;"]
+    body.append("END_CASE;")
+    body = _while_loops(body)
+    state = [IecVar("QUEUED_JOB", QUEUE_INTS, comment="job number of each queued job, oldest first"),
+             IecVar("QUEUED_ID", QUEUE_INTS, comment="its identifier")]
+    if next_cycle:
+        state.append(IecVar("QUEUED_NOW", QUEUE_FLAGS, comment="queued in this cycle"))
+    state += [IecVar("COUNT", "INT", comment="queued jobs"),
+              IecVar("NEXT_ID", "INT", "1", comment="identifier the next SUBM tries first"),
+              IecVar("RUNNING_ID", "INT", comment="identifier of the running job, 0 when none runs"),
+              IecVar("I", "INT"), IecVar("K", "INT"), IecVar("FREE", "BOOL")]
+    model = ("in the cycle that queued them" if not next_cycle else "from the cycle after the one that queued them")
+    return Pou(QUEUE_FB, "FUNCTION_BLOCK", (
+        VarSection("VAR_INPUT", (
+            IecVar("CMD", "INT", comment=f"{SUBMIT} SUBM, {REPLY} RPLY, {CANCEL} CAN, {TAKE} take the next job, "
+                                         f"{ENDED} the running job ended" + (f", {PHASE_END} end of the job phase"
+                                                                             if next_cycle else "")),
+            IecVar("JOB", "INT", comment="SUBM: number of the job subprogram"),
+            IecVar("ID", "DINT", comment="RPLY, CAN: job identifier"))),
+        VarSection("VAR_OUTPUT", (IecVar("RESULT", "DINT", comment="the command's result (see each command)"),)),
+        VarSection("VAR", tuple(state)),
+    ), "\n".join(body), comment=(
+        f"The control's submit-job queue (A-45, see docs/assumptions.md): up to {MAX_QUEUED} jobs, identifiers "
+        f"1..{MAX_ID} counted on and skipping those in use; SUBM inside a running job or with a full queue gives "
+        f"0. Queued jobs run one after the other, each to its end, {model}."))
+
+
+def _while_loops(lines: list[str]) -> list[str]:
+    """The listing's counted loops `FOR I := a TO b DO ... END_FOR;` written as WHILE loops: matiec runs a FOR
+    body zero times when the range holds a single value (FOR I := 1 TO 1)."""
+    out: list[str] = []
+    for line in lines:
+        indent = line[:len(line) - len(line.lstrip())]
+        text = line.strip()
+        if text.startswith("FOR I := ") and text.endswith(" DO"):
+            start, end = text[len("FOR I := "):-len(" DO")].split(" TO ")
+            out += [f"{indent}I := {start};", f"{indent}WHILE I <= {end} DO"]
+        elif text == "END_FOR;":
+            out += [f"{indent}    I := I + 1;", f"{indent}END_WHILE;"]
+        else:
+            out.append(line)
+    return out
