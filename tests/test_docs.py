@@ -105,6 +105,43 @@ def test_no_citation_of_the_internal_language_description() -> None:
     assert not found, "point at a docs/ page (or state the rule) instead:\n" + "\n".join(found)
 
 
+def _user_files() -> list[Path]:
+    """What users read besides the code: the README, docs/ and the samples (sources, definitions, scenarios)."""
+    return [ROOT / "README.md", *sorted(DOCS.glob("*.md")),
+            *sorted(p for p in (ROOT / "samples").rglob("*") if p.is_file()
+                    and p.suffix.lower() in (".md", ".src", ".def", ".cfg", ".mp", ".yaml"))]
+
+
+def test_no_citation_of_the_internal_language_description_in_user_files() -> None:
+    found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()}"
+             for path in _user_files()
+             for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1)
+             if SPEC_CITATION.search(line)]
+    assert not found, "point at a docs/ page (or state the rule) instead:\n" + "\n".join(found)
+
+
+def test_links_and_docs_references_in_the_samples_resolve() -> None:
+    for path in _user_files():
+        if ROOT / "samples" not in path.parents:
+            continue
+        text = path.read_text(encoding="utf-8", errors="replace")
+        if path.suffix == ".md":
+            for match in MD_LINK.finditer(text):
+                target, fragment = match.group(1), match.group(2)
+                if target.startswith(("http://", "https://")):
+                    continue
+                linked = (path.parent / target) if target else path
+                assert linked.exists(), f"{path.relative_to(ROOT)}: link to missing {target}"
+                if fragment and linked.suffix == ".md":
+                    assert fragment in anchors(linked), f"{path.relative_to(ROOT)}: no heading {fragment}"
+        else:
+            for match in DOC_LINK.finditer(text):
+                page = DOCS / match.group(1)
+                assert page.is_file(), f"{path.relative_to(ROOT)} points at missing {match.group(0)}"
+                if match.group(2):
+                    assert match.group(2) in anchors(page), f"{path.relative_to(ROOT)}: no heading {match.group(0)}"
+
+
 def test_every_docs_link_in_messages_and_comments_points_at_a_page_and_heading() -> None:
     seen = 0
     for path in _source_files():
