@@ -126,7 +126,7 @@ CODES: dict[str, CodeInfo] = {
         _c("E-MODULE-UNKNOWN", "error", "a PLC module number the module table does not have (for this profile); the "
            "message names the nearest known numbers (docs/modules.md)", "CM 9999"),
         # lints
-        _c("W-LINT", "warning", "the program depends on a corner of the semantics (spec [LINT])", "L I1\n= O1\nA I2"),
+        _c("W-LINT", "warning", "the program depends on a corner of the semantics that is legal but easy to misread", "L I1\n= O1\nA I2"),
         # runtime (interpreter)
         _c("E-RT-STACK-OVERFLOW", "error", "data stack overflow",
            "LBL Fill\nPS  K1      ; two 16-bit words per push: the 129th overflows 256 words\nJP  Fill"),
