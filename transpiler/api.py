@@ -232,11 +232,12 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
     if "xml" in formats and validate_xml:
         from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
         if schema_path() is not None:
-            problems = validate(out.files["project.xml"])
-            if problems:
-                raise CompileFailed(list(diags.items) + [Diagnostic.of(
-                    "E-XSD", NO_SPAN, "project.xml does not validate against the TC6 schema (a bug in hh2iec; "
-                    "nothing was written)", *problems)])
+            for name in sorted(n for n in out.files if n.endswith(".xml")):     # the project and its libraries
+                problems = validate(out.files[name], name)
+                if problems:
+                    raise CompileFailed(list(diags.items) + [Diagnostic.of(
+                        "E-XSD", NO_SPAN, f"{name} does not validate against the TC6 schema (a bug in hh2iec; "
+                        "nothing was written)", *problems)])
             validated = True
     return Transpilation(out.files, out.st_text, out.result, path, tuple(diags.items), validated)
 
