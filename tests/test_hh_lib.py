@@ -221,6 +221,8 @@ def test_every_helper_has_a_table_and_a_doc() -> None:
     pous = hh_lib.library_pous(make_semantics())
     assert [p.name for p in pous] == names + ["HH_TIMER", "HH_COUNTER"]
     assert all(p.comment and len(p.comment) > 60 for p in pous)
+    page = (Path(__file__).resolve().parents[1] / "docs" / "hh_lib.md").read_text(encoding="utf-8")
+    assert all(f"`{p.name}`" in page for p in pous), "docs/hh_lib.md names every POU of the library"
 
 
 @pytest.mark.parametrize("name", list(TABLES))

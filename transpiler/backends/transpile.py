@@ -1,5 +1,6 @@
 """Runs the back ends on one IR program: the ST back end decides the IEC project, the writers print it as ST and
-PLCopen XML, the report module adds report.md and io_map.csv. Returns file contents; writing is the caller's job."""
+PLCopen XML (and the libraries HH_Lib and HH_Sys as files of their own), the report module adds report.md and
+io_map.csv. Returns file contents; writing is the caller's job."""
 
 from __future__ import annotations
 
