@@ -98,6 +98,17 @@ def test_hostile_project_validates(schema: etree.XMLSchema, epoch: None) -> None
     assert xsd.validate_xml(render_xml(hostile_project()), schema=schema) == []
 
 
+@pytest.mark.parametrize("overrides", [{}, {"counter_counts": "rising_edges", "timer_start_consumed": False}])
+def test_hh_lib_library_validates(schema: etree.XMLSchema, epoch: None, overrides: dict) -> None:
+    """hh_lib.xml as transpile writes it: every helper and both blocks, no task, no program instance."""
+    from transpiler.backends.st import hh_lib
+    from transpiler.language.semantics import make_semantics
+    library = hh_lib.library_project(make_semantics("itnc530", overrides), "main")
+    data = render_xml(library)
+    assert xsd.validate_xml(data, filename=hh_lib.XML_FILE, schema=schema) == []
+    assert list(extract_st_bodies(data)) == [p.name for p in library.pous]
+
+
 def test_validation_errors_name_the_xml_line(schema: etree.XMLSchema, epoch: None) -> None:
     root = _parse(render_xml(rich_project()))
     task = root.find(".//p:task", NS)

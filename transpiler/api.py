@@ -216,10 +216,10 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
 
 def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_file: Path | None = None,
               validate_xml: bool = True, allow_untranslated: bool = False, target: str = "matiec") -> Transpilation:
-    """Translate to ST / PLCopen XML plus report.md and io_map.csv. Raises HH2IECError on bad machine
-    parameters, on code the back end cannot translate (E-UNSUPPORTED, unless `allow_untranslated`: then each
-    is a warning and report.md opens with the list), or when the XML does not validate against the cached TC6
-    schema (a bug in hh2iec). `target` (matiec, openplc, codesys, twincat) picks the dialect of project.st
+    """Translate to ST / PLCopen XML (with the helper library hh_lib.st / hh_lib.xml, docs/hh_lib.md) plus
+    report.md and io_map.csv. Raises HH2IECError on bad machine parameters, on code the back end cannot translate
+    (E-UNSUPPORTED, unless `allow_untranslated`: then each is a warning and report.md opens with the list), or
+    when an XML file does not validate against the cached TC6 schema (a bug in hh2iec). `target` (matiec, openplc, codesys, twincat) picks the dialect of project.st
     and project.xml (docs/import.md)."""
     formats = {f.strip().lower() for f in formats if f.strip()}
     if not formats or formats - {"st", "xml"}:
@@ -232,11 +232,12 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
     if "xml" in formats and validate_xml:
         from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
         if schema_path() is not None:
-            problems = validate(out.files["project.xml"])
-            if problems:
-                raise CompileFailed(list(diags.items) + [Diagnostic.of(
-                    "E-XSD", NO_SPAN, "project.xml does not validate against the TC6 schema (a bug in hh2iec; "
-                    "nothing was written)", *problems)])
+            for name in sorted(n for n in out.files if n.endswith(".xml")):     # the project and its libraries
+                problems = validate(out.files[name], name)
+                if problems:
+                    raise CompileFailed(list(diags.items) + [Diagnostic.of(
+                        "E-XSD", NO_SPAN, f"{name} does not validate against the TC6 schema (a bug in hh2iec; "
+                        "nothing was written)", *problems)])
             validated = True
     return Transpilation(out.files, out.st_text, out.result, path, tuple(diags.items), validated)
 

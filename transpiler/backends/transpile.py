@@ -1,5 +1,6 @@
 """Runs the back ends on one IR program: the ST back end decides the IEC project, the writers print it as ST and
-PLCopen XML, the report module adds report.md and io_map.csv. Returns file contents; writing is the caller's job."""
+PLCopen XML (and the libraries HH_Lib and HH_Sys as files of their own), the report module adds report.md and
+io_map.csv. Returns file contents; writing is the caller's job."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 from transpiler.backends.st.backend import StBackend, StResult
 from transpiler.backends.st.dialect import DEFAULT_TARGET, for_target, target_section
+from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
 from transpiler.backends.report.report import render_io_map, render_report
 
@@ -47,6 +49,13 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
             files[LIB_ST] = render_library_st(library).encode("utf-8")
         if "xml" in formats:
             files[LIB_XML] = render_xml(library)
+    # HH_Lib: every helper and the timer/counter blocks as a library of their own (hh_lib.py); project.st keeps
+    # the ones it uses and stays self-contained.
+    helpers = hh_lib.library_project(program.semantics, project.name)
+    if "st" in formats:
+        files[hh_lib.ST_FILE] = render_library_st(helpers).encode("utf-8")
+    if "xml" in formats:
+        files[hh_lib.XML_FILE] = render_xml(helpers)
     files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

@@ -12,7 +12,7 @@ from transpiler.diagnostics import NO_SPAN
 
 
 def register(sub, common) -> None:
-    p = sub.add_parser("transpile", help="write project.st, project.xml, report.md and io_map.csv")
+    p = sub.add_parser("transpile", help="write project.st, project.xml, report.md, io_map.csv and hh_lib.st/hh_lib.xml")
     common(p)
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--format", default="st,xml", help="which of st,xml to write (default both)")

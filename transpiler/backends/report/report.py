@@ -8,6 +8,7 @@ from transpiler.backends.st.readability import measure
 from transpiler.backends.st.writer import render_st
 from transpiler.backends.iec_model import Pou
 from transpiler.backends.report.target import target_must_provide
+from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project
 from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
 from transpiler.backends.st.backend import StResult
@@ -76,6 +77,20 @@ def _target_limits(program: Program) -> list[str]:
             "`STRING(128)` or raise the default string length; on matiec keep results within 126 characters."]
 
 
+def _library_files(result: StResult) -> list[str]:
+    """The paragraph on the HH_Sys library files (when the program calls such a module), then the HH_Lib section."""
+    lines = []
+    if library_project(result.project) is not None:
+        lines += ["", f"The same FUNCTION_BLOCKs, and nothing else, are written as the library files `{LIB_ST}` (ST) and "
+                  f"`{LIB_XML}` (PLCopen XML) next to this report (with the ST and XML output formats), to import "
+                  "into the target IDE (CODESYS, TwinCAT) and implement there."]
+    return lines + ["", "## Helper library", "", (f"`{hh_lib.ST_FILE}` (ST) and `{hh_lib.XML_FILE}` (PLCopen XML), next to this report with the ST and XML "
+            f"output formats, are the library {hh_lib.LIBRARY_NAME}: every `HH_` helper function and the `HH_TIMER` and "
+            "`HH_COUNTER` blocks, each with a comment saying which behaviour of the control it keeps. project.st is "
+            "complete without it (it declares the helpers it uses, with the same bodies); import the library to keep "
+            "the helpers in one place on the target instead (docs/hh_lib.md).")]
+
+
 def _not_translated(result: StResult) -> list[str]:
     return [f"- {span}: {text}" for span, text in result.untranslated]
 
@@ -137,11 +152,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
-    lines += ["", "## What the target must provide", ""] + target_must_provide(program, result)
-    if library_project(result.project) is not None:
-        lines += ["", f"The same FUNCTION_BLOCKs, and nothing else, are written as the library files `{LIB_ST}` (ST) and "
-                  f"`{LIB_XML}` (PLCopen XML) next to this report (with the ST and XML output formats), to import "
-                  "into the target IDE (CODESYS, TwinCAT) and implement there."]
+    lines += ["", "## What the target must provide", ""] + target_must_provide(program, result) + _library_files(result)
     lines += ["", "## Timers and counters", ""]
     for name, cycles in sorted(result.presets.items()):
         lines.append(f"- `{name}` = {cycles} cycles")
