@@ -166,7 +166,12 @@ MALFORMED = [
     ("bad mp value", 'cycles: 5\nmp:\n  "4110.3": fast\n', 3, "not a number"),
     ("duplicate key", "cycles: 5\ncycles: 6\n", 2, "duplicate key"),
     ("two nc actions", "cycles: 5\nevents:\n  - cycle: 1\n    nc: {m_function: 3, gear: 1}\n", 4, "exactly one"),
-    ("empty event", "cycles: 5\nevents:\n  - cycle: 1\n", 3, "`set` or `nc`"),
+    ("empty event", "cycles: 5\nevents:\n  - cycle: 1\n", 3, "`set`, `nc` or `machine`"),
+    ("axis out of range", "cycles: 5\nmachine:\n  axes: {16: {position: 1}}\n", 3, "less than 16"),
+    ("unknown table", "cycles: 5\nmachine:\n  tables: [{table: X, line: 1, element: 1, value: 2}]\n", 3, "TCH"),
+    ("table element out of range", "cycles: 5\nmachine:\n  tables: [{table: T, line: 1, element: 64, value: 2}]\n",
+     3, "63"),
+    ("empty machine", "cycles: 5\nevents:\n  - cycle: 1\n    machine: {}\n", 4, "`axes`, `drives` or `tables`"),
     ("bad restart", "cycles: 5\nevents:\n  - cycle: 1\n    nc: {restart: everything}\n", 4, "restart"),
     ("unknown profile", "cycles: 5\nprofile: tnc640\n", 2, "unknown profile"),
     ("probability above 1", "cycles: 5\nrandom: {seed: 1, inputs: [I1], toggle_probability: 1.5}\n", 2,
@@ -468,3 +473,28 @@ def test_unreadable_values_give_one_message(tmp_path: Path, names: NameTable, te
                                             fragment: str) -> None:
     (d,) = errors_of(write(tmp_path, text), names)
     assert d.span.line == line and fragment in d.message
+
+
+def test_machine_data_loads_applies_per_cycle_and_round_trips(tmp_path: Path, names: NameTable) -> None:
+    path = write(tmp_path, """
+        cycles: 5
+        machine:
+          axes: {0: {position: 1250000}, 3: {active: false}}
+          drives: {available: 5}
+          tables:
+            - {table: TCH, line: 4, element: 1, value: 12}
+        events:
+          - cycle: 2
+            machine: {axes: {0: {position: -7}}}
+        """)
+    scenario = load_scenario(path, names)
+    assert scenario.machine.axes[0].position == 1250000 and scenario.machine.axes[0].active
+    assert not scenario.machine.axes[3].active and scenario.machine.axes[3].position == 0
+    assert (scenario.machine.drives.available, scenario.machine.drives.switching_off) == (5, 0)
+    assert scenario.machine.tables[0].table == "TCH"
+    stimulus = build_stimulus(scenario, names)
+    assert stimulus.machine_updates(1) == ()
+    (update,) = stimulus.machine_updates(2)
+    assert update.axes[0].position == -7
+    again = write(tmp_path, scenario_to_yaml(scenario, tmp_path), "again.yaml")
+    assert load_scenario(again, names) == scenario

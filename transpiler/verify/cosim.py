@@ -16,7 +16,8 @@ from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
-from transpiler.verify.simulate import build_machine, effective_machine_parameters, operand_writers, program_operands
+from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
+                                       program_operands)
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations
 
 
@@ -109,6 +110,16 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
     return Comparison(tuple(cols), inputs, missing)
+
+
+def _machine_changes(stimulus: Stimulus, cycle: int, machine: Machine, side: StSide) -> None:
+    """The scenario's machine data of this cycle, for both sides: each side's module calls run on a system
+    context of its own."""
+    translated = getattr(side, "sys", None)
+    for data in stimulus.machine_updates(cycle):
+        apply_machine_data(machine.sys, data)
+        if translated is not None and translated.sys is not None:
+            apply_machine_data(translated.sys, data)
 
 
 class _StDriver:
@@ -310,6 +321,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     for cycle in range(total):
         writes = stimulus.writes(cycle)
         actions = stimulus.nc_actions(cycle)
+        _machine_changes(stimulus, cycle, machine, side)
         report = machine.run_cycle(cycle, writes, actions)
         if report.faults:
             fault = report.faults[0]

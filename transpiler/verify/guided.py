@@ -25,7 +25,7 @@ from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.verify.corners import Corners, harvest
 from transpiler.verify.scenario import Event, NcAction, NameTable, RandomStimulus, Scenario, bind
-from transpiler.verify.simulate import build_machine
+from transpiler.verify.simulate import apply_machine_data, build_machine
 from transpiler.verify.stimulus import build_stimulus
 
 MARGIN = 5                  # cycles kept after the last one that brought new coverage (effects settle)
@@ -70,6 +70,8 @@ class Search:
         new: set = set()
         last_new, count, ok = -1, 0, 0
         for cycle in range(stimulus.cycles):
+            for data in stimulus.machine_updates(cycle):
+                apply_machine_data(machine.sys, data)
             try:
                 report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
             except NcActionError:

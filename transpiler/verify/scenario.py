@@ -9,6 +9,7 @@ import functools
 import re
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
+from types import MappingProxyType
 from typing import Annotated, Any, Callable, Iterator, Literal, Mapping, NamedTuple, Union, get_args
 
 import yaml
@@ -241,15 +242,62 @@ class NcAction(_Model):
         return self.model_dump(exclude_none=True)
 
 
+# The tables selected for program run that PLC modules 9092-9094 read and write, by the file type they use.
+TABLE_FILES: Mapping[str, int] = MappingProxyType({"T": 0, "D": 1, "TCH": 2})
+AXES = 16
+TABLE_ELEMENTS = 63
+
+
+class Axis(_Model):
+    """One NC axis as the PLC modules see it: whether it exists and is active, and its actual position."""
+
+    active: bool = True
+    position: _DWord = 0            # actual position in the reference system, 0.0001 mm (module 9049)
+
+
+class Drives(_Model):
+    """Power stages: bit n = drive of axis n+1 (bit 15 the spindle)."""
+
+    available: _DWord               # ready to be switched on (module 9162 gives available AND enabled)
+    switching_off: _DWord = 0       # early warning that a drive is about to be switched off (module 9159)
+
+
+class TableEntry(_Model):
+    """One element of a tool (T), datum (D) or pocket (TCH) table selected for program run."""
+
+    table: Literal["T", "D", "TCH"]
+    line: Annotated[int, Field(ge=0, le=VALUE_RANGES["D"][1])]
+    element: Annotated[int, Field(ge=0, le=TABLE_ELEMENTS)]
+    value: _DWord
+
+
+class MachineData(_Model):
+    """What the control's PLC modules read about the machine: axes, drives, table contents."""
+
+    axes: dict[Annotated[int, Field(ge=0, lt=AXES)], Axis] = {}
+    drives: Drives | None = None
+    tables: list[TableEntry] = []
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> MachineData:
+        if not self.axes and self.drives is None and not self.tables:
+            raise ValueError("`machine` needs `axes`, `drives` or `tables`")
+        return self
+
+    def as_dict(self) -> dict[str, Any]:
+        return self.model_dump(exclude_none=True, exclude_defaults=False)
+
+
 class Event(_Model):
     cycle: Annotated[int, Field(ge=0)]
     set: dict[str, Any] = {}
     nc: NcAction | None = None
+    machine: MachineData | None = None
 
     @model_validator(mode="after")
     def _not_empty(self) -> Event:
-        if not self.set and self.nc is None:
-            raise ValueError("an event needs `set` or `nc`")
+        if not self.set and self.nc is None and self.machine is None:
+            raise ValueError("an event needs `set`, `nc` or `machine`")
         return self
 
 
@@ -289,6 +337,7 @@ class Scenario(_Model):
     expect: list[Expectation] = []
     semantics: dict[str, Annotated[Any, AfterValidator(_scalar)]] = {}
     module_results: dict[int, list[int]] = {}
+    machine: MachineData | None = None
 
     _source: Path | None = PrivateAttr(default=None)
     _spans: dict[tuple, Span] = PrivateAttr(default_factory=dict)

@@ -14,7 +14,7 @@ from transpiler.diagnostics import CompileFailed, Diagnostics, Span
 from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
-from transpiler.verify.scenario import NameTable, OperandRef, Scenario
+from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario
 from transpiler.language.semantics import PROFILES
 from transpiler.exec.compiled.shim import NcActionError, UnknownModule
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
@@ -145,13 +145,26 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
     diags.raise_if_errors()
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:
-        return Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
-                       mp_spans=spans, compiled=compiled, number_mp4111=int(program.semantics["number_mp4111"]))
+        machine = Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
+                          mp_spans=spans, compiled=compiled, number_mp4111=int(program.semantics["number_mp4111"]))
+        if scenario.machine is not None:
+            apply_machine_data(machine.sys, scenario.machine)
+        return machine
     except MachineConfigError:
         raise
     except (UnknownModule, ValueError) as exc:
         diags.report("E-SCENARIO", scenario.span_of("module_results"), str(exc))
         raise CompileFailed(diags.items) from None
+
+
+def apply_machine_data(sys, data: MachineData) -> None:
+    """Load `data` (axes, drives, table elements) into a system context of the PLC module models."""
+    for axis, values in data.axes.items():
+        sys.set_axis(axis, values.active, values.position)
+    if data.drives is not None:
+        sys.set_drives(data.drives.available, data.drives.switching_off)
+    for entry in data.tables:
+        sys.set_table(TABLE_FILES[entry.table], entry.line, entry.element, entry.value)
 
 
 def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulus: Stimulus | None = None, *,
@@ -173,6 +186,8 @@ def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulu
     start = time.perf_counter()
     cycles_run = 0
     for cycle in range(stimulus.cycles):
+        for data in stimulus.machine_updates(cycle):
+            apply_machine_data(machine.sys, data)
         try:
             report = machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
         except NcActionError as exc:

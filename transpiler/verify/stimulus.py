@@ -12,8 +12,8 @@ from typing import Any, Callable, Iterable, Mapping, NamedTuple
 import yaml
 
 from transpiler.diagnostics import Diagnostic, Diagnostics, Span
-from transpiler.verify.scenario import (BIT_KINDS, KIND_ORDER, Event, NameProblem, NameTable, OperandRef, Scenario, bind,
-                                 is_glob, mp_key_text, parse_operand, values_equal)
+from transpiler.verify.scenario import (BIT_KINDS, KIND_ORDER, Event, MachineData, NameProblem, NameTable, OperandRef,
+                                        Scenario, bind, is_glob, mp_key_text, parse_operand, values_equal)
 
 
 class Write(NamedTuple):
@@ -31,6 +31,7 @@ class CycleStimulus:
     sets: tuple[Write, ...] = ()
     toggles: tuple[Write, ...] = ()
     nc: tuple[dict[str, Any], ...] = ()
+    machine: tuple[MachineData, ...] = ()     # axes, drives, tables the PLC modules read from now on
 
     @property
     def writes(self) -> tuple[Write, ...]:
@@ -63,6 +64,9 @@ class Stimulus:
 
     def nc_actions(self, cycle: int) -> tuple[dict[str, Any], ...]:
         return self.step(cycle).nc
+
+    def machine_updates(self, cycle: int) -> tuple[MachineData, ...]:
+        return self.step(cycle).machine
 
     @property
     def toggle_count(self) -> int:
@@ -140,8 +144,9 @@ def build_stimulus(scenario: Scenario, names: NameTable) -> Stimulus:
                     driven[ref] = 1 - _bit(driven.get(ref, 0))
                     flips.append(Write(ref, driven[ref], name))
         nc = tuple(event.nc.as_dict() for event in events if event.nc is not None)
-        if sets or flips or nc:
-            steps[cycle] = CycleStimulus(tuple(sets), tuple(flips), nc)
+        machine = tuple(event.machine for event in events if event.machine is not None)
+        if sets or flips or nc or machine:
+            steps[cycle] = CycleStimulus(tuple(sets), tuple(flips), nc, machine)
     return Stimulus(bound.cycles, bound.cycle_time_ms, steps, tuple(toggles), tuple(diags.items))
 
 
@@ -252,6 +257,8 @@ def _scenario_data(scenario: Scenario, base_dir: Path | None) -> dict[str, Any]:
         data["semantics"] = dict(scenario.semantics)
     if scenario.module_results:
         data["module_results"] = {k: list(v) for k, v in scenario.module_results.items()}
+    if scenario.machine is not None:
+        data["machine"] = scenario.machine.as_dict()
     return data
 
 
@@ -261,6 +268,8 @@ def _event_data(event: Event) -> dict[str, Any]:
         data["set"] = dict(event.set)
     if event.nc is not None:
         data["nc"] = event.nc.as_dict()
+    if event.machine is not None:
+        data["machine"] = event.machine.as_dict()
     return data
 
 
