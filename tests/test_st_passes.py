@@ -14,7 +14,7 @@ from transpiler.backends.st.arith import wrap32
 from transpiler.backends.st.layout import Layout
 from transpiler.backends.st.liveness import Liveness, use_def
 from transpiler.backends.st.names import MAX_LEN, NameTable, legalise
-from transpiler.backends.st.routine import REG_TYPES, Emitter, RoutineContext
+from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.symbolic import Executor
 
@@ -68,7 +68,7 @@ def routine_lines(program: Program, entry: CallTarget | None = None, fallback: b
 
     ctx = RoutineContext(layout, out, lambda i: live.at(key, i + 1) if i + 1 < len(file.ops) else frozenset(),
                          register, helpers.add, temp, lambda o: "KF", lambda: ("HH_STACK", "HH_SP"),
-                         lambda n: f"MODULE{n}()", program.semantics, lambda kind: f"HH_{kind}_index")
+                         lambda n: f"MODULE{n}()", program.semantics, AccessorPool().pick)
     info = RoutineInfo(key, entry, file, body, entry.key == (0, 0), lambda t: f"i_{t.label}()", {},
                        live.exit(key), lambda i: live.at(key, i))
     if fallback:
