@@ -155,3 +155,56 @@ def test_cli_reports_indexed_addresses(project, tmp_path):
     assert "+ 32 indexed addresses from their first indexed store" in proc.stdout
     run = json.loads((tmp_path / "r.json").read_text())["runs"][0]
     assert run["compared_indexed_addresses"] == 32
+
+
+# Indexed reads leave their value in the accessor instance's Q (no temporary): S through the index with LA still
+# needed after it, a value still needed after a write to the same operand, and reads and writes in a loop over X.
+READS = """\
+L     M5
+L     W10
+=     X
+S     M300[X]
+=     O2
+L     M200[X]
+R     M200[X]
+=     O1
+L     K0
+=     X
+LBL   Loop
+L     M210[X]
+O     M220[X]
+=     M230[X]
+L     M240[X]
+S     M250[X]
+INCX
+L     X
+<     K3
+JPT   Loop
+EM
+"""
+
+READS_SCENARIO = """\
+name: indexed_reads
+cycles: 4
+initial: {W10: 4, M5: 1, M204: 1, M210: 1, M221: 1, M240: 1, M242: 1}
+events:
+  - {cycle: 2, set: {M5: 0, W10: 5}}
+"""
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_indexed_reads_keep_the_value_of_their_instruction(tmp_path, backend):
+    (tmp_path / "main.src").write_text(READS)
+    (tmp_path / "scenario.yaml").write_text(READS_SCENARIO)
+    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
+    out = transpile_program(program, Diagnostics(), {}, {"st"})
+    assert "tmp" not in out.st_text
+    names = project_names(program)
+    project = (tmp_path, program, out, names, load_scenario(tmp_path / "scenario.yaml", names))
+    result = _run(project, out.st_text, backend)
+    assert result.equivalent, (result.divergence, result.error)
+    # The value stored to O1 is the one read before the write: reading the instance that wrote breaks it.
+    broken, count = re.subn(r"O1 := HH_M_index\.Q;", "O1 := HH_M_index_2.Q;", out.st_text)
+    assert count == 1, "the mutation site moved: update the test"
+    d = _run(project, broken, backend).divergence
+    assert d is not None and d.operand == "O1"

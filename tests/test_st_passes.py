@@ -14,7 +14,7 @@ from transpiler.backends.st.arith import wrap32
 from transpiler.backends.st.layout import Layout
 from transpiler.backends.st.liveness import Liveness, use_def
 from transpiler.backends.st.names import MAX_LEN, NameTable, legalise
-from transpiler.backends.st.routine import REG_TYPES, Emitter, RoutineContext
+from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.symbolic import Executor
 
@@ -68,7 +68,7 @@ def routine_lines(program: Program, entry: CallTarget | None = None, fallback: b
 
     ctx = RoutineContext(layout, out, lambda i: live.at(key, i + 1) if i + 1 < len(file.ops) else frozenset(),
                          register, helpers.add, temp, lambda o: "KF", lambda: ("HH_STACK", "HH_SP"),
-                         lambda n: f"MODULE{n}()", program.semantics, lambda kind: f"HH_{kind}_index")
+                         lambda n: f"MODULE{n}()", program.semantics, AccessorPool().pick)
     info = RoutineInfo(key, entry, file, body, entry.key == (0, 0), lambda t: f"i_{t.label}()", {},
                        live.exit(key), lambda i: live.at(key, i))
     if fallback:
@@ -392,3 +392,81 @@ def test_bits_of_a_constant_word_are_written_as_true_and_false():
     assert lines == ["M10 := TRUE;", "M11 := FALSE;", "M12 := TRUE;", "M13 := FALSE;"]
     lines = routine_lines(program_of([op("WLD", W(0)), op("STBITS", M(10), nbits=2), op("EM")]))
     assert lines == ["tmp1 := INT_TO_DINT(W0);", "M10 := HH_BIT(tmp1, 0);", "M11 := HH_BIT(tmp1, 1);"]
+
+
+# ---- indexed bit reads: the accessor's output Q is the value, no temporary (operands.py)
+
+def Mx(addr: int) -> Operand:
+    return Operand("M", addr, True)
+
+
+def test_two_indexed_reads_in_one_expression_take_two_instances_and_no_temporary():
+    # Catches: a temporary per read ('tmp1 := HH_M_index.Q;'), or both reads through one instance (the second
+    # call overwrites the Q the first value is).
+    lines = routine_lines(program_of([op("LD", Mx(1100)), op("OR", Mx(4800)), op("ST", Mx(4800)), op("EM")]))
+    assert lines == ["HH_M_index(IDX := 1100 + HH_X, WRITE := FALSE);",
+                     "HH_M_index_2(IDX := 4800 + HH_X, WRITE := FALSE);",
+                     "HH_M_index(IDX := 4800 + HH_X, WRITE := TRUE, VALUE := HH_M_index.Q OR HH_M_index_2.Q);"]
+
+
+def test_an_indexed_read_in_flight_keeps_the_old_value_across_a_write_to_the_same_operand():
+    # Catches: the write through the instance the value in flight reads, so that 'M3 :=' gets the new value.
+    lines = routine_lines(program_of([op("LD", Mx(10)), op("STN", Mx(10)), op("ST", M(3)), op("EM")]))
+    assert lines == ["HH_M_index(IDX := 10 + HH_X, WRITE := FALSE);",
+                     "HH_M_index_2(IDX := 10 + HH_X, WRITE := TRUE, VALUE := NOT HH_M_index.Q);",
+                     "M3 := HH_M_index.Q;"]
+    # On the data stack too: the pushed value still reads the instance when it is pulled.
+    lines = routine_lines(program_of([op("LD", Mx(10)), op("PSL"), op("LD", M(1)), op("ST", Mx(10)), op("PLL"),
+                                      op("ST", M(3)), op("EM")]))
+    assert lines == ["HH_M_index(IDX := 10 + HH_X, WRITE := FALSE);", "HH_LA := M1;",
+                     "HH_M_index_2(IDX := 10 + HH_X, WRITE := TRUE, VALUE := HH_LA);", "M3 := HH_M_index.Q;"]
+
+
+def test_a_dead_indexed_value_frees_its_instance_and_a_write_may_read_its_own_instance():
+    # The IF condition is read before the branch: the branch reuses its instance. INC writes NOT of the value it
+    # read through the same instance (the inputs are evaluated before the call).
+    lines = routine_lines(program_of([op("LD", Mx(10)), op("JPF", target=5), op("LD", Mx(20)), op("AND", Mx(21)),
+                                      op("ST", Mx(22)), lbl("b"), op("INC", Mx(30)), op("EM")]))
+    assert lines == ["HH_M_index(IDX := 10 + HH_X, WRITE := FALSE);",
+                     "IF HH_M_index.Q THEN (* t.src:2 *)",
+                     "    HH_M_index(IDX := 20 + HH_X, WRITE := FALSE);",
+                     "    HH_M_index_2(IDX := 21 + HH_X, WRITE := FALSE);",
+                     "    HH_M_index(IDX := 22 + HH_X, WRITE := TRUE, VALUE := HH_M_index.Q AND HH_M_index_2.Q);",
+                     "END_IF;",
+                     "HH_M_index(IDX := 30 + HH_X, WRITE := FALSE);",
+                     "HH_M_index(IDX := 30 + HH_X, WRITE := TRUE, VALUE := NOT HH_M_index.Q);"]
+
+
+def test_indexed_reads_in_a_loop_and_across_its_exit():
+    # Catches: a value of one iteration read after the instance was called again; the last read leaves the loop
+    # in the register variable (it is live after the loop), read once more there.
+    lines = routine_lines(program_of([op("WLD", Operand("K", 0)), op("WST", Operand("X", 0)), lbl("a"),
+                                      op("LD", Mx(10)), op("SET", Mx(20)), op("INCX"), op("LD", Mx(30)),
+                                      op("JPT", target=2), op("ST", M(1)), op("EM")]))
+    assert lines == ["HH_X := 0;",
+                     "REPEAT (* t.src:3 *)",
+                     "    HH_M_index(IDX := 10 + HH_X, WRITE := FALSE);",
+                     "    HH_M_index_2(IDX := 20 + HH_X, WRITE := FALSE);",
+                     "    HH_M_index(IDX := 20 + HH_X, WRITE := TRUE, VALUE := HH_M_index.Q OR HH_M_index_2.Q);",
+                     "    HH_M_index(IDX := 30 + HH_ADD(HH_X, 1), WRITE := FALSE);",
+                     "    HH_LA := HH_M_index.Q;",
+                     "    HH_X := HH_ADD(HH_X, 1);",
+                     "UNTIL NOT HH_LA",
+                     "END_REPEAT;",
+                     "M1 := HH_LA;"]
+
+
+def test_bits_read_together_by_one_op_each_keep_their_instance():
+    # Catches: LDBITS holding its bits outside the symbolic state while one instance is called for each.
+    lines = routine_lines(program_of([op("LDBITS", Mx(10), nbits=3), op("WST", W(0)), op("EM")]))
+    assert lines == ["HH_M_index(IDX := 10 + HH_X, WRITE := FALSE);",
+                     "HH_M_index_2(IDX := 11 + HH_X, WRITE := FALSE);",
+                     "HH_M_index_3(IDX := 12 + HH_X, WRITE := FALSE);",
+                     "W0 := DINT_TO_INT(HH_PACK3(HH_M_index.Q, HH_M_index_2.Q, HH_M_index_3.Q));"]
+
+
+def test_indexed_set_reads_la_after_it_was_saved():
+    # Catches: S M4800[X] writing 'HH_LA XOR M5 OR ...' after 'HH_LA := HH_LA XOR M5' (M5 applied twice).
+    lines = routine_lines(program_of([op("XOR", M(5)), op("SET", Mx(4800)), op("ST", M(6)), op("EM")]))
+    assert lines[:3] == ["HH_M_index(IDX := 4800 + HH_X, WRITE := FALSE);", "HH_LA := HH_LA XOR M5;",
+                         "HH_M_index(IDX := 4800 + HH_X, WRITE := TRUE, VALUE := HH_LA OR HH_M_index.Q);"]

@@ -22,7 +22,7 @@ from transpiler.backends.st.interfaces import Effect, StackAnalysis
 from transpiler.backends.st import passes
 from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
-from transpiler.backends.st.routine import REG_TYPES, Emitter, RoutineContext, Unsupported
+from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
 
@@ -297,15 +297,9 @@ class StBackend:
                                          f"(* {span.file}:{span.line} *)")
             return True
 
-        accessors: dict[str, str] = {}
-
-        def bit_accessor(kind: str) -> str:
-            if kind not in accessors:
-                accessors[kind] = f"HH_{kind}_index"
-            return accessors[kind]
-
+        accessors = AccessorPool()
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
-                             self._kfield, self._stack_names, self._module_call, self.semantics, bit_accessor,
+                             self._kfield, self._stack_names, self._module_call, self.semantics, accessors.pick,
                              self.job_plan.routine(key, self._job_queue))
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
@@ -319,6 +313,7 @@ class StBackend:
             self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
             emitter = Emitter()
             temps.clear()
+            accessors.count.clear()
             callees.clear()
             slots.clear()
             ctx.out = emitter
@@ -338,7 +333,7 @@ class StBackend:
             lines = lines + ["RETURN; (* the subprogram does nothing *)"]
         local = [IecVar(self.instance_names[c], self.pou_names[c]) for c in sorted(callees)]
         local += [IecVar(inst, self.layout.bit_access[kind], comment=f"indexed access to {kind} operands")
-                  for kind, inst in sorted(accessors.items())]
+                  for kind, inst in accessors.instances()]
         local += [IecVar(name, SLOT_TYPES[kind], comment=f"data stack entry {depth} of this routine")
                   for (depth, kind), name in sorted(slots.items())]
         local += [IecVar(n, t) for n, t in temps]

@@ -52,6 +52,13 @@ class InFlightMixin(ExecutorPart):
                 frame.saved = E.var(name, frame.saved.typ)
         return deferred
 
+    def saves_nothing(self, base: str, live: frozenset[str]) -> bool:
+        """Assigning `base` needs no value in flight saved: each value that reads it is a register not in `live`
+        (prepare_write drops or defers such a register; nothing is saved while the stack or a bracket is open)."""
+        dependents = list(self._dependents(base))
+        return not dependents or not self.s.frames and not self.s.stack and all(
+            kind == "reg" and key not in live for kind, key in dependents)
+
     def drop(self, regs: list[str]) -> None:
         for r in regs:
             self.s.regs[r] = None

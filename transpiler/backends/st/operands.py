@@ -44,24 +44,44 @@ class OperandMixin(ExecutorPart):
             self.s.set("X", self._temp_copy(x))
 
     def bit(self, o: Operand, offset: int = 0) -> Expr:
-        """Read a bit operand: a variable, or for an indexed one the value read now through the accessor FB."""
+        """Read a bit operand: a variable, or for an indexed one the output Q of the accessor FB called now.
+
+        Q keeps the value read until its instance is called again, so the value is `<instance>.Q` itself (its
+        deps name the instance). The instance is one that no value still needed reads: none in flight that is
+        live here (a dead register reading it is dropped) and none this op read before (its handler may hold
+        that value outside the symbolic state). So the call changes nothing that is still needed."""
         if not o.indexed:
             return self.ctx.layout.bit_lvalue(o, offset)
-        inst = self.ctx.bit_accessor(o.kind)
         index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        held = self._held_reads()
+        live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
+        inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live))
+        self.drop([key for kind, key in list(self._dependents(inst.upper())) if kind == "reg"])
         self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := FALSE);")
-        name = self.ctx.temp("BOOL")
-        self.ctx.out.line(f"{name} := {inst}.Q;")
-        return E.var(name, "BOOL")
+        held.add(inst)
+        return E.Expr(f"{inst}.Q", "BOOL", frozenset([inst.upper()]), 0, 1)
+
+    def _held_reads(self) -> set[str]:
+        """Accessor instances the op being executed has read so far."""
+        if self.s.held[0] != self.index:
+            self.s.held = (self.index, set())
+        return self.s.held[1]
 
     def bit_store(self, o: Operand, value: Callable[[], Expr], keep: frozenset[str], offset: int = 0) -> Expr | None:
-        """Write a bit operand; returns the target variable (None for an indexed write)."""
+        """Write a bit operand; returns the target variable (None for an indexed write).
+
+        An indexed write goes through an accessor instance whose call needs no value in flight saved (at worst
+        a new one): its inputs, the value among them, are evaluated before the call, so the value may read the
+        instance's own Q."""
         if not o.indexed:
             return self.store(lambda: self.ctx.layout.bit_lvalue(o, offset), value, keep)
-        inst = self.ctx.bit_accessor(o.kind)
+        keep = keep | {"X"}
         # Any operand of this space may change: values in flight that read one of them are saved first.
-        deferred = self.prepare_write(f"#{o.kind}", keep | {"X"})
+        deferred = self.prepare_write(f"#{o.kind}", keep)
         index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        live = self.ctx.live_after(self.index)
+        inst = self.ctx.bit_accessor(o.kind, lambda name: self.saves_nothing(name.upper(), live))
+        deferred += self.prepare_write(inst.upper(), keep)
         self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := TRUE, VALUE := {value().text});")
         self.drop(deferred)
         return None

@@ -39,14 +39,18 @@ class LogicOpsMixin(ExecutorPart):
         self.bit_store(op.operand, lambda: E.b_not(self.s.reg("LA")), frozenset(["LA", "X"]))
 
     def _conditional_bit(self, op: Op, when: bool, value: bool) -> None:
-        la = self.s.reg("LA")
         if op.operand.indexed:
-            # S/R through the index: the accessor writes the old value back when LA does not act.
+            # S/R through the index: the accessor writes the old value back when LA does not act. LA is read
+            # when the write is emitted: saving values in flight first may have assigned its variable.
             old = self.bit(op.operand)
-            cond = la if when else E.b_not(la)
-            new = E.b_or(cond, old) if value else E.b_and(E.b_not(cond), old)
-            self.bit_store(op.operand, lambda: new, frozenset(["LA", "X"]))
+
+            def new() -> E.Expr:
+                la = self.s.reg("LA")
+                cond = la if when else E.b_not(la)
+                return E.b_or(cond, old) if value else E.b_and(E.b_not(cond), old)
+            self.bit_store(op.operand, new, frozenset(["LA", "X"]))
             return
+        la = self.s.reg("LA")
         target = self.bit(op.operand)
         if la.bool_const is not None:
             if la.bool_const == when:

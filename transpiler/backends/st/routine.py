@@ -63,6 +63,8 @@ class SymbolicState:
         self.regs: dict[str, Expr | None] = dict.fromkeys(REGS)
         self.stack: list[tuple[str, Expr]] = []
         self.frames: list[Frame] = []
+        # (op index, accessor instances that op has read): values its handler may hold outside this state.
+        self.held: tuple[int, set[str]] = (-1, set())
 
     def reg(self, name: str) -> Expr:
         value = self.regs[name]
@@ -74,13 +76,40 @@ class SymbolicState:
         self.regs[name] = value
 
 
+class AccessorPool:
+    """The instances of the accessor FBs one routine calls, per operand kind: HH_M_index, HH_M_index_2, ...
+
+    An indexed read leaves its value in the instance's output Q until the instance is called again; several
+    instances let several such values be in flight at once without a temporary (see OperandMixin.bit)."""
+
+    def __init__(self) -> None:
+        self.count: dict[str, int] = {}         # kind -> instances handed out so far
+
+    @staticmethod
+    def _name(kind: str, n: int) -> str:
+        return f"HH_{kind}_index" if n == 1 else f"HH_{kind}_index_{n}"
+
+    def pick(self, kind: str, usable: Callable[[str], bool]) -> str:
+        """The first instance of `kind` that `usable` accepts; a new one when none does."""
+        n = 1
+        while n <= self.count.get(kind, 0) and not usable(self._name(kind, n)):
+            n += 1
+        self.count[kind] = max(n, self.count.get(kind, 0))
+        return self._name(kind, n)
+
+    def instances(self) -> list[tuple[str, str]]:
+        """(kind, instance name) of every instance handed out, in declaration order."""
+        return [(kind, self._name(kind, n)) for kind in sorted(self.count) for n in range(1, self.count[kind] + 1)]
+
+
 class RoutineContext:
     """What the symbolic executor needs from the backend: layout, register names, helper registry, liveness."""
 
     def __init__(self, layout: Layout, emitter: Emitter, live_after: Callable[[int], frozenset[str]],
                  register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
                  kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
-                 module_call: Callable[[int], str], semantics, bit_accessor: Callable[[str], str], jobs=None):
+                 module_call: Callable[[int], str], semantics,
+                 bit_accessor: Callable[[str, Callable[[str], bool]], str], jobs=None):
         self.layout = layout
         self.out = emitter
         self.live_after = live_after
