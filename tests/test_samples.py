@@ -58,3 +58,27 @@ def test_construct_sample(folder, capsys):
     extra = [] if folder.name == "indexed" else ["--random-cycles", "200", "--seed", "5"]
     assert hh2iec(["equiv", main, "--scenario", scenario, *extra, "--backend", "builtin"]) == 0, capsys.readouterr()
     assert "EQUIVALENT" in capsys.readouterr().out
+
+
+MODULES_DEMO = ROOT / "samples" / "modules_demo"
+
+
+def test_modules_demo_uses_every_module_kind_and_submit_jobs_and_is_equivalent(capsys):
+    # The acceptance project of PLC modules: pure, data and machine modules and SUBM/RPLY/CAN, nothing left
+    # untranslated, every scenario's expectations met, equivalent over its scenarios and generated stimulus.
+    from transpiler import api
+    from transpiler.language.module_table import DATA, MACHINE, MODULE_TABLE, PURE
+    project = api.load_project(api.project_options(MODULES_DEMO))
+    ops = [op for f in project.program.files for op in f.ops]
+    kinds = {MODULE_TABLE[op.call.module].kind for op in ops if op.call is not None and op.call.is_module}
+    assert kinds == {PURE, DATA, MACHINE}
+    assert {"SUBM", "RPLY", "CAN"} <= {op.code for op in ops}
+    assert api.transpile(project).result.untranslated == ()
+    scenarios = sorted((MODULES_DEMO / "scenarios").glob("*.yaml"))
+    for scenario in scenarios:
+        assert hh2iec(["simulate", str(MODULES_DEMO), "--scenario", str(scenario)]) == 0, capsys.readouterr().err
+        assert " 0 failed" in capsys.readouterr().out
+    args = [a for s in scenarios for a in ("--scenario", str(s))]
+    assert hh2iec(["equiv", str(MODULES_DEMO), *args, "--random-cycles", "300", "--backend", "builtin"]) == 0, \
+        capsys.readouterr()
+    assert "EQUIVALENT" in capsys.readouterr().out

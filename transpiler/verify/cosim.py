@@ -50,6 +50,9 @@ class MissingOperand:
     written_at: tuple[Span, ...]
 
     def render(self) -> str:
+        if not self.written_at:
+            return (f"{self.name} ({self.operand}) is written by the original (through the index register or a PLC "
+                    "module) but missing in the translation")
         where = ", ".join(str(s) for s in self.written_at[:3])
         more = f" and {len(self.written_at) - 3} more" if len(self.written_at) > 3 else ""
         return f"{self.name} ({self.operand}) is written by the original at {where}{more} but missing in the translation"
@@ -207,6 +210,7 @@ class _IndexedColumns:
         self.records = 0                           # interpreter records consumed so far
         self.columns: list[tuple[str, OperandRef]] = []
         self.accessors: list[Accessor] = []
+        self.missing: list[MissingOperand] = []
         self.original: Callable[[], list] = list
         self.translated: Callable[[], list] = list
 
@@ -229,7 +233,9 @@ class _IndexedColumns:
             return
         self.seen.add(ref)
         acc = self.iomap.accessor(str(ref))
-        if acc is None:                      # the map has no place for it (no array for that space)
+        if acc is None:
+            # The translation has no place for an operand the original wrote: a finding, never skipped.
+            self.missing.append(MissingOperand(str(ref), self.names.display_name(ref), ()))
             return
         self.columns.append((self.names.display_name(ref), ref))
         self.accessors.append(acc)
@@ -284,10 +290,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`. Callers that
     co-simulate one program many times pass it `compiled` once (see build_machine).
 
-    Compared after every cycle: the static columns of comparison_for (read in one call where the side has a
-    bulk_reader; `record` sees only these), then every address the original program has stored to through the
-    index register so far, from the cycle of the first such store on (result.compared_indexed counts them); the
-    io map reaches those through the space's array. A divergence on either is reported the same way.
+    Compared after every cycle: the static columns of comparison_for (one bulk read where the side can; `record`
+    sees only these), then every address the original has written through the index register or a PLC module so
+    far, from that cycle on (result.compared_indexed); one the translation has no place for is result.missing.
 
     `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
     reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
@@ -354,6 +359,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             progress(cycle + 1, total)
     result.seconds = time.perf_counter() - start
     result.compared_indexed = len(indexed.columns)
+    result.missing += tuple(indexed.missing)
     result.expectation_failures = tuple(failures)
     return result
 

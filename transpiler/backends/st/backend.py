@@ -261,6 +261,12 @@ class StBackend:
             temps.append((name, typ))
             return name
 
+        def instance(typ: str) -> str:
+            count = sum(1 for _, t in temps if t == typ) + 1
+            name = self.names.name(f"fb:{key}:{len(temps)}", f"{typ.removeprefix('HH_')}_{count}")
+            temps.append((name, typ))
+            return name
+
         def live_after(i: int) -> frozenset[str]:
             return self.liveness.at(key, i + 1) if i + 1 < len(file.ops) else frozenset()
 
@@ -300,7 +306,7 @@ class StBackend:
         accessors = AccessorPool()
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
                              self._kfield, self._stack_names, self._module_call, self.semantics, accessors.pick,
-                             self.job_plan.routine(key, self._job_queue))
+                             self.job_plan.routine(key, self._job_queue), instance)
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)

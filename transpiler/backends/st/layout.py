@@ -152,11 +152,19 @@ class Layout:
                 self._row("S", addr, f"{self.string_array}[{addr}]", "STRING")
         else:
             for addr in sorted(strings):
-                syms = self._symbols_by_operand.get(("S", addr), [])
-                name = self.names.name(f"S{addr}", syms[0].name if syms else f"S{addr}")
-                self._string_var[addr] = name
-                self._add_global(GlobalVar(name, "STRING", "string", comment=self._comment("S", addr)))
-                self._row("S", addr, name, "STRING")
+                self.declare_string(addr)
+
+    def declare_string(self, addr: int) -> str:
+        """The variable of string S<addr> in a program without indexed string access, declared (with its row in
+        the I/O map) on first use: also for a string that only PLC module calls write."""
+        if addr in self._string_var:
+            return self._string_var[addr]
+        syms = self._symbols_by_operand.get(("S", addr), [])
+        name = self.names.name(f"S{addr}", syms[0].name if syms else f"S{addr}")
+        self._string_var[addr] = name
+        self._add_global(GlobalVar(name, "STRING", "string", comment=self._comment("S", addr)))
+        self._row("S", addr, name, "STRING")
+        return name
 
     def _plan_memory(self, mem: set[tuple[str, int]], indexed: bool) -> None:
         # Accesses that share bytes with a differently shaped access must see one byte image.

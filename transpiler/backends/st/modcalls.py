@@ -77,7 +77,7 @@ def emit_module_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[in
     args = [ex._pop("val") for _ in row.params][::-1]
     # Entries below the arguments may read the error marker or word the call writes: they go to their variables.
     ex.flush_stack()
-    inst = ctx.temp(itf.name)
+    inst = ctx.instance(itf.name)
     used.add(number)
     named = [f"{name} := {arg.text}" for name, arg in zip(itf.inputs, args)] + [f"{IN_JOB} := {in_job}"]
     span = op.span
@@ -130,12 +130,9 @@ class _StringRef:
             self.ok = "TRUE" if 0 <= arg.const < count else "FALSE"
             self.var = None
             if self.ok == "TRUE":
-                if layout.string_array is not None or arg.const in layout._string_var:
-                    self.var = layout.string_lvalue(Operand("S", arg.const), None).text
-                else:
-                    # A string only module calls touch: it still holds what one call writes for the next.
-                    self.var = layout.add_register(f"str:S{arg.const}", f"HH_S{arg.const}", "STRING",
-                                                   f"string S{arg.const} (used only by PLC module calls)")
+                if layout.string_array is None:
+                    layout.declare_string(arg.const)     # also a string only module calls touch
+                self.var = layout.string_lvalue(Operand("S", arg.const), None).text
             return
         if layout.string_array is None:
             raise Unsupported("a PLC module's string number computed at run time in a program without indexed "
@@ -177,7 +174,7 @@ def _emit_pure(ex, op: Op, live: frozenset[str], used: set[int], point: str) -> 
         raise Unsupported(f"PLC module {number} reads or writes the byte memory, which this program does not keep "
                           "in one byte array (only programs with indexed memory access do)", span)
     args = _prepare(ex, live, row.nparams)
-    inst = ctx.temp(pure_lib.fb_name(number))
+    inst = ctx.instance(pure_lib.fb_name(number))
     used.add(number)
     mem_size = layout.profile.ranges.size("B")
     tag = f"(* CM {number} {row.st_name}  {span.file}:{span.line} *)"

@@ -109,7 +109,8 @@ class RoutineContext:
                  register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
                  kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
                  module_call: Callable[[int], str], semantics,
-                 bit_accessor: Callable[[str, Callable[[str], bool]], str], jobs=None):
+                 bit_accessor: Callable[[str, Callable[[str], bool]], str], jobs=None,
+                 instance: Callable[[str], str] | None = None):
         self.layout = layout
         self.out = emitter
         self.live_after = live_after
@@ -122,6 +123,8 @@ class RoutineContext:
         self.semantics = semantics
         self.bit_accessor = bit_accessor
         self.jobs = jobs                    # jobs.RoutineJobs of this routine (None: SUBM/RPLY/CAN not translated)
+        # A local FB instance named after its type (a temporary's name where the backend gives no namer).
+        self.instance: Callable[[str], str] = instance or temp
         self.flag_markers = semantics.profile.interface
 
 

@@ -139,3 +139,15 @@ def m9070(state: MachineState, p: Sequence[int], env: PureEnv) -> tuple[list[int
 
 PURE_MODULES: Mapping[int, Pure] = MappingProxyType(
     {9019: m9019, 9050: m9050, 9052: m9052, 9053: m9053, 9054: m9054, 9070: m9070})
+
+
+def written(number: int, state: MachineState, p: Sequence[int]) -> list[tuple[str, int]]:
+    """The operands a successful call of pure module `number` with parameters `p` wrote: the strings of 9050,
+    9053 and 9070, the bytes of 9054 (the co-simulation compares them from then on, as it does indexed stores)."""
+    if number == 9050:
+        return [("S", p[2])]
+    if number in (9053, 9070):
+        return [("S", p[1])]
+    if number == 9054:
+        return [("B", a) for a in range(p[1], p[1] + len(state.S[p[0]]) // 2)]
+    return []

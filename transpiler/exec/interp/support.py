@@ -9,7 +9,7 @@ from transpiler.language.semantics import Semantics
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
 from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
-from transpiler.exec.interp.pure_modules import PURE_MODULES, PureEnv
+from transpiler.exec.interp.pure_modules import PURE_MODULES, PureEnv, written as pure_written
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.language.module_table import MODULE_TABLE
 
@@ -230,6 +230,9 @@ class Runtime:
             return self.sys.call_in(number, params, self.in_job)
         row = MODULE_TABLE[number]          # pure modules may be called anywhere: no context rule
         results, code = pure(self.state, params, self.pure_env)
+        if not code:
+            for place in pure_written(number, self.state, params):
+                self.indexed_writes.setdefault(place)
         results = results or [0] * row.nresults
         return results, 1 if code else 0, code or None
 
