@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 SAMPLE := samples/basic_program
 OUT := out/basic_program
 
-.PHONY: all venv shim test test-install test-matiec demo bench fuzz mutants difftest clean
+.PHONY: all venv shim test test-install test-matiec test-beremiz demo bench fuzz mutants difftest clean
 
 all: test
 
@@ -66,4 +66,16 @@ test-matiec: venv shim
 	@test -x "$(MATIEC_HOME)/iec2c" || { echo "test-matiec: MATIEC_HOME must name the folder holding iec2c and its lib/ (\$$MATIEC_HOME/iec2c not found: '$(MATIEC_HOME)/iec2c')" >&2; exit 1; }
 	@log=$$(mktemp); MATIEC_HOME="$(MATIEC_HOME)" $(PY) -m pytest -q -rs $(MATIEC_TESTS) >$$log 2>&1; rc=$$?; cat $$log; \
 	if grep -qi "SKIPPED.*iec2c" $$log; then echo "test-matiec: some tests skipped for lack of iec2c" >&2; rc=1; fi; \
+	rm -f $$log; exit $$rc
+
+# Beremiz's PLCopen importer on the transpiled projects (docs/import.md): opens project.xml, generates its ST and
+# compiles that with iec2c. Needs BEREMIZ_HOME (a Beremiz checkout; nothing of it is built or kept here),
+# MATIEC_HOME (iec2c and its lib/) and BEREMIZ_PYTHON (a python with lxml, numpy, matplotlib, zeroconf; default: the
+# venv's). A skip fails the target.
+test-beremiz: venv
+	@test -f "$(BEREMIZ_HOME)/PLCControler.py" || { echo "test-beremiz: BEREMIZ_HOME must name a Beremiz checkout ('$(BEREMIZ_HOME)/PLCControler.py' not found)" >&2; exit 1; }
+	@test -x "$(MATIEC_HOME)/iec2c" || { echo "test-beremiz: MATIEC_HOME must name the folder holding iec2c and its lib/ ('$(MATIEC_HOME)/iec2c' not found)" >&2; exit 1; }
+	@log=$$(mktemp); BEREMIZ_HOME="$(BEREMIZ_HOME)" MATIEC_HOME="$(MATIEC_HOME)" BEREMIZ_PYTHON="$(BEREMIZ_PYTHON)" \
+	$(PY) -m pytest -q -rs tests/test_beremiz_import.py >$$log 2>&1; rc=$$?; cat $$log; \
+	if grep -q "SKIPPED" $$log; then echo "test-beremiz: the Beremiz import test skipped" >&2; rc=1; fi; \
 	rm -f $$log; exit $$rc
