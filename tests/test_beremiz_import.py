@@ -1,7 +1,7 @@
 """The PLCopen XML that transpile writes loads in Beremiz's PLCopen importer and builds there (the import
 acceptance of docs/import.md): Beremiz opens project.xml without a load error, generates its ST without errors,
-and matiec's iec2c compiles that ST. The library files (hh_lib.xml, hh_sys.xml) load and generate too; their POUs
-compile (see _LIBRARY_NOTE for the part of their generated ST that is left out).
+and matiec's iec2c compiles that ST. The library files (hh_lib.xml, hh_sys.xml: POUs, no configuration) load,
+generate and compile the same way.
 
 Optional: runs only when BEREMIZ_HOME names a Beremiz checkout and MATIEC_HOME the folder holding iec2c and its
 lib/ (`make test-beremiz`). BEREMIZ_PYTHON is the interpreter with Beremiz's dependencies (lxml, numpy,
@@ -35,7 +35,6 @@ SKIP_REASON = ("Beremiz import not checked: set BEREMIZ_HOME to a Beremiz checko
 # The library files are no program: they carry a configuration with an empty resource (no task, no instance), which
 # Beremiz writes as `RESOURCE ... ON PLC END_RESOURCE` and matiec's grammar rejects (a resource needs a program).
 # Their POUs are what an integrator imports, so iec2c compiles the generated ST up to its CONFIGURATION.
-_LIBRARY_NOTE = "library: iec2c on the generated POUs, without the empty configuration"
 
 # Runs inside BEREMIZ_PYTHON with the Beremiz checkout as working folder. Reads the jobs as JSON on stdin, prints
 # one result line per job. The import order is Beremiz's own for a headless run: fake_wx stands in for wxPython,
@@ -63,10 +62,6 @@ for job in json.load(sys.stdin):
         result["generated"] = text
         if text and not errors:
             source = generated
-            if job["pous_only"]:
-                source = os.path.join(job["out"], "pous.st")
-                with open(source, "w", encoding="utf-8") as f:
-                    f.write(text[:text.find("\nCONFIGURATION ")] if "\nCONFIGURATION " in text else text)
             proc = subprocess.run([os.path.join(matiec, "iec2c"), "-f", "-l", "-p", "-I", os.path.join(matiec, "lib"),
                                    "-T", job["out"], source], capture_output=True, text=True, timeout=300)
             result["iec2c_rc"] = proc.returncode
@@ -115,7 +110,7 @@ def test_transpiled_projects_load_and_build_in_beremiz(tmp_path: Path, capsys) -
     files = [("basic_program", "project.xml"), ("basic_program", "hh_lib.xml"), ("submit_jobs", "project.xml"),
              ("sys_program", "project.xml"), ("sys_program", "hh_sys.xml")]
     jobs = [{"name": f"{name}/{file}", "xml": str(outputs[name] / file), "out": str(tmp_path / "beremiz" / name / file),
-             "pous_only": file != "project.xml"} for name, file in files]
+             "library": file != "project.xml"} for name, file in files]
     proc = subprocess.run([python, "-c", IMPORTER, str(home), str(matiec)], input=json.dumps(jobs), cwd=home,
                           capture_output=True, text=True, timeout=900)
     results = {r["name"]: r for r in (json.loads(line.split(" ", 1)[1]) for line in proc.stdout.splitlines()
@@ -126,7 +121,7 @@ def test_transpiled_projects_load_and_build_in_beremiz(tmp_path: Path, capsys) -
     problems = []
     for job in jobs:
         r = results[job["name"]]
-        where = f"{job['name']}" + (f" ({_LIBRARY_NOTE})" if job["pous_only"] else "")
+        where = job["name"]
         if "exception" in r:
             problems.append(f"{where}: Beremiz raised\n{r['exception']}")
             continue
@@ -139,7 +134,7 @@ def test_transpiled_projects_load_and_build_in_beremiz(tmp_path: Path, capsys) -
             problems.append(f"{where}: iec2c exit {r.get('iec2c_rc')}:\n{r.get('iec2c_output', '')}")
         # Every POU of our file is in Beremiz's ST, so the import dropped none; a project keeps its task.
         generated = r["generated"].upper()
-        if not job["pous_only"] and not re.search(r"^\s*TASK\s", generated, re.M):
+        if not job["library"] and not re.search(r"^\s*TASK\s", generated, re.M):
             problems.append(f"{where}: no TASK in Beremiz's generated configuration")
         missing = [n for n in _pou_names(Path(job["xml"]))
                    if not re.search(rf"\b(FUNCTION_BLOCK|FUNCTION|PROGRAM)\s+{re.escape(n.upper())}\b", generated)]

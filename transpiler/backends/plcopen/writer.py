@@ -226,7 +226,12 @@ def _instances(parent: etree._Element, project: IecProject) -> None:
     for instance in conf.instances:
         if instance.task not in task_names:
             raise ValueError(f"program instance {instance.name} names unknown task {instance.task}")
-    configuration = _sub(_sub(_sub(parent, "instances"), "configurations"), "configuration", name=conf.name)
+    configurations = _sub(_sub(parent, "instances"), "configurations")
+    if not conf.instances and not conf.globals:
+        # A library (no program runs): an empty resource is no IEC configuration (matiec rejects it after a
+        # Beremiz import), so the library has none.
+        return
+    configuration = _sub(configurations, "configuration", name=conf.name)
     resource = _sub(configuration, "resource", name=conf.resource)
     for task in conf.tasks:
         task_element = _sub(resource, "task", name=task.name, priority=str(task.priority),
