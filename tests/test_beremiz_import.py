@@ -104,11 +104,13 @@ def test_transpiled_projects_load_and_build_in_beremiz(tmp_path: Path, capsys) -
     outputs = {
         "basic_program": _transpile(ROOT / "samples" / "basic_program", tmp_path / "basic_program"),
         "submit_jobs": _transpile(ROOT / "samples" / "constructs" / "submit_jobs", tmp_path / "submit_jobs"),
+        "modules_demo": _transpile(ROOT / "samples" / "modules_demo", tmp_path / "modules_demo"),
         "sys_program": _transpile(sys_src, tmp_path / "sys_out"),
     }
     capsys.readouterr()
     files = [("basic_program", "project.xml"), ("basic_program", "hh_lib.xml"), ("submit_jobs", "project.xml"),
-             ("sys_program", "project.xml"), ("sys_program", "hh_sys.xml")]
+             ("sys_program", "project.xml"), ("sys_program", "hh_sys.xml"), ("modules_demo", "project.xml"),
+             ("modules_demo", "hh_sys.xml")]
     jobs = [{"name": f"{name}/{file}", "xml": str(outputs[name] / file), "out": str(tmp_path / "beremiz" / name / file),
              "library": file != "project.xml"} for name, file in files]
     proc = subprocess.run([python, "-c", IMPORTER, str(home), str(matiec)], input=json.dumps(jobs), cwd=home,
