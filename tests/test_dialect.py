@@ -81,7 +81,8 @@ def test_gvl_target_xml_validates_and_holds_the_lists(sample, target):
     assert root.find(f".//{{{NS}}}configuration/{{{NS}}}globalVars") is None
     lists = root.findall(f"{{{NS}}}addData/{{{NS}}}data[@name='{GVL_DATA_NAME}']/{{{NS}}}globalVars")
     assert [g.get("name") for g in lists] == ["GVL_IO", "GVL_NC", "GVL_Markers", "GVL_TimersCounters", "GVL_Words",
-                                              "GVL_Strings", "GVL_MachineParams", "GVL_Constants", "GVL_Registers"]
+                                              "GVL_Strings", "GVL_MachineParams", "GVL_Constants", "GVL_Registers",
+                                              "GVL_Jobs"]
     assert all(g.find(f".//{{{NS}}}Attribute[@Name='qualified_only']") is not None for g in lists)
 
 

@@ -54,6 +54,7 @@ GVL_BY_TITLE = MappingProxyType({
     "Machine parameters (presets in PLC cycles)": "GVL_MachineParams",
     "Constant fields (KFIELD tables)": "GVL_Constants",
     "Accumulators, index register, data stack": "GVL_Registers",
+    "Submit-job queue": "GVL_Jobs",
 })
 
 
