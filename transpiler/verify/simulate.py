@@ -14,6 +14,7 @@ from transpiler.diagnostics import CompileFailed, Diagnostics, Span
 from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError, RuntimeFault
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
+from transpiler.frontend.opcodes import implicit_writes
 from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario
 from transpiler.language.semantics import PROFILES
 from transpiler.exec.compiled.shim import NcActionError, UnknownModule
@@ -37,13 +38,17 @@ def _operand_refs(op) -> list[OperandRef]:   # noqa: ANN001 - ir.Op
 
 
 def operand_writers(program: Program) -> dict[OperandRef, list[Span]]:
-    """Every operand an instruction names as the target of a write, with the source lines that write it."""
+    """Every operand an instruction writes, with the source lines that write it: the targets it names, and the
+    error markers and error-code word arithmetic and PLC module calls set without naming them."""
     writers: dict[OperandRef, list[Span]] = {}
+    interface = program.semantics.profile.interface
+    flag = program.semantics["add_overflow"] == "flag"
     for code in program.files:
         for op in code.ops:
-            if op.code in _WRITES:
-                for ref in _operand_refs(op):
-                    writers.setdefault(ref, []).append(op.span)
+            refs = _operand_refs(op) if op.code in _WRITES else []
+            refs += [OperandRef(kind, addr) for kind, addr in implicit_writes(op, interface, flag)]
+            for ref in refs:
+                writers.setdefault(ref, []).append(op.span)
     return writers
 
 

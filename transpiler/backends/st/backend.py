@@ -262,8 +262,10 @@ class StBackend:
             return name
 
         def instance(typ: str) -> str:
-            count = sum(1 for _, t in temps if t == typ) + 1
-            name = self.names.name(f"fb:{key}:{len(temps)}", f"{typ.removeprefix('HH_')}_{count}")
+            base, count = typ.removeprefix("HH_"), sum(1 for _, t in temps if t == typ) + 1
+            while self.names.taken(f"{base}_{count}"):      # another POU's instance of the same block
+                count += 1
+            name = self.names.name(f"fb:{key}:{len(temps)}", f"{base}_{count}")
             temps.append((name, typ))
             return name
 

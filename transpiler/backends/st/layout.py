@@ -6,6 +6,7 @@ import dataclasses
 from collections import defaultdict
 from types import MappingProxyType
 
+from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.names import NameTable
@@ -114,10 +115,12 @@ class Layout:
                         string_indexed = True
                     strings.add(o.addr)
             for op in f.ops:
-                if op.code in ("MUL", "DIV", "MOD") or (op.code == "BCLOSE" and op.bracket and op.bracket.op in ("x", "/", "MOD")):
-                    flag = {"MUL": prof.interface.mul_err, "x": prof.interface.mul_err, "DIV": prof.interface.div_err,
-                            "/": prof.interface.div_err, "MOD": prof.interface.mod_err}[op.code if op.code != "BCLOSE" else op.bracket.op]
-                    bits["M"].add(flag)
+                # The error markers (and the module error-code word) the original writes are held and written too.
+                for kind, addr in implicit_writes(op, prof.interface):
+                    if kind == "M":
+                        bits["M"].add(addr)
+                    else:
+                        mem.add((kind, addr))
         for t in timers:
             bits["T"].add(t)
             bits["T"].add(t - prof.timer_start[0] + prof.timer_running[0])

@@ -47,6 +47,10 @@ class NameTable:
         self._taken[name.upper()] = key
         self._by_key[key] = name
 
+    def taken(self, name: str) -> bool:
+        """Whether `name` is handed out (or reserved) already, in any case."""
+        return name.upper() in self._taken
+
     def get(self, key: str) -> str | None:
         """The name handed out for `key`, or None when none was."""
         return self._by_key.get(key)
