@@ -340,7 +340,9 @@ class Structurer:
         if any(s >= h and s != j for s in self.jumps_to[h]):
             raise NotStructured("loop with several back edges", h)
         tail = self.ops[j]
-        self.ex.flush(self._live(h) | frozenset(["LA"]))
+        # Only what the loop reads before writing it enters it in a variable (a WHILE's head condition reads LA,
+        # so LA is live there then); a dead accumulator value is not stored.
+        self.ex.flush(self._live(h))
         self.ex.index = h
         self.loop_exits.append(exit_index)
         self.loop_heads.add(h)
