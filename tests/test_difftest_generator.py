@@ -29,10 +29,12 @@ from transpiler.verify.scenario import OperandRef  # noqa: E402
 from transpiler.language.semantics import PROFILES, make_semantics  # noqa: E402
 from transpiler.verify.stimulus import Write  # noqa: E402
 from transpiler.frontend.mpfile import read_mp_file  # noqa: E402
+from transpiler.backends.st.modcalls import translatable  # noqa: E402
+from transpiler.language.module_table import CYCLIC, DATA, MACHINE, MODULE_TABLE, PURE, SUBMIT  # noqa: E402
 
 COVERAGE_SEEDS = range(1, 101)
 
-# Mnemonics of spec section 6 by section; 6.18 (SUBM/RPLY/CAN) and =N (A-16, off by default) are not generated.
+# Mnemonics of spec section 6 by section; =N (A-16, off by default) is not generated.
 SECTION_6 = {
     "6.1 load": {"L", "LN", "L-", "LB", "LW", "LD"},
     "6.2 assign": {"=", "B=", "W=", "D=", "S", "R", "SN", "RN"},
@@ -49,8 +51,9 @@ SECTION_6 = {
     "6.14 extended": {"INC", "DEC", "INCW", "DECW", "INCX", "DECX", "NOTL", "NOTW", "TWOC"},
     "6.15 structured": {"IFT", "IFF", "ELSE", "ENDI", "WHILET", "WHILEF", "ENDW", "REPEAT", "UNTILT", "UNTILF",
                         "CASE", "ENDC"},
+    "6.18 submit jobs": {"SUBM", "RPLY", "CAN"},
 }
-NOT_GENERATED = {"SUBM", "RPLY", "CAN", "=N"}
+NOT_GENERATED = {"=N"}
 
 # What each known-divergent feature writes, and nothing else does.
 DIVERGENT_CONSTRUCTS = {
@@ -173,7 +176,7 @@ def test_known_divergent_features_are_off_by_default_and_can_be_switched_on(proj
     for feature, pattern in DIVERGENT_CONSTRUCTS.items():
         assert not re.search(pattern, default_text, re.M | re.I), feature
         assert any(re.search(pattern, "\n".join(generate(seed, enable={feature}).files.values()), re.M | re.I)
-                   for seed in range(30)), feature
+                   for seed in range(120)), feature
 
 
 def test_indexed_wide_stores_are_generated_by_default(projects):
@@ -182,7 +185,7 @@ def test_indexed_wide_stores_are_generated_by_default(projects):
 
 
 def test_every_other_feature_is_on_by_default():
-    defaults = [generate(seed, size=20) for seed in range(5)]
+    defaults = [generate(seed, size=20) for seed in range(8)]
     for feature in sorted(set(FEATURES) - set(KNOWN_DIVERGENT)):       # switching it off changes the programs
         assert any(generate(seed, size=20, disable={feature}) != p for seed, p in enumerate(defaults)), feature
 
@@ -301,11 +304,18 @@ def test_the_stack_is_balanced_in_every_block(projects):
     for p in projects:
         blocks, _ = _main_blocks(p.files[p.main])
         for block in blocks:
-            if any(line.split()[0].upper() in ("CM", "CMT", "CMF", "CASE") for line in block if line.split()):
+            if any(line.split()[0].upper() in ("CM", "CMT", "CMF", "CASE") and not line.split()[1].isdigit()
+                   for line in block if len(line.split()) > 1):
                 continue                                # calls of stack subprograms move values across
             depth = 0
             for line in block:
                 parts = line.split()
+                if parts[:1] and parts[0].upper() == "CM" and parts[1].isdigit():       # a PLC module pulls and pushes 32-bit values
+                    row = MODULE_TABLE[int(parts[1])]
+                    depth -= 2 * row.nparams
+                    assert depth >= 0, (p.seed, block)
+                    depth += 2 * row.nresults
+                    continue
                 if not parts or parts[0].upper() not in words:
                     continue
                 m = parts[0].upper()
@@ -373,3 +383,85 @@ def test_fault_injection_gives_one_runtime_fault(tmp_path):
                 faulted += 1
                 break
     assert faulted >= 4      # an EMT/EMF in front of the fault may hide it when every input is 1
+
+
+# ------------------------------------------------------------------------------------------------------------
+# PLC module calls and submit jobs
+
+
+def test_the_module_lists_are_the_modules_that_translate():
+    """Every module of the itnc530 profile that the ST back end translates is generated, with the table's shape."""
+    translated = {n for n, row in MODULE_TABLE.items() if "itnc530" in row.profiles and translatable(n) is None}
+    assert translated == set(generator.PURE_MODULES) | set(generator.SYS_MODULES)
+    assert translatable(9019) is not None and translatable(9006) is not None     # E-UNSUPPORTED at the CM
+    for number, (params, results) in {**generator.PURE_MODULES, **generator.SYS_MODULES}.items():
+        row = MODULE_TABLE[number]
+        assert (len(params), results) == (row.nparams, row.nresults), number
+        assert (row.kind == PURE) == (number in generator.PURE_MODULES), number
+    assert set(generator.SUBMIT_ONLY_MODULES) == {n for n in generator.SYS_MODULES
+                                                  if MODULE_TABLE[n].context == SUBMIT}
+
+
+def _module_calls(projects):
+    return collections.Counter(int(operand) for p in projects for _, m, operand in instructions(p)
+                               if m == "CM" and operand.isdigit())
+
+
+def test_module_calls_of_every_kind_occur(projects):
+    calls = _module_calls(projects)
+    kinds = collections.Counter(MODULE_TABLE[n].kind for n in calls.elements())
+    assert kinds[PURE] >= 10 and kinds[DATA] >= 10 and kinds[MACHINE] >= 20, kinds
+    assert set(generator.PURE_MODULES) <= set(calls)
+    assert {9032, 9035, 9036} <= set(calls)
+    # over more seeds every module the generator knows is called
+    more = _module_calls(generate(seed, size=60) for seed in range(1000, 1150))
+    assert set(generator.PURE_MODULES) | set(generator.SYS_MODULES) <= set(calls) | set(more)
+
+
+def test_module_calls_push_their_parameters_and_pull_their_results(projects):
+    for p in projects:
+        lines = [(m, operand) for _, m, operand in instructions(p)]
+        for i, (m, operand) in enumerate(lines):
+            if m != "CM" or not operand.isdigit():
+                continue
+            row = MODULE_TABLE[int(operand)]
+            assert row.kind == PURE or row.number != 9006
+            pushes = lines[i - row.nparams:i] if row.nparams else []
+            assert all(pm == "PS" for pm, _ in pushes), (p.seed, operand, pushes)
+            kinds = {**generator.PURE_MODULES, **generator.SYS_MODULES}[row.number][0]
+            for kind, (_, po) in zip(kinds, pushes):    # string numbers are constants (the ST needs them so)
+                assert kind != "str" or re.fullmatch(r"K-?\d+", po), (p.seed, operand, pushes)
+            j = i + 1
+            for _ in range(row.nresults):               # PL operand, or PLW and a store
+                assert lines[j][0] in ("PL", "PLW"), (p.seed, operand, lines[i:j + 1])
+                j += 1 if lines[j][0] == "PL" else 2
+
+
+def test_submit_jobs_are_queued_and_cancelled_only_where_the_translation_allows(projects):
+    with_jobs = 0
+    for p in projects:
+        text = p.files[p.main]
+        jobs = set(re.findall(r"^LBL (Job_\d+)$", text, re.M))
+        blocks, tail = _main_blocks(text)
+        tail_blocks = ["\n".join(b.splitlines()) for b in "\n".join(tail + [""]).split("; @block\n")[1:]]
+        for name, other in p.files.items():
+            if name.endswith(".src") and name != p.main:
+                assert not re.search(r"^(SUBM|RPLY|CAN)\b", other, re.M | re.I), (p.seed, name)
+        submitted = set(re.findall(r"^SUBM\s+(\w+)$", text, re.M | re.I))
+        assert submitted == jobs, p.seed                   # every job is queued somewhere, only jobs are
+        assert not re.search(r"^CM[TF]?\s+Job_", text, re.M | re.I), p.seed       # a job is never called
+        for block in tail_blocks:
+            own_job = re.match(r"LBL (Job_\d+)", block)
+            if not own_job:                              # no submit command in a subprogram a job may call
+                assert not re.search(r"^(SUBM|RPLY|CAN)\b", block, re.M | re.I), (p.seed, block)
+        with_jobs += bool(jobs)
+        if jobs:
+            main_text = "\n".join("\n".join(b) for b in blocks)
+            assert re.search(r"^SUBM\s+Job_", main_text, re.M | re.I)
+    assert with_jobs >= 30
+    text = "\n".join(p.files[p.main] for p in projects)
+    job_text = "\n".join(b for p in projects for b in p.files[p.main].split("; @block\n") if b.startswith("LBL Job_"))
+    for pattern in (r"^RPLY\s+W20\d\d$", r"^CAN\s+W20\d\d$", r"^SUBM\s+Job_\d+\n=\s+W\d+"):
+        assert re.search(pattern, job_text, re.M), pattern      # inside a job: its own state, self-cancel, SUBM (0)
+    assert re.search(r"^CAN\s+W20\d\d$", "\n".join(
+        "\n".join(b) for p in projects for b in _main_blocks(p.files[p.main])[0]), re.M)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import random
+import re
 import sys
 from pathlib import Path
 from types import MappingProxyType
@@ -78,6 +79,13 @@ FEATURES: Mapping[str, str] = MappingProxyType({
     "reg_flow": "WA/LA live across conditional jumps, IFT/ELSE and loops (saved with PSW/PLW), merged afterwards",
     "write_input": "writes to input operands (allowed, overwritten by the next input latch, A-33)",
     "case_mix": "mnemonics in lower case and blanks between operand letter and number (2.3, 2.5)",
+    "submit": "submit jobs: job subprograms queued with SUBM (identifier stored), RPLY/CAN of them from the main "
+              "program, SUBM (gives 0), RPLY and CAN of the running job inside the job's own subprogram; with "
+              "\"calls\" only (6.18, A-45)",
+    "plc_modules": "PLC module calls that translate: parameters pushed, CM 9xxx, results pulled, M4203/W1022 read "
+                   "(with \"stack\" only); "
+                   "pure 9050/9052/9053/9054/9070 and every data and machine module but 9006, in the cyclic program "
+                   "and in submit jobs (14, A-46)",
 })
 
 # Features disabled by default because the translation cannot match them on the targets; re-enable with
@@ -157,6 +165,38 @@ EDGE_CONSTS = (0, 1, -1, 2, 3, 7, 8, 15, 16, 31, 32, 100, 127, 128, 255, 256, -1
                -32769, 65535, 65536, 2147483647, -2147483647, -2147483648)
 
 
+# PLC modules the generator calls (the itnc530 profile's modules that translate, see
+# transpiler/backends/st/modcalls.py), with a kind for each parameter in push order and the number of results:
+#   any: any value; small: -1..12; mask: a bit mask; hour: -4..8 (9190-9192); addr: a byte address;
+#   str: a string number (0..9, sometimes invalid); status: a status number (9035/9036); axis/info (9038/9048/9049)
+# 9031/9032 take (number, index) of a machine parameter of timers.mp; 9019 and 9006 do not translate.
+PURE_MODULES: Mapping[int, tuple[tuple[str, ...], int]] = MappingProxyType({
+    9050: (("any", "exp", "str"), 0), 9052: (("str",), 2), 9053: (("addr", "str", "count"), 0),
+    9054: (("str", "addr"), 0), 9070: (("str", "str"), 1),
+})
+SYS_MODULES: Mapping[int, tuple[tuple[str, ...], int]] = MappingProxyType({
+    9031: (("mp", "mpindex", "any"), 1), 9032: (("mp", "mpindex"), 1), 9035: (("status",), 1),
+    9036: (("status", "any"), 1), 9038: (("axis", "info"), 1), 9040: (("addr", "small"), 0),
+    9041: (("addr", "small"), 0), 9042: (("addr",), 0), 9048: (("axis", "info"), 1), 9049: (("axis", "info"), 1),
+    9092: (("small", "small", "any"), 2), 9093: (("small", "small", "small"), 2),
+    9094: (("small", "small", "small", "any"), 1), 9095: (("small",), 1), 9097: (("small", "small"), 1),
+    9101: (("small",), 0), 9102: (("small",), 1), 9105: (("small", "addr", "small"), 0),
+    9106: (("small", "addr"), 1), 9123: (("axis", "any", "small"), 1), 9124: (("axis", "any"), 1),
+    9127: (("axis", "small"), 1), 9144: (("small", "small", "small"), 1), 9148: ((), 0),
+    9150: (("small", "addr"), 1), 9159: ((), 1), 9161: (("mask",), 0), 9162: ((), 1), 9166: ((), 0),
+    9169: (("mask",), 0), 9190: (("hour",), 0), 9191: (("hour",), 0), 9192: (("hour",), 1),
+    9194: (("hour", "any", "small"), 0), 9195: ((), 1), 9221: (("axis", "any", "any"), 0), 9222: (("axis",), 1),
+    9227: (("axis", "any", "any", "any", "any", "small"), 0), 9231: (("axis", "any"), 0),
+    9244: (("small", "str"), 1), 9260: (("small", "small", "mask"), 1), 9261: (("small", "mask"), 0),
+    9262: ((), 0), 9263: (("small",), 0), 9264: (("small", "mask"), 0),
+    9429: (("small", "str", "small"), 4),
+})
+# modules valid only in a submit job (called in the cyclic program they fail with code 20): jobs prefer them
+SUBMIT_ONLY_MODULES = (9031, 9032, 9035, 9092, 9093, 9094, 9095, 9097, 9105, 9106, 9192, 9194, 9244, 9260, 9262,
+                       9263, 9264)
+MAIN_RANK = 10 ** 6      # rank of the main program's context: every subprogram is callable
+
+
 @dataclasses.dataclass
 class _Sub:
     name: str
@@ -168,6 +208,7 @@ class _Sub:
     calls: int = 0
     exported: bool = False
     lines: list[str] = dataclasses.field(default_factory=list)
+    ident: str = ""            # a submit job: the word that holds its identifier (stored by the main program)
 
 
 class _Unit:
@@ -197,6 +238,12 @@ class _Ctx:
     loops: int = 0             # enclosing loops
     mult: int = 1              # worst-case repetitions of this code per call (product of loop bounds)
     top: bool = False          # top level of the main program
+    job: _Sub | None = None    # the submit job whose own subprogram this is (not a subprogram it calls)
+
+    @property
+    def in_main(self) -> bool:
+        """Code of the main program (also nested in its jumps, structures and loops)."""
+        return self.rank == MAIN_RANK
 
     @property
     def may_nest(self) -> bool:
@@ -213,6 +260,13 @@ class _Ctx:
     def loop_body(self, times: int) -> "_Ctx":
         """The context of a loop body that runs at most `times` times per pass (0 counts as once)."""
         return self.deeper(loops=self.loops + 1, mult=self.mult * max(times, 1))
+
+
+def _string_no(operand: str) -> int | None:
+    """The string number of a constant module parameter when it is a valid one of the generated strings."""
+    if operand.startswith("K") and operand[1:].isdigit() and int(operand[1:]) < N_STRINGS:
+        return int(operand[1:])
+    return None
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -244,6 +298,7 @@ class _Gen:
         self.strings_used: set[int] = set()
         self.dyn_words: list[str] = []
         self.all_subs: list[_Sub] = []
+        self.jobs: list[_Sub] = []                         # submit jobs (never called with CM)
 
     # ---------------------------------------------------------------- emission
 
@@ -579,6 +634,8 @@ class _Gen:
             (self.s_carry, 1, f("acc_carry")),
             (self.s_flow, 4, f("reg_flow") and nest_ok),
             (self.s_write_input, 0.5, f("write_input")),
+            (self.s_jobs, 3 if ctx.job else 1.5, f("submit") and bool(self.jobs) and (ctx.in_main or ctx.job is not None)),
+            (self.s_module, 4 if ctx.job else 2.5, f("plc_modules") and f("stack")),
         ]
         return [(fn, w) for fn, w, ok in kinds if ok]
 
@@ -591,6 +648,190 @@ class _Gen:
         fns = [k[0] for k in kinds]
         weights = [k[1] for k in kinds]
         self.rng.choices(fns, weights)[0](ctx)
+
+    # submit jobs and PLC modules ---------------------------------------------------------------------
+
+    def s_jobs(self, ctx: _Ctx) -> None:
+        if ctx.job is not None:
+            self.job_op_in_job(ctx, ctx.job)
+        else:
+            self.job_op_in_main(ctx)
+
+    def guarded(self, emit: Callable[[], None]) -> None:
+        """emit() behind a condition (a forward jump or IFT) when those features are on, else unconditionally."""
+        r = self.rng.random()
+        if r < 0.45 and self.has("jumps"):
+            skip = self.cur.fresh("Lb")
+            self.cond()
+            self.op(self.rng.choice(("JPF", "JPT")), skip)
+            emit()
+            self.label(skip)
+        elif r < 0.8 and self.has("struct"):
+            self.cond()
+            self.op(self.rng.choice(("IFT", "IFF")))
+            emit()
+            self.op("ENDI")
+        else:
+            emit()
+
+    def submit_job(self, job: _Sub) -> None:
+        job.calls += 1
+        self.op("SUBM", job.name)
+        self.op("=", job.ident)
+        self.cost += job.cost
+        if self.chance(0.25):
+            if self.has("compare") and self.chance(0.6):
+                self.op("==", "K0")                       # the queue was full
+                self.assigns(1, 1)
+            else:
+                self.op("=", self.val_w())
+
+    def job_ident(self, job: _Sub) -> str:
+        r = self.rng.random()
+        if r < 0.85:
+            return job.ident
+        if r < 0.95:
+            return f"K{self.rng.randint(0, 9)}"               # identifiers are numbered 1, 2, ... from the start
+        return self.mem()
+
+    def reply(self, job: _Sub) -> None:
+        self.op("RPLY", self.job_ident(job))
+        if self.has("compare") and self.chance(0.4):
+            self.op(self.rng.choice(("==", "<>", ">=")), f"K{self.rng.randint(0, 2)}")
+            self.assigns(1, 1)
+        else:
+            self.op("=", self.val_w())
+
+    def job_op_in_main(self, ctx: _Ctx) -> None:
+        """SUBM of a job (its identifier stored), RPLY of a job's state, CAN of a waiting job."""
+        job = self.rng.choice(self.jobs)
+        r = self.rng.random()
+        if r < 0.5:
+            if self.has("jumps") and self.has("compare") and self.chance(0.3):
+                skip = self.cur.fresh("Lb")               # queue it unless it is still queued (the usual idiom)
+                self.op("RPLY", job.ident)
+                self.op("==", "K0")
+                self.op("JPF", skip)
+                self.submit_job(job)
+                self.label(skip)
+            else:
+                self.guarded(lambda: self.submit_job(job))
+        elif r < 0.8:
+            self.reply(job)
+        else:
+            self.guarded(lambda: self.op("CAN", self.job_ident(job)))
+
+    def job_op_in_job(self, ctx: _Ctx, job: _Sub) -> None:
+        """Inside a job's own subprogram: RPLY of itself (1), SUBM (0: no nesting), CAN of itself or another job."""
+        r = self.rng.random()
+        if r < 0.3:
+            self.reply(job)
+        elif r < 0.5:
+            self.op("SUBM", self.rng.choice(self.jobs).name)
+            self.op("=", self.val_w())
+        elif r < 0.8:
+            self.guarded(lambda: self.op("CAN", job.ident))          # the running job ends here
+        else:
+            other = self.rng.choice(self.jobs)
+            if self.chance(0.5):
+                self.reply(other)
+            else:
+                self.guarded(lambda: self.op("CAN", other.ident))
+
+    def module_param(self, kind: str) -> str:
+        r = self.rng.random()
+        if kind == "any" or (r < 0.06 and kind != "str"):     # a string number must be a constant in the ST
+            return self.val_r() if self.chance(0.6) else self.const()
+        if kind == "small":
+            return f"K{self.rng.randint(-1, 12)}"
+        if kind == "mask":
+            return f"K{self.rng.choice((0, 1, 3, 5, 255, 256, 65535, -1))}"
+        if kind == "hour":
+            return f"K{self.rng.randint(-4, 8)}"
+        if kind == "addr":
+            return f"K{self.rng.randrange(GEN_BYTES)}" if r < 0.9 else f"K{self.rng.choice((-1, 9999, 10000))}"
+        if kind == "count":
+            # 63 bytes give 126 hex digits, all an ST string holds; 64 (128 digits, fine on the control) is a
+            # documented target limit (docs/modules.md), 65 and more are error 1
+            return f"K{self.rng.randint(0, 16)}" if r < 0.9 else f"K{self.rng.choice((-1, 63, 65, 100))}"
+        if kind == "exp":
+            return f"K{self.rng.randint(-6, 6)}" if r < 0.9 else f"K{self.rng.choice((-11, 11, 100))}"
+        if kind == "str":
+            return f"K{self.rng.randrange(N_STRINGS)}" if r < 0.93 else f"K{self.rng.choice((-1, 100))}"
+        if kind == "status":
+            return f"K{self.rng.randint(0, 7)}" if r < 0.9 else f"K{self.rng.choice((-1, 255, 256))}"
+        if kind == "axis":
+            return f"K{self.rng.randint(-1, 5)}" if r < 0.9 else "K16"
+        if kind == "info":
+            return f"K{self.rng.randint(0, 11)}"
+        raise ValueError(kind)
+
+    def mp_params(self) -> list[str]:
+        """(number, index) of a machine parameter of timers.mp, or of one that does not exist."""
+        known = [(4110, n) for n in sorted(self.timers)] + [(4120, n) for n in sorted(self.counters)]
+        if known and self.chance(0.75):
+            number, index = self.rng.choice(known)
+        else:
+            number, index = self.rng.choice(((4110, 30), (1234, 0), (4120, 99)))
+        return [f"K{number}", f"K{index}"]
+
+    def set_string(self, s: int, numeric: bool) -> None:
+        """A string with (or without) a number in it, or hex digits, for the string modules."""
+        if numeric:
+            text = self.rng.choice(("12.5", "-3,25", "abc 42x", "+7", "0.001", "X-1.5Y", "2147483648", "", "no",
+                                    "1.2.3", "-", "007"))
+        else:
+            text = self.rng.choice(("0A1B", "FF", "00ff7E", "123", "G1", "", "DEADBEEF", "7f80"))
+        self.op("L", f'S"{text}"')
+        self.op("=", f"S{s}")
+        self.strings_used.add(int(s))
+
+    def s_module(self, ctx: _Ctx) -> None:
+        """Parameters pushed in order, CM 9xxx, results pulled in order; the error marker and code read back."""
+        r = self.rng.random()
+        if r < 0.3:
+            number = self.rng.choice(sorted(PURE_MODULES))
+            kinds, nresults = PURE_MODULES[number]
+        elif ctx.job is not None and r < 0.75:
+            number = self.rng.choice(SUBMIT_ONLY_MODULES)
+            kinds, nresults = SYS_MODULES[number]
+        else:
+            number = self.rng.choice(sorted(SYS_MODULES))
+            kinds, nresults = SYS_MODULES[number]
+        params = [self.module_param(k) if k not in ("mp", "mpindex") else "" for k in kinds]
+        if kinds[:2] == ("mp", "mpindex"):
+            params[:2] = self.mp_params()
+        strings = {i: _string_no(p) for i, (p, k) in enumerate(zip(params, kinds)) if k == "str"}
+        if number in (9052, 9070, 9054) and strings[0] is not None and self.chance(0.7):
+            self.set_string(strings[0], numeric=number != 9054)
+        if number in (9053, 9054):
+            # the byte memory must be one array in the ST: that takes an indexed access in the program
+            self.set_x(7)
+            self.op("L", f"B{self.rng.randrange(IDX_BYTE_MAX)}[X]")
+            self.op("=", self.val_w())
+        for p in params:
+            self.op("PS", p)
+        self.op("CM", str(number))
+        for _ in range(nresults):
+            if self.chance(0.75):
+                self.op("PL", self.val_w())
+            else:
+                self.op("PLW")
+                self.op("=", self.val_w())
+        # what the module wrote, read back so that the co-simulation compares it
+        written = {9050: 2, 9053: 1, 9070: 1}.get(number)
+        if written is not None and strings[written] is not None:
+            self.op("L", f"S{strings[written]}")
+            self.op("=", f"S{self.rng.randrange(N_STRINGS)}")
+        if number == 9054 and re.fullmatch(r"K\d+", params[1]) and int(params[1][1:]) < GEN_BYTES:
+            addr = int(params[1][1:])
+            self.touch_bytes(addr, min(16, GEN_BYTES - addr))
+        if self.chance(0.6):
+            self.op("L", "M4203")
+            self.op("=", self.bit_w())
+        if self.chance(0.5):
+            self.op("L", "W1022")
+            self.op("=", self.val_w())
 
     def body(self, ctx: _Ctx, lo: int = 1, hi: int = 3) -> None:
         for _ in range(self.rng.randint(lo, hi)):
@@ -1703,14 +1944,17 @@ class _Gen:
         self.cur = unit
         self.lines = []
         self.cost = 0
-        ctx = _Ctx(unit, rank=sub.rank)
+        ctx = _Ctx(unit, rank=sub.rank, job=sub if sub.kind == "job" else None)
         if sub.exported:
             self.put(f"GLOBAL {sub.name}")
         self.label(sub.name)
-        if sub.kind == "plain":
+        if sub.kind in ("plain", "job"):
             n = self.rng.randint(1, 4)
             guard = self.rng.randrange(n + 1) if self.has("calls") and self.chance(0.3) else -1
+            job_op = self.rng.randrange(n) if sub.kind == "job" and self.chance(0.7) else -1
             for i in range(n):
+                if i == job_op:                              # RPLY, SUBM or CAN inside the job itself
+                    self.job_op_in_job(ctx, sub)
                 if i == guard:
                     self.cond()
                     if self.has("struct") and self.chance(0.3):
@@ -1904,6 +2148,15 @@ class _Gen:
             self.gen_sub(s)
             s.unit.subs.append(s)
             self.all_subs.append(s)
+        # submit jobs: subprograms of the main file that only SUBM starts; they may call every other subprogram
+        if self.has("submit") and self.has("calls") and self.chance(0.6):
+            self.jobs = [_Sub(f"Job_{k}", main, "job", 0, ident=self.reserve_word())
+                         for k in range(self.rng.randint(1, 3))]
+            for s in self.jobs:
+                s.rank = rank
+                rank += 1
+                self.gen_sub(s)
+                main.subs.append(s)
         # the main program
         self.cur = main
         blocks: list[list[str]] = []
@@ -1930,6 +2183,11 @@ class _Gen:
                     s.calls += 1
                     self.call_sub(ctx, s)
                     blocks.append(self.lines)
+        for s in self.jobs:                           # and for each job nobody submits yet
+            if s.calls == 0:
+                self.lines = []
+                self.guarded(lambda: self.submit_job(s))
+                blocks.append(self.lines)
         # main.src
         out = [f"; generated by tests/difftest/generator.py, seed {self.seed}, size {self.size}"]
         if self.def_lines:
