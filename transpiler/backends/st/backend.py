@@ -347,8 +347,8 @@ class StBackend:
         local += [IecVar(n, t) for n, t in temps]
         if not structured:
             local.append(IecVar("HH_STATE", "DINT", comment="state of the irreducible control flow"))
-        if not local and not is_main and (iface is None or iface.empty) and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
-            # matiec rejects a FUNCTION_BLOCK without any declaration.
+        if not local and (iface is None or iface.empty) and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
+            # matiec rejects a FUNCTION_BLOCK or PROGRAM without any declaration.
             local.append(IecVar("HH_UNUSED", "BOOL", comment="placeholder: the subprogram has no data of its own"))
         sections = []
         if iface is not None and not iface.empty:

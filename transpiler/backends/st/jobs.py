@@ -79,13 +79,14 @@ def _callees(op: Op):
 
 def plan_jobs(program: Program) -> JobPlan:
     """Number the SUBM targets of `program` and find the routines the jobs call."""
+    entries = {r.key: r for r in program.routines}
     roots: dict[tuple[int, int], CallTarget] = {}
     for f in program.files:
         for op in f.ops:
-            if op.code == "SUBM" and op.call is not None and op.call.file >= 0:
+            # A SUBM only in code that never runs (after a JP, in a job nothing queues) names no routine: no job.
+            if op.code == "SUBM" and op.call is not None and op.call.file >= 0 and op.call.key in entries:
                 roots.setdefault(op.call.key, op.call)
     numbers = {key: n for n, key in enumerate(sorted(roots), start=1)}
-    entries = {r.key: r for r in program.routines}
     reached: set[tuple[int, int]] = set()
     todo = list(roots.values())
     seen: set[tuple[int, int]] = set()

@@ -132,6 +132,9 @@ class VarDeclarer(CompilerBase):
                 has_input = has_input or v.kind in ("input", "inout")
         if node.kind == "function" and not has_input:
             self.error(node.span, f"FUNCTION {node.name} has no input; matiec rejects calls without parameters")
+        if node.kind in ("program", "function_block") and not node.blocks and not prelude:
+            kind = node.kind.replace("_", " ").upper()
+            self.error(node.span, f"{kind} {node.name} declares no variable at all; matiec rejects it (declare one)")
         self.constant_values(list(info.vars.values()), ordinal)
         return info
 
