@@ -107,3 +107,37 @@ def test_patch_pous_inserts_the_model_call_into_the_fb_body() -> None:
     patched = patch_pous(text, SysBinding("FUNCTION_BLOCK HH_ReadMP\n").c_bodies())
     assert "hh_sysfb_call(9032," in patched and patched.count("hh_sysfb_call(") == 2    # declaration + one body
     assert "goto __end;" in patched.split("OTHER_body__")[0]
+
+
+CONDITIONAL = """L I0
+PS K4310
+PS K0
+CMT 9032
+L I1
+PS K0
+PS K2
+CMF 9049
+L I2
+CMT 9162
+PL D20
+PL D24
+PL D28
+EM
+"""
+
+
+def test_conditional_module_calls_run_inside_an_if_and_cosimulate(tmp_path: Path, capsys) -> None:
+    # Catches: CMT/CMF of a module refused, called unconditionally, or called on the wrong value of LA (the
+    # parameters a call that does not happen leaves on the stack are pulled later: the values show it).
+    (tmp_path / "main.src").write_text(CONDITIONAL, encoding="latin-1")
+    (tmp_path / "s.yaml").write_text(
+        "name: cmt\ncycles: 8\nmachine: {axes: {0: {position: 4242}}, drives: {available: 3}}\n"
+        "initial: {I0: 1, I1: 0, I2: 1}\nevents:\n  - {cycle: 2, set: {I0: 0, I1: 1}}\n"
+        "  - {cycle: 4, set: {I0: 1, I2: 0}}\n", encoding="utf-8")
+    code, out = _run(["transpile", tmp_path / "main.src", "--out", tmp_path / "out"], capsys)
+    assert code == 0 and "0 not translated" in out, out
+    st = (tmp_path / "out" / "project.st").read_text()
+    assert "IF HH_LA THEN (* CMT main.src:4 *)" in st and "IF NOT HH_LA THEN (* CMF main.src:8 *)" in st
+    code, out = _run(["equiv", tmp_path / "main.src", "--scenario", tmp_path / "s.yaml", "--random-cycles", "200",
+                      "--backend", "builtin"], capsys)
+    assert code == 0 and "hh2iec equiv: EQUIVALENT" in out, out

@@ -8,8 +8,8 @@ Where the caller's stack is dynamic the parameters come from the emulated stack 
 A *pure* module (9050, 9052-9054, 9070) is a call of its block in the generated library (pure_lib.py): the
 caller reads the string contents (and whether the string numbers are valid) into the block and stores its TEXT
 into the destination string when the call did not fail; 9053/9054 get the byte memory as VAR_IN_OUT, which
-exists only where the program keeps all of its memory in the byte array. 9019 (stack depth), 9006 and the
-conditional calls CMT/CMF stay E-UNSUPPORTED at their line.
+exists only where the program keeps all of its memory in the byte array. A conditional call (CMT/CMF) is the
+same call inside an IF on the logic accumulator. 9019 (stack depth) and 9006 stay E-UNSUPPORTED at their line.
 """
 
 from __future__ import annotations
@@ -62,7 +62,32 @@ def emit_module_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[in
     if why is not None:
         raise Unsupported(why, op.span)
     if op.code != "CALL":
-        raise Unsupported(f"conditional call of PLC module {number} ({op.mnemonic})", op.span)
+        _emit_conditional(ex, op, live, in_job, used, decimal_point)
+        return
+    _emit_call(ex, op, live, in_job, used, decimal_point)
+
+
+def _emit_conditional(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], decimal_point: str) -> None:
+    """CMT/CMF of a module: the call, with its pulls and pushes, only when LA is 1 (0); otherwise the stack keeps
+    the parameters and nothing changes. The stack lives in its variables across the IF (a static stack never
+    reaches here with parameters or results: the stack analysis makes such a routine keep the emulated stack)."""
+    row = MODULE_TABLE[op.call.module]
+    if ex.static is not None and (row.nparams or row.nresults):
+        raise Unsupported(f"internal: conditional call of PLC module {row.number} on a static data stack", op.span)
+    ex.flush(live | frozenset(["LA"]))
+    cond = ex.la_is(op.code == "CALLT")
+    out = ex.ctx.out
+    out.line(f"IF {cond.text} THEN (* {op.mnemonic} {op.span.file}:{op.span.line} *)")
+    out.indent += 1
+    _emit_call(ex, op, live, in_job, used, decimal_point)
+    ex.flush(live)
+    out.indent -= 1
+    out.line("END_IF;")
+    ex.forget()
+
+
+def _emit_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], decimal_point: str) -> None:
+    number = op.call.module
     row = MODULE_TABLE[number]
     if row.kind == PURE:
         _emit_pure(ex, op, live, used, decimal_point)
