@@ -135,7 +135,7 @@ class StBackend:
         config = self._configuration(layout, job_program)
         # Only the POUs translated from the program read globals: the library ones use their own variables
         # (and a FUNCTION may not declare VAR_EXTERNAL).
-        globals_by_upper = {v.name.upper(): v for s in config.globals for v in s.vars}
+        globals_by_upper = {v.name.upper(): (v, s.comment) for s in config.globals for v in s.vars}
         program_pous = [_with_externals(p, globals_by_upper)
                         for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
@@ -526,12 +526,20 @@ def _module_effect(number: int) -> Effect | None:
     return Effect(*effect) if effect is not None else None
 
 
-def _with_externals(pou: Pou, globals_by_upper: Mapping[str, IecVar]) -> Pou:
-    """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count)."""
+def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]]) -> Pou:
+    """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
+    one block per area of the configuration's globals, titled like it: matiec needs these declarations (a POU
+    sees no global without one), the blocks make the long lists readable."""
     used = {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
     local = {v.name.upper() for s in pou.sections for v in s.vars}
-    ext = [globals_by_upper[u] for u in sorted(used - local) if u in globals_by_upper]
-    if not ext:
+    by_area: dict[str | None, list[IecVar]] = {}
+    for u in sorted(used - local):
+        if u in globals_by_upper:
+            var, area = globals_by_upper[u]
+            by_area.setdefault(area, []).append(IecVar(var.name, var.type))
+    if not by_area:
         return pou
-    externals = VarSection("VAR_EXTERNAL", tuple(IecVar(v.name, v.type) for v in ext))
-    return dataclasses.replace(pou, sections=pou.sections + (externals,))
+    order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
+    externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)
+                      for area, vars_ in sorted(by_area.items(), key=lambda item: order[item[0]]))
+    return dataclasses.replace(pou, sections=pou.sections + externals)
