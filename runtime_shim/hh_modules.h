@@ -39,6 +39,13 @@
  *        hh_sys_set_table (error numbers 2..6 of the manual, also pulled as the error result);
  *        9159/9161/9162/9169 drives (9162 = available AND enabled); 9190/9191 start/stop the 8 PLC
  *        operating-hours counters that 9192 0..7 reads (other numbers: -1 and module error 1).
+ *  Parameter validation with the documented error codes (the machine-dependent results stay 0, the
+ *        assumptions are named in the module table's rows): 9036 (numbers 0..19, factors 0..10, MP7641),
+ *        9040/9042 (type, D address and block fit), 9048, 9095, 9097, 9102, 9105, 9124, 9127, 9144 (self
+ *        test active to the end of its cycle: 28), 9150, 9194, 9231, 9244, 9260, 9261 (only the submit queue
+ *        K$80000000), 9429 (status 2: no NC program runs).  A row may name its own code for the wrong
+ *        calling context (9262/9263: 30) and its own error result then (9093/9094: 1, 9095: 7, 9097: 6,
+ *        9192/9244: -1).
  * The table rows (signatures, kind, calling context, profiles) are generated from the Python table into
  * hh_module_table.h.  Every other row runs the stub rule of A-46 (results 0, no error).  The pure
  * modules (9019, 9050-9054, 9070) need PLC memory, so the executors implement them, not the shim.
@@ -131,6 +138,8 @@ void hh_sys_clear_module_results(hh_sys *sys, int32_t number);
 
 /* Axis `axis` (0..HH_AXES-1): active flag (9038 info 0) and actual REF position in 0.0001 mm (9049). 0 / -1. */
 int hh_sys_set_axis(hh_sys *sys, int32_t axis, int32_t active, int32_t position);
+/* Size in bytes of the PLC's B/W/D memory (9040/9042 refuse a block that does not fit); 0 = unknown. */
+void hh_sys_set_memory_size(hh_sys *sys, int32_t bytes);
 /* Drives: bit mask of ready power stages (9162 reads available AND the mask 9161 enabled) and the
  * early warning 9159 reads. */
 void hh_sys_set_drives(hh_sys *sys, int32_t available, int32_t switching_off);
