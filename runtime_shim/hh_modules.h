@@ -31,8 +31,8 @@
  *        wrote).  A number outside the table -> result 0 (9035) / 1 (9036), module error, code 1.
  *  9192  read an operating time (1 parameter: number; 1 result: seconds).  -3 control on,
  *        -2 machine on, -1 program run: all = whole seconds of simulated time since cycle 0
- *        (floor(cycle * cycle_time_ms / 1000)).  Any other number -> -1, the documented
- *        "not available" answer, without module error.
+ *        (floor(cycle * cycle_time_ms / 1000)); 0..7 the PLC counters of 9190/9191.  Any other
+ *        number -> -1 (the documented error answer) and module error code 1.
  *  9195  system time (0 parameters; 1 result): whole seconds of the simulated clock, same
  *        value as 9192 -3 (the simulated clock starts at 0).
  *  9038/9049 axis information / REF position from hh_sys_set_axis; 9092/9093/9094 tables from
