@@ -14,6 +14,9 @@ typedef struct {
     int modelled; /* 0: the stub rule of A-46 (results 0, no error) */
     int profiles; /* bit mask, see hh_module_table.h */
     int error_result; /* index of a result that also carries the error code, -1 none */
+    int context_code; /* W1022 code of a call in the wrong context, 0: HH_MODERR_NOT_IN_JOB / _NOT_CYCLIC */
+    int context_result_set; /* 1: the error result takes context_result then, 0: it takes the code */
+    int context_result;
     const char *purpose;
 } module_entry;
 
@@ -22,6 +25,8 @@ typedef struct {
 
 #define N_MODULES ((int32_t)(sizeof MODULES / sizeof MODULES[0]))
 #define MP_TIMER_EXTRA 4111
+#define MP_HANDWHEEL_INTERPOLATION 7641 /* 9036: interpolation factors need MP7641 = 1 */
+#define SUBMIT_QUEUE_ID ((int32_t)0x80000000u) /* 9261: K$80000000 addresses the submit queue */
 #define MAX_MANTISSA 1000000000000000LL /* 10^15: keeps mantissa * 1000 and 10^9 * ms in int64 */
 
 typedef struct {
@@ -59,6 +64,8 @@ struct hh_sys {
     int32_t drives_switching_off;         /* 9159 early warning, from the scenario */
     int32_t counters_running;             /* bits 0..7: PLC operating-hours counters 1..8 (9190/9191) */
     int64_t counter_ms[HH_HOUR_COUNTERS];
+    int32_t mem_size;                     /* bytes of the B/W/D memory, 0 unknown (9040/9042 block check) */
+    int64_t safety_test_until;            /* 9144: a self test is active while cycle < this */
     int32_t rem[HH_EXTRA_TIMER_COUNT];
     unsigned char start[HH_EXTRA_TIMER_COUNT];
 };
@@ -291,6 +298,8 @@ int hh_sys_set_axis(hh_sys *sys, int32_t axis, int32_t active, int32_t position)
     return 0;
 }
 
+void hh_sys_set_memory_size(hh_sys *sys, int32_t bytes) { sys->mem_size = bytes > 0 ? bytes : 0; }
+
 void hh_sys_set_drives(hh_sys *sys, int32_t available, int32_t switching_off)
 {
     sys->drives_available = available;
@@ -454,18 +463,6 @@ static int call_9035(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
     return 0;
 }
 
-static int call_9036(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
-{
-    if (p[0] < 0 || p[0] >= HH_STATUS_SIZE) {
-        r[0] = 1;
-        *code = HH_MODERR_PARAM;
-        return 1;
-    }
-    sys->status[p[0]] = p[1];
-    r[0] = 0;
-    return 0;
-}
-
 static int call_9192(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
 {
     if (p[0] >= -3 && p[0] <= -1) {
@@ -577,6 +574,214 @@ static int call_counters(hh_sys *sys, int32_t mask, int start, int32_t *code)
     return 0;
 }
 
+/* Sets the error result (when the module has one) and the W1022 code; returns the error status 1. */
+static int fail(int32_t *r, int32_t result, int32_t *code, int32_t w1022)
+{
+    r[0] = result;
+    *code = w1022;
+    return 1;
+}
+
+static int axis_ok(int32_t axis) { return axis >= 0 && axis < HH_AXES; }
+
+/* 9036 numbers (T407/T426): 0-4 and 11-19 interpolation factor of one axis, 5 all axes (0..10 each),
+ * 6 handwheel axis, 7-9 reserved, 10 jog-increment limit. */
+static int interpolation_number(int32_t n) { return (n >= 0 && n <= 5) || (n >= 11 && n <= 19); }
+
+static int call_9036(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    int32_t n = p[0], v = p[1];
+    const mp_entry *mp7641;
+    if (n < 0 || n > 19)
+        return fail(r, 1, code, 2); /* wrong number: error result 1, W1022 2 (TNC 426) */
+    if (interpolation_number(n)) {
+        if (v < 0 || v > 10)
+            return fail(r, 2, code, 1); /* value out of range: error result 2, W1022 1 */
+        mp7641 = find_mp(sys, MP_HANDWHEEL_INTERPOLATION, 0);
+        if (mp7641 != NULL && mp7641->mantissa != pow10_of(mp7641->decimals))
+            return fail(r, 3, code, 6); /* input disabled: error result 3, W1022 6 */
+    }
+    sys->status[n] = v;
+    r[0] = 0;
+    return 0;
+}
+
+/* A D address whose `dwords` double words fit the memory (when its size is known). */
+static int dword_block_ok(const hh_sys *sys, int32_t addr, int32_t dwords)
+{
+    if (addr < 0 || addr % 4 != 0)
+        return 0;
+    return sys->mem_size == 0 || (int64_t)addr + 4 * (int64_t)dwords <= sys->mem_size;
+}
+
+static int call_9040(hh_sys *sys, const int32_t *p, int32_t *code)
+{
+    if (p[1] < 0 || p[1] > 4 || !dword_block_ok(sys, p[0], 5)) {
+        *code = HH_MODERR_PARAM;
+        return 1;
+    }
+    return 0; /* coordinates depend on the machine: the memory is not written (A-46t) */
+}
+
+static int call_9042(hh_sys *sys, const int32_t *p, int32_t *code)
+{
+    if (!dword_block_ok(sys, p[0], 5)) {
+        *code = HH_MODERR_PARAM;
+        return 1;
+    }
+    return 0;
+}
+
+static int call_9048(const int32_t *p, int32_t *r, int32_t *code)
+{
+    r[0] = 0; /* no brake test, no free rotation in simulation (A-46u) */
+    if (p[1] != 0 && p[1] != 1)
+        return fail(r, 0, code, 1);
+    if (p[0] != -1 && !axis_ok(p[0]))
+        return fail(r, 0, code, 2);
+    return 0;
+}
+
+static int call_9095(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (p[0] < 0)
+        return fail(r, 1, code, 1); /* line missing */
+    r[0] = 0;
+    return 0;
+}
+
+static int call_9097(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (p[1] != 0)
+        return fail(r, 1, code, 2); /* bad mode: W1022 2 groups the configuration errors */
+    if (p[0] < 0)
+        return fail(r, 2, code, 2); /* line missing */
+    r[0] = 0;
+    return 0;
+}
+
+static int call_9102(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (p[0] != 0 && p[0] != 1)
+        return fail(r, -1, code, 1);
+    r[0] = 0; /* not assigned: 9100 has no model (A-46x) */
+    return 0;
+}
+
+static int call_9105(const int32_t *p, int32_t *code)
+{
+    int32_t interface = p[0], addr = p[1], len = p[2];
+    if (interface < 0 || interface > 1 || addr < 0 || addr > 1023 || len < 0 || len > 63 || addr + len > 1024) {
+        *code = HH_MODERR_PARAM;
+        return 1;
+    }
+    return 0;
+}
+
+static int call_9124(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (!axis_ok(p[0]))
+        return fail(r, 1, code, 1);
+    if (p[1] < 0 || p[1] > 10000)
+        return fail(r, 3, code, 3);
+    r[0] = 0;
+    return 0;
+}
+
+static int call_9127(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (!axis_ok(p[0]))
+        return fail(r, 0, code, 1);
+    if (p[1] < 0 || p[1] > 3)
+        return fail(r, 0, code, 2);
+    r[0] = 0; /* no axis is coupled in simulation */
+    return 0;
+}
+
+static int call_9144(hh_sys *sys, const int32_t *p, int32_t *r, int32_t *code)
+{
+    int32_t mode = p[0], p1 = p[1];
+    r[0] = 0;
+    if (mode == 10 ? p1 < 0 || p1 > 2 : mode == 11 ? !axis_ok(p1) : mode != 0)
+        return fail(r, 0, code, 2);
+    if (mode == 0) {
+        if (sys->cycle < sys->safety_test_until)
+            return fail(r, 0, code, 28); /* test already active */
+        sys->safety_test_until = sys->cycle + 1; /* runs to the end of this cycle (A-46z) */
+    }
+    return 0;
+}
+
+static int call_9150(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (p[0] != 0)
+        return fail(r, 2, code, 2); /* unknown code: only TOOL CALL (0) */
+    r[0] = 0;
+    return 0;
+}
+
+static int call_9194(const int32_t *p, int32_t *code)
+{
+    if (p[0] < -3 || p[0] >= HH_HOUR_COUNTERS || p[2] < 0) {
+        *code = HH_MODERR_PARAM;
+        return 1;
+    }
+    return 0; /* the alarm marker is not set in simulation (A-46l2) */
+}
+
+static int call_9231(const int32_t *p, int32_t *code)
+{
+    if (p[0] < 0 || p[0] > 8) {
+        *code = 1;
+        return 1;
+    }
+    if (p[1] < -30000 || p[1] > 30000) {
+        *code = 2;
+        return 1;
+    }
+    return 0;
+}
+
+static int call_9244(const int32_t *p, int32_t *r, int32_t *code)
+{
+    if (p[1] < 0 || p[1] > 7)
+        return fail(r, -1, code, 3);
+    if (p[0] < 0)
+        return fail(r, -1, code, 2);
+    r[0] = 0; /* files depend on the machine: nothing written (A-46x) */
+    return 0;
+}
+
+static int call_9260(const int32_t *p, int32_t *r, int32_t *code)
+{
+    r[0] = 0; /* no events are delivered in simulation (A-46e2) */
+    if (p[0] != 0 && p[0] != -1)
+        return fail(r, 0, code, 2);
+    return 0;
+}
+
+static int call_9261(const int32_t *p, int32_t *code)
+{
+    if (p[0] != SUBMIT_QUEUE_ID) {
+        *code = 30; /* SPAWN has no model: no process has another identifier */
+        return 1;
+    }
+    return 0;
+}
+
+static int call_9429(const int32_t *p, int32_t *r, int32_t *code)
+{
+    int32_t i;
+    for (i = 0; i < 4; i++)
+        r[i] = 0;
+    if (p[0] != 0 || p[2] < 0 || p[2] > 3 || p[1] < 0) {
+        *code = 1;
+        return 1;
+    }
+    r[0] = 2; /* no NC program runs in simulation: finished (A-46p2) */
+    return 0;
+}
+
 static int run_model(hh_sys *sys, const module_entry *m, const int32_t *p, int32_t *r, int32_t *code)
 {
     int32_t i;
@@ -599,6 +804,23 @@ static int run_model(hh_sys *sys, const module_entry *m, const int32_t *p, int32
     case 9190: return call_counters(sys, p[0], 1, code);
     case 9191: return call_counters(sys, p[0], 0, code);
     case 9195: r[0] = clock_seconds(sys); return 0;
+    case 9040: return call_9040(sys, p, code);
+    case 9042: return call_9042(sys, p, code);
+    case 9048: return call_9048(p, r, code);
+    case 9095: return call_9095(p, r, code);
+    case 9097: return call_9097(p, r, code);
+    case 9102: return call_9102(p, r, code);
+    case 9105: return call_9105(p, code);
+    case 9124: return call_9124(p, r, code);
+    case 9127: return call_9127(p, r, code);
+    case 9144: return call_9144(sys, p, r, code);
+    case 9150: return call_9150(p, r, code);
+    case 9194: return call_9194(p, code);
+    case 9231: return call_9231(p, code);
+    case 9244: return call_9244(p, r, code);
+    case 9260: return call_9260(p, r, code);
+    case 9261: return call_9261(p, code);
+    case 9429: return call_9429(p, r, code);
     default: /* stub rule of A-46 */
         for (i = 0; i < m->nresults; i++)
             r[i] = 0;
@@ -623,14 +845,15 @@ int hh_module_call_ctx(hh_sys *sys, int32_t number, int32_t caller, const int32_
         return -1;
     }
     if (caller == HH_CALLER_CYCLIC && m->context == HH_CTX_SUBMIT)
-        code = HH_MODERR_NOT_IN_JOB;
+        code = m->context_code ? m->context_code : HH_MODERR_NOT_IN_JOB;
     else if (caller == HH_CALLER_JOB && m->context == HH_CTX_CYCLIC)
-        code = HH_MODERR_NOT_CYCLIC;
-    if (code != 0) { /* the module does nothing; an error result carries the code too (A-46q) */
+        code = m->context_code ? m->context_code : HH_MODERR_NOT_CYCLIC;
+    if (code != 0) { /* the module does nothing; an error result carries the code, or the module's own
+                      * documented number for the wrong context (A-46q) */
         for (i = 0; i < m->nresults; i++)
             results[i] = 0;
         if (m->error_result >= 0)
-            results[m->error_result] = code;
+            results[m->error_result] = m->context_result_set ? m->context_result : code;
         *error_code = code;
         return 1;
     }

@@ -31,14 +31,21 @@
  *        wrote).  A number outside the table -> result 0 (9035) / 1 (9036), module error, code 1.
  *  9192  read an operating time (1 parameter: number; 1 result: seconds).  -3 control on,
  *        -2 machine on, -1 program run: all = whole seconds of simulated time since cycle 0
- *        (floor(cycle * cycle_time_ms / 1000)).  Any other number -> -1, the documented
- *        "not available" answer, without module error.
+ *        (floor(cycle * cycle_time_ms / 1000)); 0..7 the PLC counters of 9190/9191.  Any other
+ *        number -> -1 (the documented error answer) and module error code 1.
  *  9195  system time (0 parameters; 1 result): whole seconds of the simulated clock, same
  *        value as 9192 -3 (the simulated clock starts at 0).
  *  9038/9049 axis information / REF position from hh_sys_set_axis; 9092/9093/9094 tables from
  *        hh_sys_set_table (error numbers 2..6 of the manual, also pulled as the error result);
  *        9159/9161/9162/9169 drives (9162 = available AND enabled); 9190/9191 start/stop the 8 PLC
  *        operating-hours counters that 9192 0..7 reads (other numbers: -1 and module error 1).
+ *  Parameter validation with the documented error codes (the machine-dependent results stay 0, the
+ *        assumptions are named in the module table's rows): 9036 (numbers 0..19, factors 0..10, MP7641),
+ *        9040/9042 (type, D address and block fit), 9048, 9095, 9097, 9102, 9105, 9124, 9127, 9144 (self
+ *        test active to the end of its cycle: 28), 9150, 9194, 9231, 9244, 9260, 9261 (only the submit queue
+ *        K$80000000), 9429 (status 2: no NC program runs).  A row may name its own code for the wrong
+ *        calling context (9262/9263: 30) and its own error result then (9093/9094: 1, 9095: 7, 9097: 6,
+ *        9192/9244: -1).
  * The table rows (signatures, kind, calling context, profiles) are generated from the Python table into
  * hh_module_table.h.  Every other row runs the stub rule of A-46 (results 0, no error).  The pure
  * modules (9019, 9050-9054, 9070) need PLC memory, so the executors implement them, not the shim.
@@ -131,6 +138,8 @@ void hh_sys_clear_module_results(hh_sys *sys, int32_t number);
 
 /* Axis `axis` (0..HH_AXES-1): active flag (9038 info 0) and actual REF position in 0.0001 mm (9049). 0 / -1. */
 int hh_sys_set_axis(hh_sys *sys, int32_t axis, int32_t active, int32_t position);
+/* Size in bytes of the PLC's B/W/D memory (9040/9042 refuse a block that does not fit); 0 = unknown. */
+void hh_sys_set_memory_size(hh_sys *sys, int32_t bytes);
 /* Drives: bit mask of ready power stages (9162 reads available AND the mask 9161 enabled) and the
  * early warning 9159 reads. */
 void hh_sys_set_drives(hh_sys *sys, int32_t available, int32_t switching_off);

@@ -328,16 +328,16 @@ def test_watchdog_rerun_keeps_the_state_of_the_cycle_exact(tmp_path: Path) -> No
 
 def test_module_calls_are_not_repeated_by_the_exact_rerun(tmp_path: Path) -> None:
     # The fast code runs the module calls, then its pre-count of the next block passes the budget, and
-    # the cycle is re-run exactly from a snapshot. 9036 doubles status 5 each time it runs: the re-run
+    # the cycle is re-run exactly from a snapshot. 9036 doubles status 10 (the jog-increment limit, any value) each time it runs: the re-run
     # must replay the logged module results instead of calling the modules a second time.
     m = machine(tmp_path, """
-        PS  K5
+        PS  K10
         CM  9035
         PL  D0
         L   D0
         x   K2
         =   D0
-        PS  K5
+        PS  K10
         PS  D0
         CM  9036
         PL  D4
@@ -349,11 +349,11 @@ def test_module_calls_are_not_repeated_by_the_exact_rerun(tmp_path: Path) -> Non
         LBL END
         EM
     """, overrides={"max_instructions_per_cycle": 14, "module_context": "ignore"})  # 9035 is submit-only (A-46q)
-    m.sys.set_status(5, 21)
+    m.sys.set_status(10, 21)
     fault = fault_of(cycles(m, 1))
     assert (fault.code, fault.span.line) == ("E-RT-WATCHDOG", 15)
     assert values(m, "D0", "O1", "O2") == {"D0": 42, "O1": 1, "O2": 0}
-    assert m.sys.call(9035, [5])[0] == [42]
+    assert m.sys.call(9035, [10])[0] == [42]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -271,7 +271,7 @@ def sysm() -> shim.SysModules:
 @pytest.mark.parametrize("number, kind, nparams, nresults", [
     (9006, "modelled", 1, 0), (9031, "modelled", 3, 1), (9032, "modelled", 2, 1), (9035, "modelled", 1, 1),
     (9036, "modelled", 2, 1), (9192, "modelled", 1, 1), (9195, "modelled", 0, 1), (9041, "stub", 2, 0),
-    (9094, "modelled", 4, 1), (9097, "stub", 2, 1), (9051, "stub", 5, 0), (9999, "unknown", 0, 0),
+    (9094, "modelled", 4, 1), (9097, "modelled", 2, 1), (9081, "stub", 0, 1), (9051, "stub", 5, 0), (9999, "unknown", 0, 0),
 ])
 def test_module_info(sysm: shim.SysModules, number: int, kind: str, nparams: int, nresults: int) -> None:
     info = sysm.info(number)
@@ -297,7 +297,7 @@ def test_unknown_module_and_wrong_parameter_count(sysm: shim.SysModules) -> None
 
 
 def test_stub_module_pushes_zeros(sysm: shim.SysModules) -> None:
-    assert sysm.call(9097, [1, 0]) == ([0], 0, None)
+    assert sysm.call(9081, []) == ([0], 0, None)
 
 
 def test_9006_needs_numbermp4111(sysm: shim.SysModules) -> None:
@@ -345,11 +345,11 @@ def test_mp_read_write_9031_9032(sysm: shim.SysModules) -> None:
 
 
 def test_status_table_9035_9036(sysm: shim.SysModules) -> None:
-    assert sysm.call(9036, [12, -5]) == ([0], 0, None)
-    assert sysm.call(9035, [12]) == ([-5], 0, None)
+    assert sysm.call(9036, [10, -5]) == ([0], 0, None)      # 10: the jog-increment limit, any value
+    assert sysm.call(9035, [10]) == ([-5], 0, None)
     sysm.set_status(13, 4)
     assert sysm.call(9035, [13]) == ([4], 0, None)
-    assert sysm.call(9036, [256, 1]) == ([1], 1, 1)
+    assert sysm.call(9036, [256, 1]) == ([1], 1, 2)          # wrong number: result 1, W1022 2
     with pytest.raises(ValueError):
         sysm.set_status(-1, 0)
 

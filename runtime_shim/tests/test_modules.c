@@ -25,9 +25,10 @@ static void module_table(void)
         {9006, HH_MODULE_MODELLED, 1, 0}, {9031, HH_MODULE_MODELLED, 3, 1},
         {9032, HH_MODULE_MODELLED, 2, 1}, {9035, HH_MODULE_MODELLED, 1, 1},
         {9036, HH_MODULE_MODELLED, 2, 1}, {9192, HH_MODULE_MODELLED, 1, 1},
-        {9195, HH_MODULE_MODELLED, 0, 1}, {9040, HH_MODULE_STUB, 2, 0},
-        {9094, HH_MODULE_MODELLED, 4, 1}, {9097, HH_MODULE_STUB, 2, 1},
-        {9042, HH_MODULE_STUB, 1, 0},     {9194, HH_MODULE_STUB, 3, 0},
+        {9195, HH_MODULE_MODELLED, 0, 1}, {9040, HH_MODULE_MODELLED, 2, 0},
+        {9094, HH_MODULE_MODELLED, 4, 1}, {9097, HH_MODULE_MODELLED, 2, 1},
+        {9042, HH_MODULE_MODELLED, 1, 0}, {9194, HH_MODULE_MODELLED, 3, 0},
+        {9080, HH_MODULE_STUB, 0, 0},     {9263, HH_MODULE_STUB, 1, 0},
         {9999, HH_MODULE_UNKNOWN, 0, 0},  {0, HH_MODULE_UNKNOWN, 0, 0},
     };
     size_t i;
@@ -52,7 +53,7 @@ static void unknown_and_stub_calls(void)
     hh_sys *sys = hh_sys_new(20);
     CHECK_EQ(call(sys, 9999, 0, 0, 0), -1);
     CHECK_EQ(code, 0);
-    CHECK_EQ(call(sys, 9097, 1, 0, 0), 0); /* stub rule A-46: results 0, no error */
+    CHECK_EQ(call(sys, 9081, 0, 0, 0), 0); /* stub rule A-46: results 0, no error */
     CHECK_EQ(results[0], 0);
     CHECK_EQ(code, 0);
     hh_sys_free(sys);
@@ -205,7 +206,7 @@ static void run_time_mp_changes_timer_preset(void)
 static void status_9035_9036(void)
 {
     hh_sys *sys = hh_sys_new(20);
-    CHECK_EQ(call(sys, 9036, 7, 42, 0), 0);
+    CHECK_EQ(call(sys, 9036, 7, 42, 0), 0); /* 7: reserved, not range-checked */
     CHECK_EQ(results[0], 0);
     CHECK_EQ(call(sys, 9035, 7, 0, 0), 0);
     CHECK_EQ(results[0], 42);
@@ -214,9 +215,21 @@ static void status_9035_9036(void)
     CHECK_EQ(hh_sys_set_status(sys, 8, -3), 0);
     CHECK_EQ(call(sys, 9035, 8, 0, 0), 0);
     CHECK_EQ(results[0], -3);
-    CHECK_EQ(call(sys, 9036, HH_STATUS_SIZE, 1, 0), 1);
+    CHECK_EQ(call(sys, 9036, 20, 1, 0), 1); /* wrong number: error result 1, W1022 2 */
     CHECK_EQ(results[0], 1);
-    CHECK_EQ(code, HH_MODERR_PARAM);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9036, 2, 11, 0), 1); /* interpolation factor 0..10: error result 2, W1022 1 */
+    CHECK_EQ(results[0], 2);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9036, 12, 10, 0), 0);
+    CHECK_EQ(call(sys, 9036, 10, -1, 0), 0); /* jog limit: -1 cancels, no error */
+    CHECK_EQ(hh_sys_set_mp(sys, 7641, 0, 0, 0), 0); /* handwheel interpolation disabled */
+    CHECK_EQ(call(sys, 9036, 0, 4, 0), 1);
+    CHECK_EQ(results[0], 3);
+    CHECK_EQ(code, 6);
+    CHECK_EQ(call(sys, 9036, 10, 5000, 0), 0); /* the jog limit is not an interpolation factor */
+    CHECK_EQ(hh_sys_set_mp(sys, 7641, 0, 10, 1), 0); /* 1.0 */
+    CHECK_EQ(call(sys, 9036, 0, 4, 0), 0);
     CHECK_EQ(call(sys, 9035, -1, 0, 0), 1);
     CHECK_EQ(results[0], 0);
     CHECK_EQ(hh_sys_set_status(sys, HH_STATUS_SIZE, 1), -1);
@@ -305,9 +318,16 @@ static void context_rule(void)
     CHECK_EQ(results[0], 0);
     CHECK_EQ(call_ctx(sys, 9032, HH_CALLER_JOB, 910, 0, 0, 0), 0);
     CHECK_EQ(results[0], 1001200);
-    /* 9031 carries the code in its error result too */
+    /* 9031's error result carries its own number for "not in a submit job" (4), W1022 20 */
     CHECK_EQ(call_ctx(sys, 9031, HH_CALLER_CYCLIC, 910, 0, 5, 0), 1);
-    CHECK_EQ(results[0], 20);
+    CHECK_EQ(results[0], 4);
+    CHECK_EQ(code, HH_MODERR_NOT_IN_JOB);
+    /* 9262 names 30 for the wrong context; 9244's error result is -1 */
+    CHECK_EQ(call_ctx(sys, 9262, HH_CALLER_CYCLIC, 0, 0, 0, 0), 1);
+    CHECK_EQ(code, 30);
+    CHECK_EQ(call_ctx(sys, 9244, HH_CALLER_CYCLIC, 0, 0, 0, 0), 1);
+    CHECK_EQ(code, HH_MODERR_NOT_IN_JOB);
+    CHECK_EQ(results[0], -1);
     /* 9161 is cyclic-only: 24 in a job, and the drives stay disabled */
     hh_sys_set_drives(sys, 0x7, 0x4);
     CHECK_EQ(call_ctx(sys, 9161, HH_CALLER_JOB, 0x3, 0, 0, 0), 1);
@@ -348,8 +368,9 @@ static void tables_9092_9094(void)
     CHECK_EQ(call_ctx(sys, 9092, HH_CALLER_JOB, 0, 7, 99, 0), 1);
     CHECK_EQ(results[0], -1);
     CHECK_EQ(results[1], 6);
-    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_CYCLIC, 0, 5, 1, 0), 1); /* submit-only */
-    CHECK_EQ(results[1], 20);
+    CHECK_EQ(call_ctx(sys, 9093, HH_CALLER_CYCLIC, 0, 5, 1, 0), 1); /* submit-only: error number 1, W1022 20 */
+    CHECK_EQ(results[1], 1);
+    CHECK_EQ(code, HH_MODERR_NOT_IN_JOB);
     hh_sys_free(sys);
 }
 
@@ -383,6 +404,105 @@ static void axes_and_counters(void)
     hh_sys_free(sys);
 }
 
+static void validation_of_machine_modules(void)
+{
+    hh_sys *sys = hh_sys_new(20);
+    /* 9040 / 9042: type 0..4, a D address whose 5 double words fit */
+    CHECK_EQ(call(sys, 9040, 100, 4, 0), 0);
+    CHECK_EQ(call(sys, 9040, 100, 5, 0), 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9040, 102, 0, 0), 1);
+    CHECK_EQ(call(sys, 9042, 0, 0, 0), 0);
+    CHECK_EQ(call(sys, 9042, 6, 0, 0), 1);
+    CHECK_EQ(call(sys, 9042, 4096, 0, 0), 0); /* memory size unknown: not checked */
+    hh_sys_set_memory_size(sys, 1024);
+    CHECK_EQ(call(sys, 9042, 1008, 0, 0), 1); /* D1008..D1024 passes the end */
+    CHECK_EQ(call(sys, 9042, 1004, 0, 0), 0); /* D1004..D1020 fits */
+    CHECK_EQ(call(sys, 9040, 1008, 0, 0), 1);
+    /* 9048: info 0/1 (1), axis -1 or 0..15 (2) */
+    CHECK_EQ(call(sys, 9048, -1, 1, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9048, 0, 2, 0), 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9048, 16, 0, 0), 1);
+    CHECK_EQ(code, 2);
+    /* 9095 / 9097 / 9150: error results and codes */
+    CHECK_EQ(call(sys, 9095, -1, 0, 0), 1);
+    CHECK_EQ(results[0], 1);
+    CHECK_EQ(call(sys, 9097, 3, 1, 0), 1);
+    CHECK_EQ(results[0], 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9097, -1, 0, 0), 1);
+    CHECK_EQ(results[0], 2);
+    CHECK_EQ(call(sys, 9097, 3, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9150, 1, 0, 0), 1);
+    CHECK_EQ(results[0], 2);
+    CHECK_EQ(code, 2);
+    /* 9102 / 9105: serial interface */
+    CHECK_EQ(call(sys, 9102, 2, 0, 0), 1);
+    CHECK_EQ(results[0], -1);
+    CHECK_EQ(call(sys, 9102, 1, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9105, 0, 1000, 24), 0);
+    CHECK_EQ(call(sys, 9105, 0, 1000, 25), 1);
+    CHECK_EQ(call(sys, 9105, 0, 0, 64), 1);
+    CHECK_EQ(call(sys, 9105, 2, 0, 1), 1);
+    /* 9124 / 9127 */
+    CHECK_EQ(call(sys, 9124, 16, 5000, 0), 1);
+    CHECK_EQ(results[0], 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9124, 1, 10001, 0), 1);
+    CHECK_EQ(results[0], 3);
+    CHECK_EQ(code, 3);
+    CHECK_EQ(call(sys, 9124, 1, 10000, 0), 0);
+    CHECK_EQ(call(sys, 9127, 0, 4, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9127, -1, 0, 0), 1);
+    CHECK_EQ(code, 1);
+    /* 9144: a second self test in the same cycle is 28, the next cycle may start one */
+    CHECK_EQ(call(sys, 9144, 1, 0, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9144, 10, 3, 0), 1);
+    CHECK_EQ(call(sys, 9144, 11, 2, 0), 0);
+    CHECK_EQ(call(sys, 9144, 0, 0, 0), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9144, 0, 0, 0), 1);
+    CHECK_EQ(code, 28);
+    hh_sys_tick(sys);
+    CHECK_EQ(call(sys, 9144, 0, 0, 0), 0);
+    /* 9194, 9231, 9244 */
+    CHECK_EQ(call(sys, 9194, -4, 60, 100), 1);
+    CHECK_EQ(call(sys, 9194, 7, 60, 100), 0);
+    CHECK_EQ(call(sys, 9194, 0, 60, -1), 1);
+    CHECK_EQ(call(sys, 9231, 9, 0, 0), 1);
+    CHECK_EQ(code, 1);
+    CHECK_EQ(call(sys, 9231, 8, -30001, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9231, 0, 30000, 0), 0);
+    CHECK_EQ(call(sys, 9244, 0, 8, 0), 1);
+    CHECK_EQ(results[0], -1);
+    CHECK_EQ(code, 3);
+    CHECK_EQ(call(sys, 9244, -1, 0, 0), 1);
+    CHECK_EQ(code, 2);
+    /* 9260, 9261, 9429 */
+    CHECK_EQ(call(sys, 9260, 1, 0, 0), 1);
+    CHECK_EQ(code, 2);
+    CHECK_EQ(call(sys, 9260, -1, 0, 0xff), 0);
+    CHECK_EQ(results[0], 0);
+    CHECK_EQ(call(sys, 9261, (int32_t)0x80000000u, 1, 0), 0);
+    CHECK_EQ(call(sys, 9261, 3, 1, 0), 1);
+    CHECK_EQ(code, 30);
+    CHECK_EQ(call(sys, 9429, 0, 0, 3), 0);
+    CHECK_EQ(results[0], 2);
+    CHECK_EQ(results[3], 0);
+    CHECK_EQ(call(sys, 9429, 1, 0, 0), 1);
+    CHECK_EQ(call(sys, 9429, 0, 0, 4), 1);
+    CHECK_EQ(call(sys, 9429, 0, -1, 1), 1);
+    CHECK_EQ(code, 1);
+    hh_sys_free(sys);
+}
+
 static void invalid_context(void) { CHECK(hh_sys_new(0) == NULL); }
 
 void run_module_tests(void)
@@ -391,6 +511,7 @@ void run_module_tests(void)
     RUN(context_rule);
     RUN(tables_9092_9094);
     RUN(axes_and_counters);
+    RUN(validation_of_machine_modules);
     RUN(unknown_and_stub_calls);
     RUN(timer_9006_needs_numbermp4111);
     RUN(timer_9006_counts_like_9_2);

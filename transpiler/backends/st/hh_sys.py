@@ -14,7 +14,7 @@ import dataclasses
 
 from transpiler.backends.iec_model import IecVar, Pou, VarSection
 from transpiler.backends.st.names import RESERVED
-from transpiler.language.module_table import ANY, CYCLIC, ERR_NOT_CYCLIC, ERR_NOT_IN_JOB, MODULE_TABLE, PURE, SUBMIT, Module
+from transpiler.language.module_table import ANY, CYCLIC, MODULE_TABLE, PURE, SUBMIT, Module
 
 FAULT, FAULT_CODE, IN_JOB = "FAULT", "FAULT_CODE", "IN_JOB"
 NOT_PROVIDED = 1            # FAULT_CODE of the stub body: the target has not implemented the module
@@ -69,8 +69,8 @@ def doc_comment(row: Module) -> str:
         lines.append("Parameters (push order): " + ", ".join(f"{v.name}{_unit(v.unit)}" for v in row.params) + ".")
     if row.results:
         lines.append("Results (pull order): " + ", ".join(f"{v.name}{_unit(v.unit)}" for v in row.results) + ".")
-    context = {ANY: "anywhere", CYCLIC: "the cyclic program only (code 24 in a job)",
-               SUBMIT: "submit/spawn jobs only (code 20 in the cyclic program)"}[row.context]
+    context = {ANY: "anywhere", CYCLIC: f"the cyclic program only (code {row.context_error(True)} in a job)",
+               SUBMIT: f"submit/spawn jobs only (code {row.context_error(False)} in the cyclic program)"}[row.context]
     lines.append(f"Called from {context}" + ("; needs a pending strobe while an NC program runs." if row.strobe else "."))
     if row.errors:
         lines.append("Error codes (FAULT_CODE): " + "; ".join(f"{c} {t}" for c, t in sorted(row.errors.items())) + ".")
@@ -90,12 +90,12 @@ def fb_pou(number: int) -> Pou:
     outputs += (IecVar(FAULT, "BOOL", comment="the module error marker after the call"),
                 IecVar(FAULT_CODE, "DINT", comment="the error code when FAULT (else unchanged in the error word)"))
     body = [f"{FAULT} := FALSE;", f"{FAULT_CODE} := 0;"]
-    if row.context == SUBMIT:
-        body += [f"IF NOT {IN_JOB} THEN", f"    {FAULT} := TRUE;", f"    {FAULT_CODE} := {ERR_NOT_IN_JOB};", "    RETURN;",
-                 "END_IF;"]
-    elif row.context == CYCLIC:
-        body += [f"IF {IN_JOB} THEN", f"    {FAULT} := TRUE;", f"    {FAULT_CODE} := {ERR_NOT_CYCLIC};", "    RETURN;",
-                 "END_IF;"]
+    if row.context in (SUBMIT, CYCLIC):
+        wrong = not (row.context == SUBMIT)         # IN_JOB in the wrong context
+        result = row.context_error_result(wrong)
+        set_result = [] if result is None else [f"    {itf.outputs[row.error_result]} := {result};"]
+        body += [f"IF {'' if wrong else 'NOT '}{IN_JOB} THEN", f"    {FAULT} := TRUE;",
+                 f"    {FAULT_CODE} := {row.context_error(wrong)};", *set_result, "    RETURN;", "END_IF;"]
     body += ["(* TO BE PROVIDED BY THE TARGET: this body only reports that the module is missing. *)",
              f"{FAULT} := TRUE;", f"{FAULT_CODE} := {NOT_PROVIDED};"]
     return Pou(itf.name, "FUNCTION_BLOCK", (VarSection("VAR_INPUT", inputs), VarSection("VAR_OUTPUT", outputs)),

@@ -83,6 +83,7 @@ class Machine:
         timer_presets, counter_presets = load_presets(mps, sem, self.cycle_time_ms, diags, mp_spans)
         self.sys = SysContext(self.cycle_time_ms, number_mp4111=number_mp4111, timer_unit=sem["timer_unit"],
                               timer_restart=bool(sem["timer_restart_while_running"]))
+        self.sys.set_memory_size(self.state.mem_size)
         for (number, index), value in mps.items():
             try:
                 self.sys.set_mp(number, index, value)

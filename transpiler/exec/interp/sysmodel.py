@@ -21,6 +21,7 @@ _PROTOTYPES = {
     "hh_module_meta": (ctypes.c_int, [_I32, _PI32, _PI32, _PI32, _PI32, _PI32]),
     "hh_sys_set_axis": (ctypes.c_int, [ctypes.c_void_p, _I32, _I32, _I32]),
     "hh_sys_set_drives": (None, [ctypes.c_void_p, _I32, _I32]),
+    "hh_sys_set_memory_size": (None, [ctypes.c_void_p, _I32]),
     "hh_sys_set_table": (ctypes.c_int, [ctypes.c_void_p, _I32, _I32, _I32, _I32]),
 }
 
@@ -74,6 +75,10 @@ class SysContext(SysModules):
     def set_drives(self, available: int, switching_off: int = 0) -> None:
         """Ready power stages (9162 = available AND the mask of 9161) and the early warning of 9159."""
         self._lib.hh_sys_set_drives(self._handle, available, switching_off)
+
+    def set_memory_size(self, size: int) -> None:
+        """Bytes of the PLC's B/W/D memory: 9040/9042 refuse a block of double words that does not fit."""
+        self._lib.hh_sys_set_memory_size(self._handle, size)
 
     def set_table(self, file_type: int, line: int, element: int, value: int) -> None:
         """Element of a table selected for program run (0 .T, 1 .D, 2 .TCH): what 9092/9093 read, 9094 writes."""
