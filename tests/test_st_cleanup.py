@@ -69,3 +69,6 @@ def test_readability_counts_what_it_says():
     assert (figure.statements, figure.stack_lines, figure.temp_lines, figure.helper_calls, figure.var_external_lines) \
         == (3, 1, 2, 1, 2)
     assert figure.per_instruction == 0.75
+    # a titled block (matiec's lists are grouped by area) counts the same
+    titled = st.replace("VAR_EXTERNAL\n", "VAR_EXTERNAL (* Markers *)\n")
+    assert measure(titled, 4).var_external_lines == 2

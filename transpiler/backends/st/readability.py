@@ -53,9 +53,10 @@ def measure(st_text: str, instructions: int) -> Readability:
     externals = 0
     inside = False
     for line in st_text.split("\n"):
-        if line.strip() == "VAR_EXTERNAL":
+        code = _COMMENT.sub("", line).strip()       # a block may carry its title as a comment
+        if code == "VAR_EXTERNAL":
             inside = True
-        elif line.strip() == "END_VAR":
+        elif code == "END_VAR":
             inside = False
         elif inside and _COMMENT.sub("", line).strip():
             externals += 1
