@@ -811,7 +811,12 @@ class _Gen:
             self.op("=", self.val_w())
         for p in params:
             self.op("PS", p)
-        self.op("CM", str(number))
+        if number in SYS_MODULES and len(kinds) == nresults and self.chance(0.6):
+            # A conditional call: whether it happens or not, the pulls below take as many words as were pushed.
+            self.op("L", self.bit_r())
+            self.op(self.rng.choice(("CMT", "CMF")), str(number))
+        else:
+            self.op("CM", str(number))
         for _ in range(nresults):
             if self.chance(0.75):
                 self.op("PL", self.val_w())
