@@ -17,9 +17,9 @@ ROOT = Path(__file__).resolve().parents[1]
 CONSTRUCTS = ROOT / "samples" / "constructs"
 
 MAIN_WITH_MODULE = "USES sub.src\nEXTERN Read_pos\nL I1\n= O1\nCM Read_pos\nEM\n"
-# A subprogram that calls the pure module 9019 (data stack depth, which the ST's static stack does not have): the
-# ST back end does not translate it.
-SUB_WITH_MODULE = "GLOBAL Read_pos\nLBL Read_pos\nL K1\n= M100\nPS K0\nPL D204\nCM 9019\nPL D200\nL M100\n= O2\nEM\n"
+# A subprogram that calls PLC module 9006 (additional timers), which the ST back end does not translate: the call
+# (at line 8) never happens (M101 AND NOT M101), so only the lost write of O2 can show.
+SUB_WITH_MODULE = "GLOBAL Read_pos\nLBL Read_pos\nL K1\n= M100\nPS K96\nL M101\nAN M101\nCMT 9006\nL M100\n= O2\nEM\n"
 
 
 def _run(args: list, capsys) -> tuple[int, str, str]:
@@ -41,32 +41,32 @@ def test_untranslated_code_is_an_error_at_its_line(tmp_path, capsys):
     main_src = _write(tmp_path, {"main.src": MAIN_WITH_MODULE, "sub.src": SUB_WITH_MODULE})
     code, _, err = _run(["transpile", main_src, "--out", tmp_path / "out"], capsys)
     assert code == 2
-    assert "sub.src:7:1: error[E-UNSUPPORTED]" in err and "9019" in err
+    assert "sub.src:8:1: error[E-UNSUPPORTED]" in err and "9006" in err
     assert not (tmp_path / "out").exists(), "nothing partial is written"
 
 
 def test_allowed_untranslated_code_is_written_with_the_list_first_and_never_equivalent(tmp_path, capsys):
     main_src = _write(tmp_path, {"main.src": MAIN_WITH_MODULE, "sub.src": SUB_WITH_MODULE})
     code, _, err = _run(["transpile", main_src, "--out", tmp_path / "out", "--allow-untranslated"], capsys)
-    assert code == 0 and "sub.src:7:1: warning[E-UNSUPPORTED]" in err
+    assert code == 0 and "sub.src:8:1: warning[E-UNSUPPORTED]" in err
     report = (tmp_path / "out" / "report.md").read_text()
     first_section = report.split("## ")[1]
-    assert first_section.startswith("Not translated") and "sub.src:7:1" in first_section
+    assert first_section.startswith("Not translated") and "sub.src:8:1" in first_section
     code, out, _ = _run(["equiv", main_src, "--random-cycles", "50"], capsys)
     assert code == 2 and "EQUIVALENT" not in out
     # The lost routine wrote O2: the runs show it.
     code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated"], capsys)
-    assert code == 1 and "hh2iec equiv: NOT EQUIVALENT" in out and "NOT TRANSLATED: sub.src:7:1" in out
+    assert code == 1 and "hh2iec equiv: NOT EQUIVALENT" in out and "NOT TRANSLATED: sub.src:8:1" in out
     # A lost routine whose effect no compared operand shows: every run agrees, and still no EQUIVALENT.
-    _write(tmp_path, {"sub.src": "GLOBAL Read_pos\nLBL Read_pos\nPS K0\nPL D204\nCM 9019\nPL D200\nEM\n"})
+    _write(tmp_path, {"sub.src": "GLOBAL Read_pos\nLBL Read_pos\nPS K96\nL M101\nAN M101\nCMT 9006\nEM\n"})
     code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated",
                          "--report", tmp_path / "equiv.json"], capsys)
     assert code == 1
     assert "equivalent: random_seed1" in out
-    assert "hh2iec equiv: NOT PROVEN" in out and "NOT TRANSLATED: sub.src:5:1" in out
+    assert "hh2iec equiv: NOT PROVEN" in out and "NOT TRANSLATED: sub.src:6:1" in out
     report = json.loads((tmp_path / "equiv.json").read_text())
     assert report["verdict"] == "NOT PROVEN" and report["equivalent"] is False
-    assert report["not_translated"][0]["at"] == "sub.src:5:1"
+    assert report["not_translated"][0]["at"] == "sub.src:6:1"
 
 
 # --- 2. expectations of the scenario ---------------------------------------------------------

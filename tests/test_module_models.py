@@ -511,9 +511,15 @@ def test_9019_stack_depth_in_the_interpreter(tmp_path: Path, capsys) -> None:
     """, profile="itnc530")
     cycles(m, 1)
     assert values(m, "D0", "D4") == {"D0": 0, "D4": 6}
-    # The ST has no data stack: 9019 stays a named gap of the translation (docs/modules.md).
+    # The translation reads the emulated stack's pointer (the program keeps its whole stack there): the same
+    # depths, also inside a subprogram whose caller pushed its parameter.
     from transpiler.cli import main
     src = tmp_path / "main.src"
-    src.write_text("CM 9019\nPL D0\nEM\n", encoding="latin-1")
-    assert main(["transpile", str(src), "--out", str(tmp_path / "out")]) == 2
-    assert "E-UNSUPPORTED" in capsys.readouterr().err
+    src.write_text("CM 9019\nPL D0\nPS K1\nPS M0\nCM 9019\nPL D4\nPL M1\nPL D8\nPS W20\nCM Sub\nPL D12\nEM\n"
+                   "LBL Sub\nCM 9019\nPL D16\nPL D24\nCM 9019\nEM\n", encoding="latin-1")
+    assert main(["transpile", str(src), "--out", str(tmp_path / "out")]) == 0
+    st = (tmp_path / "out" / "project.st").read_text()
+    assert "INT_TO_DINT(HH_SP) * 2;" in st
+    capsys.readouterr()
+    assert main(["equiv", str(src), "--random-cycles", "20", "--backend", "builtin"]) == 0
+    assert "hh2iec equiv: EQUIVALENT" in capsys.readouterr().out

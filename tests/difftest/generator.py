@@ -172,7 +172,7 @@ EDGE_CONSTS = (0, 1, -1, 2, 3, 7, 8, 15, 16, 31, 32, 100, 127, 128, 255, 256, -1
 # 9031/9032 take (number, index) of a machine parameter of timers.mp; 9019 and 9006 do not translate.
 PURE_MODULES: Mapping[int, tuple[tuple[str, ...], int]] = MappingProxyType({
     9050: (("any", "exp", "str"), 0), 9052: (("str",), 2), 9053: (("addr", "str", "count"), 0),
-    9054: (("str", "addr"), 0), 9070: (("str", "str"), 1),
+    9054: (("str", "addr"), 0), 9070: (("str", "str"), 1), 9019: ((), 1),
 })
 SYS_MODULES: Mapping[int, tuple[tuple[str, ...], int]] = MappingProxyType({
     9031: (("mp", "mpindex", "any"), 1), 9032: (("mp", "mpindex"), 1), 9035: (("status",), 1),

@@ -18,7 +18,7 @@ from transpiler.backends.st import exprs as E
 from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
-from transpiler.backends.st.interfaces import Effect, StackAnalysis
+from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes
 from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
@@ -99,6 +99,7 @@ class StBackend:
         self.liveness = Liveness(self.program)
         self.stack: tuple[str, str] | None = None
         self.stack_analysis = StackAnalysis(self.program, _module_effect)
+        self._stack_depth_read()
         self.modules_used: set[int] = set()
         self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
         self.real_stack_users: dict[str, tuple[int, int]] = {}
@@ -150,6 +151,19 @@ class StBackend:
         files = self.program.files
         return tuple((number, self.pou_names[key], files[key[0]].ops[key[1]].span)
                      for key, number in sorted(self.job_plan.numbers.items(), key=lambda item: item[1]))
+
+    def _stack_depth_read(self) -> None:
+        """A program that reads the data-stack depth (PLC module 9019) keeps every subprogram's stack in the emulated
+        stack: with parameters in VAR_INPUTs no stack pointer would hold the depth the control reports."""
+        reads = [op for f in self.program.files for op in f.ops
+                 if op.call is not None and op.call.is_module and op.call.module == modcalls.STACK_DEPTH]
+        if not reads:
+            return
+        span = reads[0].span
+        why = Dynamic(f"the program reads the data-stack depth (PLC module 9019 at {span.file}:{span.line})", span)
+        self.stack_analysis.interfaces.clear()
+        for key in [(0, 0)] + [r.key for r in self.program.routines]:
+            self.stack_analysis.dynamic.setdefault(key, why)
 
     def _dynamic_stack(self) -> tuple[tuple[str, str, Span], ...]:
         out = []

@@ -9,7 +9,8 @@ A *pure* module (9050, 9052-9054, 9070) is a call of its block in the generated 
 caller reads the string contents (and whether the string numbers are valid) into the block and stores its TEXT
 into the destination string when the call did not fail; 9053/9054 get the byte memory as VAR_IN_OUT, which
 exists only where the program keeps all of its memory in the byte array. A conditional call (CMT/CMF) is the
-same call inside an IF on the logic accumulator. 9019 (stack depth) and 9006 stay E-UNSUPPORTED at their line.
+same call inside an IF on the logic accumulator. 9019 (stack depth) reads the emulated stack's pointer: a program
+that calls it keeps all of its data stack there. 9006 stays E-UNSUPPORTED at its line.
 """
 
 from __future__ import annotations
@@ -35,11 +36,16 @@ def stack_effect(number: int) -> tuple[tuple[str, ...], tuple[str, ...], int] | 
     return ("val",) * row.nparams, ("val",) * row.nresults, 2 * row.nresults
 
 
+STACK_DEPTH = 9019
+
+
 def translatable(number: int) -> str | None:
     """None when module `number` translates, else why not."""
     row = MODULE_TABLE.get(number)
     if row is None:
         return f"PLC module {number} has no row in the module table"
+    if number == STACK_DEPTH:
+        return None
     if row.kind == PURE and number not in pure_lib.PURE_TRANSLATED:
         return f"PLC module {number} ({row.st_name}, a pure module) is not translated yet"
     if row.number == 9006:
@@ -88,6 +94,9 @@ def _emit_conditional(ex, op: Op, live: frozenset[str], in_job: str, used: set[i
 
 def _emit_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], decimal_point: str) -> None:
     number = op.call.module
+    if number == STACK_DEPTH:
+        _emit_stack_depth(ex, op, live)
+        return
     row = MODULE_TABLE[number]
     if row.kind == PURE:
         _emit_pure(ex, op, live, used, decimal_point)
@@ -111,6 +120,22 @@ def _emit_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], de
     ex.forget()
     for name in reversed(itf.outputs):
         ex.s.stack.append(("val", E.var(f"{inst}.{name}", "DINT")))
+
+
+def _emit_stack_depth(ex, op: Op, live: frozenset[str]) -> None:
+    """9019: the bytes on the data stack (2 per 16-bit word). A program that calls it keeps its whole stack in the
+    emulated stack (the back end turns the stack interfaces off), so after the flush the stack pointer is exact."""
+    if ex.static is not None:
+        raise Unsupported("internal: PLC module 9019 on a static data stack", op.span)
+    _prepare(ex, live, 0)
+    _, sp = ex.ctx.stack_names()
+    span = op.span
+    ex.ctx.out.comment(f"CM 9019 (data stack depth in bytes)  {span.file}:{span.line}")
+    depth = ex._temp_copy(E.Expr(f"INT_TO_DINT({sp}) * 2", "DINT", frozenset([sp.upper()]), 0, 65534))
+    marker = Operand("M", ex.ctx.semantics.profile.interface.module_err)
+    ex.bit_store(marker, lambda: E.bool_const(False), frozenset())     # 9019 never fails
+    ex.forget()
+    ex.s.stack.append(("val", depth))
 
 
 def _error_marker(ex, inst: str) -> None:
