@@ -66,6 +66,20 @@ def test_gvl_targets_have_no_externals_and_qualify_every_global(sample, target):
 
 
 @pytest.mark.parametrize("target", ["codesys", "twincat"])
+def test_gvl_targets_read_bits_with_bit_access_instead_of_the_helper(sample, target):
+    # Catches: the HH_BIT helper kept where the target reads a bit itself, a widened INT read above its width
+    # (bit 15 is its sign, which INT_TO_DINT repeats), or the matiec text losing its helper.
+    text = sample[target].files["project.st"].decode()
+    assert "HH_BIT(" not in text and "FUNCTION HH_BIT " not in text
+    assert "GVL_Markers.M6001 := GVL_Words.DG_pocket_occ_low.1;" in text
+    assert "HH_BIT(" in sample["matiec"].files["project.st"].decode()
+    from transpiler.backends.st.dialect import _with_bit_access
+    body = "a := HH_BIT(INT_TO_DINT(W), 3) AND HH_BIT(INT_TO_DINT(W), 20) OR HH_BIT(SINT_TO_DINT(B), 9);\nc := HH_BIT(D, 31);"
+    (pou,) = _with_bit_access((Pou("P", "PROGRAM", (), body),))
+    assert pou.body == "a := W.3 AND W.15 OR B.7;\nc := D.31;"
+
+
+@pytest.mark.parametrize("target", ["codesys", "twincat"])
 def test_gvl_targets_parse_with_blark(sample, target):
     pytest.importorskip("blark")
     assert check_blark(sample[target].files["project.st"].decode(), "project.st") == []

@@ -27,6 +27,8 @@ class Dialect:
     qualified_only: bool = False
     # Initialised array globals written with their ARRAY spec in the ST (see writer._inline_array).
     inline_initialised_arrays: bool = False
+    # Bit access `w.3` on integer variables (matiec has none: there the HH_BIT helper reads a bit).
+    bit_access: bool = False
 
 
 TARGETS = MappingProxyType({
@@ -34,9 +36,9 @@ TARGETS = MappingProxyType({
     # OpenPLC v3 runs matiec (with -f -l -p -r -R -a): the same text is right for it.
     "openplc": Dialect("openplc", externals=True, st_template="project.st.j2", xml_globals="configuration"),
     "codesys": Dialect("codesys", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True),
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True),
     "twincat": Dialect("twincat", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True),
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True),
 })
 
 DEFAULT_TARGET = "matiec"
@@ -101,6 +103,8 @@ def for_target(project: IecProject, target: str) -> TargetProject:
     gvls = tuple(Gvl(name, tuple(sections), chosen.qualified_only) for name, sections in by_name.items())
     owner = {v.name.upper(): g.name for g in gvls for s in g.sections for v in s.vars}
     pous = tuple(_without_externals(pou, owner, chosen.qualified_only) for pou in project.pous)
+    if chosen.bit_access:
+        pous = _with_bit_access(pous)
     config = dataclasses.replace(project.configuration, globals=())
     return TargetProject(chosen, dataclasses.replace(project, pous=pous, configuration=config), gvls)
 
@@ -128,6 +132,32 @@ def _without_externals(pou: Pou, owner: dict[str, str], qualify: bool) -> Pou:
         return f"{owner[name.upper()]}.{name}"
 
     return dataclasses.replace(pou, sections=sections, body=_TOKEN.sub(rewrite, pou.body))
+
+
+_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)?"
+# HH_BIT(A, k) reads bit k of the DINT A; its argument is a DINT variable or a widened INT/SINT one.
+_BIT_OF_DINT = re.compile(rf"\bHH_BIT\((?P<var>{_NAME}), (?P<k>\d+)\)")
+_BIT_OF_NARROW = re.compile(rf"\bHH_BIT\((?P<conv>INT|SINT)_TO_DINT\((?P<var>{_NAME})\), (?P<k>\d+)\)")
+_WIDTH = MappingProxyType({"INT": 16, "SINT": 8})
+
+
+def _with_bit_access(pous: tuple[Pou, ...]) -> tuple[Pou, ...]:
+    """Reads of one bit of a variable written `var.k` (bit access), and the HH_BIT helper left out where no call
+    of it remains. A widened INT or SINT repeats its sign bit above its width, so a higher bit is its top bit."""
+    def narrow(m: re.Match) -> str:
+        return f"{m.group('var')}.{min(int(m.group('k')), _WIDTH[m.group('conv')] - 1)}"
+
+    def rewrite(pou: Pou) -> Pou:
+        if "HH_BIT(" not in pou.body:
+            return pou
+        body = _BIT_OF_NARROW.sub(narrow, pou.body)
+        body = _BIT_OF_DINT.sub(lambda m: f"{m.group('var')}.{m.group('k')}", body)
+        return dataclasses.replace(pou, body=body)
+
+    out = tuple(rewrite(p) if p.name != "HH_BIT" else p for p in pous)
+    if not any("HH_BIT(" in p.body for p in out if p.name != "HH_BIT"):
+        out = tuple(p for p in out if p.name != "HH_BIT")
+    return out
 
 
 def target_section(target: TargetProject) -> str:
