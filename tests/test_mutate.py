@@ -55,6 +55,20 @@ def test_sites_cover_every_operator_and_leave_the_library_alone():
     assert constants == {"24 -> 25", "24 -> 23"}
 
 
+def test_a_dropped_call_stays_a_statement_so_its_block_is_not_left_empty():
+    # Catches: the call's line deleted, which leaves `IF c THEN END_IF;` -- ST that no compiler accepts, so the
+    # mutant could only be counted invalid, never judged.
+    from transpiler.exec.stexec import load_st
+    st = ("FUNCTION_BLOCK Clamp\nVAR\n    x : BOOL;\nEND_VAR\n    x := TRUE;\nEND_FUNCTION_BLOCK\n"
+          "PROGRAM Main\nVAR\n    c : BOOL;\n    i_Clamp : Clamp;\nEND_VAR\n    IF c THEN\n        i_Clamp();\n    END_IF;\n"
+          "END_PROGRAM\nCONFIGURATION C\n    RESOURCE R ON PLC\n        TASK T(INTERVAL := T#20ms, PRIORITY := 0);\n"
+          "        PROGRAM P WITH T : Main;\n    END_RESOURCE\nEND_CONFIGURATION\n")
+    (dropped,) = [m for m in mutation_sites(st) if m.description == "call dropped"]
+    text = dropped.apply(st)
+    assert "        IF FALSE THEN i_Clamp(); END_IF;" in text.splitlines()
+    load_st(text, "mutant.st")          # compiles (raises StError otherwise)
+
+
 def _verdict(mutant: Mutant, outcome: str) -> Verdict:
     return Verdict(mutant, outcome, "", 0.0)
 

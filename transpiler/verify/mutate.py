@@ -126,7 +126,9 @@ def mutation_sites(st_text: str) -> list[Mutant]:
             add("drop_statement", index, pou, "assignment loses its effect",
                 f"{assignment.group(1)}{target} := {target};" + rest)
         elif CALL.match(code):
-            add("drop_statement", index, pou, "call dropped", None)
+            # kept as a statement that never runs: deleting the line could leave an IF or a loop with no statement
+            indent = code[:len(code) - len(code.lstrip())]
+            add("drop_statement", index, pou, "call dropped", f"{indent}IF FALSE THEN {code.strip()} END_IF;" + rest)
         for m in re.finditer(r"\b(AND|OR)\b", plain):
             new = "OR" if m.group(1) == "AND" else "AND"
             add("and_or", index, pou, f"{m.group(1)} -> {new} at column {m.start() + 1}",
