@@ -60,6 +60,16 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
                     "a path reaches the end of the file without EM")
 
 
+def routines_entered(op: Op) -> list[CallTarget]:
+    """The subprograms `op` calls: the target of a CM/CMT/CMF of a label, every entry of a CASE table (PLC
+    modules and unresolved targets are no subprogram of the project)."""
+    if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
+        return [op.call]
+    if op.code == "CASE":
+        return [t for t in op.case_targets if t is not None and t.file >= 0]
+    return []
+
+
 def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
     """Op indices reachable from an entry until EM (the body of a subprogram)."""
     ops = files[entry.file].ops

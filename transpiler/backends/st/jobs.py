@@ -19,7 +19,7 @@ import dataclasses
 from typing import Callable
 
 from transpiler.backends.iec_model import ArrayDim, DataType, IecVar, Pou, VarSection
-from transpiler.frontend.flow import routine_body
+from transpiler.frontend.flow import routine_body, routines_entered
 from transpiler.backends.st.routine import Unsupported
 from transpiler.ir import CallTarget, Op, Program
 
@@ -70,13 +70,6 @@ class RoutineJobs:
         return self._plan.numbers[op.call.key]
 
 
-def _callees(op: Op):
-    if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
-        yield op.call
-    elif op.code == "CASE":
-        yield from (t for t in op.case_targets if t is not None and t.file >= 0)
-
-
 def plan_jobs(program: Program) -> JobPlan:
     """Number the SUBM targets of `program` and find the routines the jobs call."""
     entries = {r.key: r for r in program.routines}
@@ -97,7 +90,7 @@ def plan_jobs(program: Program) -> JobPlan:
         seen.add(r.key)
         ops = program.files[r.file].ops
         for i in routine_body(program.files, r):
-            entered = list(_callees(ops[i]))
+            entered = routines_entered(ops[i])
             # Falling through into another routine's label runs that routine as a callee as well.
             if i != r.index and (r.file, i) in entries:
                 entered.append(entries[(r.file, i)])

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Iterable
-
 from transpiler.ir import CallTarget, Op, Program
+from transpiler.frontend.flow import routines_entered
 from transpiler.frontend.resolve import routine_body, successors
 
 REGS = ("LA", "WA", "SA", "X")
@@ -84,12 +83,6 @@ class Liveness:
         return {r.key: [(r.file, i) for i in self.bodies[r.key] if i != r.index and (r.file, i) in entries]
                 for r in roots}
 
-    def _callees(self, op: Op) -> Iterable[CallTarget]:
-        if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
-            yield op.call
-        elif op.code == "CASE":
-            yield from (t for t in op.case_targets if t is not None and t.file >= 0)
-
     def _solve(self) -> None:
         # The sets only grow from round to round, so every round that changes something adds one register to one
         # routine's entry or exit set at least: the lattice height bounds the rounds.
@@ -105,7 +98,7 @@ class Liveness:
                     changed = True
                 ops = self.program.files[key[0]].ops
                 for i in body:
-                    for callee in self._callees(ops[i]):
+                    for callee in routines_entered(ops[i]):
                         after = live.get(i + 1, frozenset()) if i + 1 < len(ops) else frozenset()
                         if callee.key in new_exit:
                             new_exit[callee.key] = new_exit[callee.key] | after
@@ -136,7 +129,7 @@ class Liveness:
                     out = out | live.get(s, frozenset())
                 use, d = use_def(op)
                 extra = frozenset()
-                for callee in self._callees(op):
+                for callee in routines_entered(op):
                     extra = extra | self.entry_use.get(callee.key, frozenset())
                 value = use | extra | (out - d)
                 if value != live[i]:
