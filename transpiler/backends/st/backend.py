@@ -503,11 +503,10 @@ class StBackend:
             for lhs, zero in layout.write_value(Operand("W", word), None, E.int_const(0)):
                 own.append(jobs.OwnValue(lhs, zero.text, "BYTE" if "[" in lhs else "INT"))
         name = self.names.name("pou:jobs", "HH_SubmitJobs")
-        instances = {number: self.instance_names[key] for key, number in self.job_plan.numbers.items()}
-        types = {self.instance_names[key]: self.pou_names[key] for key in self.job_plan.numbers}
-        labels = {self.instance_names[key]: f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}"
-                  for key in self.job_plan.numbers}
-        return jobs.jobs_program(name, self._job_queue(), self.semantics["submit_model"], instances, types, labels,
+        calls = [jobs.JobCall(number, self.instance_names[key], self.pou_names[key],
+                              f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}")
+                 for key, number in self.job_plan.numbers.items()]
+        return jobs.jobs_program(name, self._job_queue(), self.semantics["submit_model"], calls,
                                  own, self.stack[1] if self.stack is not None else None, self.names.get("in_job"),
                                  lambda wanted: self.names.name(f"jobs:{wanted}", wanted))
 

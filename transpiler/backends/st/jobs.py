@@ -110,12 +110,22 @@ class OwnValue:
     typ: str
 
 
-def jobs_program(name: str, queue: str, model: str, instances: dict[int, str], types: dict[str, str],
-                 labels: dict[str, str], own: list[OwnValue], stack_pointer: str | None, in_job: str | None,
-                 local_name: Callable[[str], str]) -> Pou:
-    """The PROGRAM `name` that runs the queued jobs: job number -> instance in `instances` (FB type in `types`,
-    described by `labels`); `own` are the variables each job has its own copy of; `stack_pointer` and `in_job`
-    the data stack pointer and the in-job flag where the program has them; `local_name` gives unique names."""
+@dataclasses.dataclass(frozen=True)
+class JobCall:
+    """One job subprogram as the job runner calls it: its number in the queue, its FB instance and type."""
+
+    number: int
+    instance: str
+    fb_type: str
+    label: str                      # where it comes from, for the comment
+
+
+def jobs_program(name: str, queue: str, model: str, calls: list[JobCall], own: list[OwnValue],
+                 stack_pointer: str | None, in_job: str | None, local_name: Callable[[str], str]) -> Pou:
+    """The PROGRAM `name` that runs the queued jobs (`calls`, by job number); `own` are the variables each job has
+    its own copy of; `stack_pointer` and `in_job` the data stack pointer and the in-job flag where the program has
+    them; `local_name` gives unique names."""
+    calls = sorted(calls, key=lambda c: c.number)
     saved = [(v, local_name(f"main_{v.target.replace('[', '_').replace(']', '')}")) for v in own]
     lines = [f"{queue}(CMD := {TAKE});",
              f"WHILE {queue}.RESULT <> 0 DO"]
@@ -126,8 +136,7 @@ def jobs_program(name: str, queue: str, model: str, instances: dict[int, str], t
     if in_job is not None:
         body.append(f"{in_job} := TRUE;")
     body.append(f"CASE {queue}.RESULT OF")
-    for number, inst in sorted(instances.items()):
-        body.append(f"    {number}: {inst}(); (* {labels[inst]} *)")
+    body += [f"    {c.number}: {c.instance}(); (* {c.label} *)" for c in calls]
     body.append("END_CASE;")
     if in_job is not None:
         body.append(f"{in_job} := FALSE;")
@@ -136,7 +145,7 @@ def jobs_program(name: str, queue: str, model: str, instances: dict[int, str], t
     lines += ["    " + line for line in body] + ["END_WHILE;"]
     if model != "same_cycle":
         lines.append(f"{queue}(CMD := {PHASE_END});")
-    local = [IecVar(inst, types[inst], comment=f"job {number}") for number, inst in sorted(instances.items())]
+    local = [IecVar(c.instance, c.fb_type, comment=f"job {c.number}") for c in calls]
     local += [IecVar(local, v.typ, comment=f"the main program's {v.target} while a job runs") for v, local in saved]
     return Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "\n".join(lines), comment=(
         "Phase 5 of the PLC cycle: the submit jobs the main program queued run now, one after the other, each to "
