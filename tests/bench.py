@@ -98,6 +98,7 @@ def bench_transpile(lines: int = 100_000) -> dict:
 
 def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
     """Co-simulation cycles per second on the sample project for each available ST backend (compile excluded)."""
+    from transpiler.verify import pipeline
     from transpiler.verify.cosim import builtin_side_factory, cosimulate
     from transpiler.diagnostics import Diagnostics
     from transpiler.verify.equiv import random_scenario
@@ -123,7 +124,7 @@ def bench_cosim(cycles: int = COSIM_CYCLES) -> dict:
         scenario = random_scenario(result.program, names, count, seed=3, machine_parameters=SAMPLE.parent / "MP_data.mp")
         # as `equiv` runs it: the reference with coverage; the loop's own time (res.seconds, setup excluded)
         res = cosimulate(result.program, factory, io_map_of(out.result), scenario, names, coverage=True,
-                         compiled=reference)
+                         compiled=reference, pipelined=pipeline.worthwhile())
         if res.error:
             print(f"co-simulation, {backend} backend: {res.error}")
         rate = res.cycles_run / res.seconds if res.seconds else 0.0

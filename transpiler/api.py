@@ -304,6 +304,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN."""
     from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify import pipeline
     from transpiler.verify.equiv import choose_backend, run_equivalence
     from transpiler.verify.guided import generate
     from transpiler.verify.simulate import project_names
@@ -339,7 +340,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
-                                 untranslated=tuple(transpiled.result.untranslated))
+                                 untranslated=tuple(transpiled.result.untranslated),
+                                 pipelined=pipeline.worthwhile())
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -7,13 +7,14 @@ import time
 from typing import Callable, Iterable, Mapping, Protocol, Sequence
 
 from transpiler.exec.interp import CompiledProgram
-from transpiler.exec.interp.machine import Machine
+from transpiler.exec.interp.machine import Coverage, Machine
 from transpiler.exec.interp.state import byte_cells
 from transpiler.exec.st_lines import st_origin
 from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
+from transpiler.verify import pipeline
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
@@ -74,6 +75,7 @@ class CosimResult:
     missing: tuple[MissingOperand, ...] = ()                # written by the original, not held by the translation
     excluded: tuple[tuple[str, str], ...] = ()              # (operand, reason) written by the original, not compared
     expectation_failures: tuple[ExpectationFailure, ...] = ()   # the scenario's `expect` entries, on the original
+    coverage: Coverage | None = None    # of the reference over the compared cycles, when asked for
 
     @property
     def equivalent(self) -> bool:
@@ -113,16 +115,6 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
     return Comparison(tuple(cols), inputs, missing)
-
-
-def _machine_changes(stimulus: Stimulus, cycle: int, machine: Machine, side: StSide) -> None:
-    """The scenario's machine data of this cycle, for both sides: each side's module calls run on a system
-    context of its own."""
-    translated = getattr(side, "sys", None)
-    for data in stimulus.machine_updates(cycle):
-        apply_machine_data(machine.sys, data)
-        if translated is not None and translated.sys is not None:
-            apply_machine_data(translated.sys, data)
 
 
 class _StDriver:
@@ -189,32 +181,69 @@ class _StDriver:
         self.side.run_cycle()
 
 
-class _IndexedColumns:
-    """Operands reached through the index register, compared every cycle from the cycle of their first indexed store.
+@dataclasses.dataclass(frozen=True)
+class NewColumn:
+    """An address the original stored to through the index register or a PLC module, compared from now on;
+    `latch` is an input's process-image value, which the translated side's input latch keeps from now on."""
+
+    display: str
+    ref: OperandRef
+    latch: int | None = None
+
+
+class _ReferenceHalf:
+    """The original program's half: its machine, the scenario's machine data and expectations, and the values
+    compared each cycle (the static columns, then the addresses reached through the index register).
 
     The reference interpreter records the address of every indexed store (Machine.indexed_writes); comparing whole
     operand spaces every cycle instead would cost thousands of reads per cycle. The set only grows, so an address
     stays compared after X has moved on, as a static column would."""
 
-    def __init__(self, machine: Machine, side: StSide, iomap: IoMap, names: NameTable, driver: _StDriver,
-                 static: list[OperandRef]):
+    def __init__(self, machine: Machine, stimulus: Stimulus, scenario: Scenario, comparison: Comparison,
+                 iomap: IoMap, names: NameTable):
         self.machine = machine
-        self.side = side
+        self.stimulus = stimulus
+        self.scenario = scenario
         self.iomap = iomap
         self.names = names
-        self.driver = driver
+        static = [ref for _, ref in comparison.columns]
+        self.static = machine.reader([(ref.kind, ref.addr) for ref in static])
         # The static columns already compare these; indexed stores come as bytes, and a static W/D column
         # compares its bytes.
         self.seen = {OperandRef(kind, addr) for ref in static for kind, addr in byte_cells(ref.kind, ref.addr)}
         self.seen.update(static)
         self.records = 0                           # interpreter records consumed so far
         self.columns: list[tuple[str, OperandRef]] = []
-        self.accessors: list[Accessor] = []
-        self.missing: list[MissingOperand] = []
-        self.original: Callable[[], list] = list
-        self.translated: Callable[[], list] = list
+        self.indexed: Callable[[], list] = list
+        self._news: tuple[list[NewColumn], list[MissingOperand], list[ExpectationFailure]] = ([], [], [])
+        self._read = lambda ref: machine.read(ref.kind, ref.addr)
 
-    def update(self) -> None:
+    def step(self, cycle: int) -> str | None:
+        """Run one cycle: the fault's text when the original faults in it, else None."""
+        machine = self.machine
+        for data in self.stimulus.machine_updates(cycle):
+            apply_machine_data(machine.sys, data)
+        report = machine.run_cycle(cycle, self.stimulus.writes(cycle), self.stimulus.nc_actions(cycle))
+        if report.faults:
+            fault = report.faults[0]
+            return f"{fault.code} in cycle {cycle}: {fault.message}"
+        if self.scenario.expect:
+            self._news[2].extend(check_expectations(self.scenario, cycle, self._read))
+        self._update()
+        return None
+
+    def values(self) -> tuple[list, list]:
+        return self.static(), self.indexed()
+
+    def take_news(self) -> tuple[list[NewColumn], list[MissingOperand], list[ExpectationFailure]]:
+        """Indexed columns, missing operands and expectation failures found since the last call."""
+        news, self._news = self._news, ([], [], [])
+        return news
+
+    def coverage(self):
+        return self.machine.coverage if self.machine.coverage_enabled else None
+
+    def _update(self) -> None:
         """Take the indexed stores recorded since the last call; O(1) when there are none."""
         count = self.machine.indexed_write_count
         if count == self.records:
@@ -224,29 +253,89 @@ class _IndexedColumns:
             self._add(OperandRef(kind, addr))
         self.records = count
         if len(self.columns) != before:
-            # Readers for all columns on both sides, rebuilt only when a new address appears.
-            self.original = self.machine.reader([(ref.kind, ref.addr) for _, ref in self.columns])
-            self.translated = side_reader(self.side, self.accessors)
+            self.indexed = self.machine.reader([(ref.kind, ref.addr) for _, ref in self.columns])
 
     def _add(self, ref: OperandRef) -> None:
         if ref in self.seen:
             return
         self.seen.add(ref)
-        acc = self.iomap.accessor(str(ref))
-        if acc is None:
+        if self.iomap.accessor(str(ref)) is None:
             # The translation has no place for an operand the original wrote: a finding, never skipped.
-            self.missing.append(MissingOperand(str(ref), self.names.display_name(ref), ()))
+            self._news[1].append(MissingOperand(str(ref), self.names.display_name(ref), ()))
             return
-        self.columns.append((self.names.display_name(ref), ref))
-        self.accessors.append(acc)
-        if ref.kind == "I":
-            self.driver.latch_input(str(ref), self.machine.state.process_inputs[ref.addr])
+        display = self.names.display_name(ref)
+        self.columns.append((display, ref))
+        latch = self.machine.state.process_inputs[ref.addr] if ref.kind == "I" else None
+        self._news[0].append(NewColumn(display, ref, latch))
 
-    def divergence(self, cycle: int) -> Divergence | None:
-        """The first indexed column whose values differ."""
-        if not self.columns:
-            return None
-        return first_divergence(cycle, self.columns, self.original(), self.translated())
+
+class _TranslatedHalf:
+    """The translated program's half: its driver and the values it holds at the compared places."""
+
+    def __init__(self, side: StSide, driver: "_StDriver", stimulus: Stimulus, accessors: list[Accessor]):
+        self.side = side
+        self.driver = driver
+        self.stimulus = stimulus
+        self.static = side_reader(side, accessors)
+        self.columns: list[tuple[str, OperandRef]] = []
+        self.accessors: list[Accessor] = []
+        self.indexed: Callable[[], list] = list
+
+    def step(self, cycle: int) -> None:
+        """The scenario's machine data for this side's own system context, then one cycle through the driver."""
+        translated = getattr(self.side, "sys", None)
+        if translated is not None and translated.sys is not None:
+            for data in self.stimulus.machine_updates(cycle):
+                apply_machine_data(translated.sys, data)
+        self.driver.cycle(cycle, self.stimulus.writes(cycle), self.stimulus.nc_actions(cycle))
+
+    def add(self, columns: list[NewColumn]) -> None:
+        if not columns:
+            return
+        for column in columns:
+            self.columns.append((column.display, column.ref))
+            self.accessors.append(self.driver.iomap.accessor(str(column.ref)))
+            if column.latch is not None:
+                self.driver.latch_input(str(column.ref), column.latch)
+        self.indexed = side_reader(self.side, self.accessors)
+
+    def values(self) -> tuple[list, list]:
+        return self.static(), self.indexed()
+
+
+class _LocalReference:
+    """The reference half run in this process, cycle by cycle beside the translated one."""
+
+    def __init__(self, half: _ReferenceHalf):
+        self.half = half
+        self.missing: list = []
+        self.failures: list = []
+        self._new: list[NewColumn] = []
+        self._values: tuple[list, list] = ([], [])
+
+    def fault(self, cycle: int) -> str | None:
+        fault = self.half.step(cycle)
+        if fault is None:
+            self._values = self.half.values()
+            self._new, missing, failures = self.half.take_news()
+            self.missing += [(cycle, m) for m in missing]
+            self.failures += failures
+        return fault
+
+    def new_columns(self, cycle: int) -> list[NewColumn]:
+        return self._new
+
+    def agrees(self, cycle: int, values: tuple[list, list]) -> bool:
+        return self._values == values
+
+    def values(self, cycle: int) -> tuple[list, list]:
+        return self._values
+
+    def coverage(self):
+        return self.half.coverage()
+
+    def close(self) -> None:
+        pass
 
 
 def first_divergence(cycle: int, columns: Sequence[tuple[str, OperandRef]], a_values: list,
@@ -286,13 +375,18 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                stimulus: Stimulus | None = None, *, cycles: int | None = None, coverage: bool = False,
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
-               compiled: CompiledProgram | None = None, base_mp: Mapping | None = None) -> CosimResult:
-    """Run both programs in lockstep; stop at the first divergence, runtime fault or after `cycles`. Callers that
-    co-simulate one program many times pass it `compiled` once (see build_machine).
+               compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
+               pipelined: bool = False) -> CosimResult:
+    """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
+    that co-simulate one program many times pass it `compiled` once (see build_machine).
 
     Compared after every cycle: the static columns of comparison_for (one bulk read where the side can; `record`
     sees only these), then every address the original has written through the index register or a PLC module so
     far, from that cycle on (result.compared_indexed); one the translation has no place for is result.missing.
+
+    `pipelined` runs the reference interpreter in a forked process of its own, ahead of the translated side
+    (pipeline.py), where the platform can fork and no `record` wants every cycle's values; the result is the same
+    as in lockstep. It pays where a second CPU is free (pipeline.worthwhile).
 
     `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
     reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
@@ -307,12 +401,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     comparison = comparison_for(program, names, iomap)
     mismatches = preset_mismatches(side, iomap, program, parameters[0], cycle_time)
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
-    original = machine.reader([(ref.kind, ref.addr) for _, ref in comparison.columns])
-    translated = side_reader(side, accessors)
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
-    indexed = _IndexedColumns(machine, side, iomap, names, driver, [ref for _, ref in comparison.columns])
+    translated = _TranslatedHalf(side, driver, stimulus, accessors)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
-    start = time.perf_counter()
     result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine,
                          compared_operands=tuple(str(ref) for _, ref in comparison.columns),
                          missing=comparison.missing, excluded=comparison.excluded)
@@ -321,47 +412,66 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                         + "; ".join(mismatches))
         result.error_side = "scenario"
         return result
-    failures: list[ExpectationFailure] = []
-    read_original: Callable[[OperandRef], int | str] = lambda ref: machine.read(ref.kind, ref.addr)  # noqa: E731
+    start = time.perf_counter()
+    half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
+    pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
+    reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
+    try:
+        _compare_cycles(result, reference, translated, comparison, total, progress, record)
+        complete = result.cycles_run == total
+        if coverage and (complete or not pipelined):
+            result.coverage = reference.coverage()
+    finally:
+        reference.close()
+    result.seconds = time.perf_counter() - start
+    last = result.cycles_run - 1
+    result.missing += tuple(m for cycle, m in reference.missing if cycle <= last)
+    result.expectation_failures = tuple(f for f in reference.failures if f.cycle <= last)
+    result.compared_indexed = len(translated.columns)
+    if pipelined:
+        result.machine = None           # this process's machine did not run
+        if coverage and not complete:
+            # The reference process ran on beyond the end; coverage counts the cycles the reference ran before
+            # the run ended (the cycle that ended it by a fault included), as in lockstep, so they run again here.
+            for cycle in range(result.cycles_run + (result.error is not None)):
+                half.step(cycle)
+            result.coverage = half.coverage()
+            result.machine = machine
+    return result
+
+
+def _compare_cycles(result: CosimResult, reference, translated: _TranslatedHalf, comparison: Comparison,
+                    total: int, progress: Callable[[int, int], None] | None,
+                    record: Callable[[int, list, list], None] | None) -> None:
+    """The cycle loop: both halves run each cycle, then their compared values meet (see cosimulate)."""
     for cycle in range(total):
-        writes = stimulus.writes(cycle)
-        actions = stimulus.nc_actions(cycle)
-        _machine_changes(stimulus, cycle, machine, side)
-        report = machine.run_cycle(cycle, writes, actions)
-        if report.faults:
-            fault = report.faults[0]
-            result.error, result.error_side = f"{fault.code} in cycle {cycle}: {fault.message}", "original"
-            break
+        fault = reference.fault(cycle)
+        if fault is not None:
+            result.error, result.error_side = fault, "original"
+            return
         try:
-            driver.cycle(cycle, writes, actions)
+            translated.step(cycle)
         except HandshakeTimeout as exc:
             result.error = f"E-SIM-HANDSHAKE-TIMEOUT on the translated side in cycle {exc.cycle}"
             result.error_side = "translated"
-            break
+            return
         except Exception as exc:  # noqa: BLE001 - an executor fault is a result, reported with its message
             result.error = f"translated program failed in cycle {cycle}: {type(exc).__name__}: {exc}"
             result.error_side = "translated"
-            break
+            return
         result.cycles_run = cycle + 1
-        if scenario.expect:
-            failures += check_expectations(scenario, cycle, read_original)
-        a_values = original()
-        b_values = translated()
+        translated.add(reference.new_columns(cycle))
+        b_values = translated.values()
         if record is not None:
-            record(cycle, a_values, b_values)
-        result.divergence = first_divergence(cycle, comparison.columns, a_values, b_values)
-        if result.divergence is None:
-            indexed.update()
-            result.divergence = indexed.divergence(cycle)
-        if result.divergence is not None:
-            break
+            record(cycle, reference.values(cycle)[0], b_values[0])
+        if not reference.agrees(cycle, b_values):
+            a_values = reference.values(cycle)
+            result.divergence = (first_divergence(cycle, comparison.columns, a_values[0], b_values[0])
+                                 or first_divergence(cycle, translated.columns, a_values[1], b_values[1]))
+            if result.divergence is not None:
+                return
         if progress is not None:
             progress(cycle + 1, total)
-    result.seconds = time.perf_counter() - start
-    result.compared_indexed = len(indexed.columns)
-    result.missing += tuple(indexed.missing)
-    result.expectation_failures = tuple(failures)
-    return result
 
 
 def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:

@@ -248,9 +248,10 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
                     names: NameTable, backend: str, *, shrink_divergences: bool = True, vcd_dir: Path | None = None,
                     progress: Callable[[str], Callable[[int, int], None]] | None = None,
                     base_mp: Mapping | None = None,
-                    untranslated: tuple[tuple[Span, str], ...] = ()) -> EquivalenceResult:
+                    untranslated: tuple[tuple[Span, str], ...] = (), pipelined: bool = False) -> EquivalenceResult:
     """Co-simulate every scenario; shrink each divergent stimulus. Raises CompileFailed on bad scenario input.
-    `base_mp` are the machine parameters the translation was made with (see cosim.cosimulate)."""
+    `base_mp` are the machine parameters the translation was made with, `pipelined` runs the reference in a process
+    of its own where it can (see cosim.cosimulate)."""
     outcomes: list[Outcome] = []
     coverage_sets: list = []
     reference = compile_program(program, coverage=True, exact=False)      # fast code, exact coverage
@@ -259,14 +260,14 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
         record = (lambda c, a, b: traces.append((c, a, b))) if vcd_dir else None
         res = cosimulate(program, make_side, iomap, scenario, names, coverage=True,
                          progress=progress(scenario.name) if progress else None, record=record, compiled=reference,
-                         base_mp=base_mp)
+                         base_mp=base_mp, pipelined=pipelined)
         outcome = Outcome(res)
         if res.divergence is not None and shrink_divergences:
             outcome.shrunk, outcome.shrink_runs = shrink(program, make_side, iomap, scenario, names, res,
                                                          compile_program(program), base_mp)
         outcomes.append(outcome)
-        if res.machine is not None and res.machine.coverage_enabled:
-            coverage_sets.append(res.machine.coverage)
+        if res.coverage is not None:
+            coverage_sets.append(res.coverage)
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
     return EquivalenceResult(outcomes, backend, coverage_summary(program, coverage_sets), tuple(untranslated))
