@@ -148,3 +148,21 @@ def test_matiec_side_gives_the_same_result(sample):
     lockstep, piped = _both(program, factory, iomap, scenario, names)
     assert lockstep.equivalent
     _assert_same(lockstep, piped)
+
+
+def test_a_store_where_the_original_never_stores_shows_after_the_last_cycle(tmp_path):
+    """No column names byte 310 (the original stores to W104/W108 only): the sweep of the byte array after the
+    last cycle finds the translation's stray store, in both modes."""
+    program, out, names, scenario = _indexed(tmp_path, 400)
+    line = re.search(r"^( *)HH_MEM\[101 \+ (\w+)\] := .*;$", out.st_text, re.M)
+    assert line is not None, "the store of W100[X]'s high byte moved: update the test"
+    indent, index = line.group(1), line.group(2)
+    broken = out.st_text.replace(line.group(0), f"{line.group(0)}\n{indent}HH_MEM[302 + {index}] := 5;")
+    lockstep, piped = _both(program, builtin_side_factory(broken), io_map_of(out.result), scenario, names)
+    assert lockstep.divergence is not None
+    assert (lockstep.divergence.cycle, lockstep.divergence.operand) == (399, "B306")
+    assert (lockstep.divergence.original, lockstep.divergence.translated) == (0, 5)
+    assert lockstep.swept > 1000
+    _assert_same(lockstep, piped)
+    correct = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result), scenario, names)
+    assert correct.equivalent and correct.swept == lockstep.swept

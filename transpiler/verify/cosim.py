@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import time
 from typing import Callable, Iterable, Mapping, Protocol, Sequence
 
@@ -30,7 +31,8 @@ class StSide(Protocol):
     def get(self, path: str): ...
     def set(self, path: str, value) -> None: ...
     def run_cycle(self) -> None: ...
-    # Optional: `bulk_reader(places) -> () -> list` reads all compared places at once (the matiec side has one).
+    # Optional: `bulk_reader(places) -> () -> list` reads all compared places at once (the matiec side has one);
+    # `snapshot(places) -> list` reads many places one time (the built-in executor has one).
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,6 +78,7 @@ class CosimResult:
     excluded: tuple[tuple[str, str], ...] = ()              # (operand, reason) written by the original, not compared
     expectation_failures: tuple[ExpectationFailure, ...] = ()   # the scenario's `expect` entries, on the original
     coverage: Coverage | None = None    # of the reference over the compared cycles, when asked for
+    swept: int = 0                      # addresses compared once after the last cycle (sweep_refs)
 
     @property
     def equivalent(self) -> bool:
@@ -115,6 +118,29 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
     return Comparison(tuple(cols), inputs, missing)
+
+
+def sweep_refs(program: Program, iomap: IoMap, static: Iterable[OperandRef]) -> tuple[OperandRef, ...]:
+    """Every address of each operand space the translation holds as a whole array (its io map has a row `M*`,
+    `B*`, `S*`, ...), except the static columns. They are compared once, after the last cycle of a run: a
+    translation that stores where the original never does (an index one too far) shows there, although no
+    column names that address. Bytes of a W or D operand that has a variable of its own are left out: the
+    array's slot of such a byte is never used."""
+    static = set(static)
+    skip = {OperandRef(kind, addr) for ref in static for kind, addr in byte_cells(ref.kind, ref.addr)} | static
+    for row in iomap.rows:
+        m = re.fullmatch(r"([BWD])(\d+)", row.operand)
+        if m is not None and "@" not in row.iec_type:
+            skip.update(OperandRef(kind, addr) for kind, addr in byte_cells(m.group(1), int(m.group(2))))
+    ranges = program.semantics.profile.ranges
+    refs = []
+    for kind in "IOMTCBS":
+        if f"{kind}*" not in iomap.by_operand:
+            continue
+        for lo, hi in getattr(ranges, kind):
+            refs.extend(ref for ref in (OperandRef(kind, addr) for addr in range(lo, hi + 1))
+                        if ref not in skip and iomap.accessor(str(ref)) is not None)
+    return tuple(refs)
 
 
 class _StDriver:
@@ -200,8 +226,9 @@ class _ReferenceHalf:
     stays compared after X has moved on, as a static column would."""
 
     def __init__(self, machine: Machine, stimulus: Stimulus, scenario: Scenario, comparison: Comparison,
-                 iomap: IoMap, names: NameTable):
+                 iomap: IoMap, names: NameTable, sweep: tuple[OperandRef, ...] = ()):
         self.machine = machine
+        self.sweep = sweep
         self.stimulus = stimulus
         self.scenario = scenario
         self.iomap = iomap
@@ -242,6 +269,11 @@ class _ReferenceHalf:
 
     def coverage(self):
         return self.machine.coverage if self.machine.coverage_enabled else None
+
+    def final_values(self) -> list:
+        """The values of the sweep's addresses (see sweep_refs), read once after the last cycle."""
+        read = self.machine.read
+        return [read(ref.kind, ref.addr) for ref in self.sweep]
 
     def _update(self) -> None:
         """Take the indexed stores recorded since the last call; O(1) when there are none."""
@@ -302,6 +334,14 @@ class _TranslatedHalf:
     def values(self) -> tuple[list, list]:
         return self.static(), self.indexed()
 
+    def final_values(self, refs: tuple[OperandRef, ...]) -> list:
+        """The values at `refs`, read once: in one call where the side can (its snapshot or bulk reader)."""
+        accessors = [self.driver.iomap.accessor(str(ref)) for ref in refs]
+        snapshot = getattr(self.side, "snapshot", None)
+        if snapshot is not None:
+            return snapshot([acc.place for acc in accessors])
+        return side_reader(self.side, accessors)()
+
 
 class _LocalReference:
     """The reference half run in this process, cycle by cycle beside the translated one."""
@@ -333,6 +373,9 @@ class _LocalReference:
 
     def coverage(self):
         return self.half.coverage()
+
+    def final_values(self) -> list:
+        return self.half.final_values()
 
     def close(self) -> None:
         pass
@@ -383,6 +426,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     Compared after every cycle: the static columns of comparison_for (one bulk read where the side can; `record`
     sees only these), then every address the original has written through the index register or a PLC module so
     far, from that cycle on (result.compared_indexed); one the translation has no place for is result.missing.
+    After the last cycle of a run that agreed so far, every other address of the spaces the translation holds as
+    arrays (sweep_refs, result.swept).
 
     `pipelined` runs the reference interpreter in a forked process of its own, ahead of the translated side
     (pipeline.py), where the platform can fork and no `record` wants every cycle's values; the result is the same
@@ -413,12 +458,16 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         result.error_side = "scenario"
         return result
     start = time.perf_counter()
-    half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
+    sweep = sweep_refs(program, iomap, (ref for _, ref in comparison.columns))
+    half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names, sweep)
     pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
     reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
     try:
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
         complete = result.cycles_run == total
+        if complete and result.divergence is None and result.error is None:
+            result.divergence = _swept_divergence(total - 1, sweep, reference.final_values(),
+                                                  translated.final_values(sweep), names)
         if coverage and (complete or not pipelined):
             result.coverage = reference.coverage()
     finally:
@@ -428,6 +477,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     result.missing += tuple(m for cycle, m in reference.missing if cycle <= last)
     result.expectation_failures = tuple(f for f in reference.failures if f.cycle <= last)
     result.compared_indexed = len(translated.columns)
+    result.swept = len(sweep)
     if pipelined:
         result.machine = None           # this process's machine did not run
         if coverage and not complete:
@@ -438,6 +488,14 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.coverage = half.coverage()
             result.machine = machine
     return result
+
+
+def _swept_divergence(cycle: int, refs: tuple[OperandRef, ...], a_values: list, b_values: list,
+                      names: NameTable) -> Divergence | None:
+    if a_values == b_values:
+        return None
+    ref, a, b = next((ref, a, b) for ref, a, b in zip(refs, a_values, b_values) if a != b)
+    return Divergence(cycle, str(ref), names.display_name(ref), a, b)
 
 
 def _compare_cycles(result: CosimResult, reference, translated: _TranslatedHalf, comparison: Comparison,
@@ -474,12 +532,10 @@ def _compare_cycles(result: CosimResult, reference, translated: _TranslatedHalf,
             progress(cycle + 1, total)
 
 
-def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
-    """The values of `places` in the built-in executor's runtime as the io map's accessors read them (BOOL as 0/1,
-    integers as they are, multi-byte operands combined from their bytes and sign-extended, texts as str), from one
-    generated read of every variable involved instead of one path lookup per operand and cycle."""
+def _read_plan(places: list[Place]) -> tuple[list[str], list[tuple[int, int, bool, bool]]]:
+    """The variables to read for `places` and, per place, (first variable, width, big endian, text)."""
     paths: list[str] = []
-    plan: list[tuple[int, int, bool, bool]] = []          # (first path, width, big endian, text)
+    plan: list[tuple[int, int, bool, bool]] = []
     for place in places:
         plan.append((len(paths), place.width, place.big_endian, place.text))
         if place.width == 0:
@@ -487,6 +543,14 @@ def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
         else:
             array, base = place.path[:-1].split("[")
             paths.extend(f"{array}[{int(base) + k}]" for k in range(place.width))
+    return paths, plan
+
+
+def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
+    """The values of `places` in the built-in executor's runtime as the io map's accessors read them (BOOL as 0/1,
+    integers as they are, multi-byte operands combined from their bytes and sign-extended, texts as str), from one
+    generated read of every variable involved instead of one path lookup per operand and cycle."""
+    paths, plan = _read_plan(places)
     raw = rt.reader(paths)
     items = []
     for first, width, big, text in plan:
@@ -499,6 +563,24 @@ def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
     env = {"raw": raw}
     exec(compile("def read():\n    v = raw()\n    return [" + ", ".join(items) + "]\n", "<cosim-reader>", "exec"), env)
     return env["read"]
+
+
+def runtime_snapshot(rt, places: list[Place]) -> list:
+    """The values runtime_reader(rt, places)() gives, read once without generating a reader: for the sweep after
+    the last cycle, where thousands of places are read one time."""
+    paths, plan = _read_plan(places)
+    v = rt.values(paths)
+    out: list = []
+    for first, width, big, text in plan:
+        if width == 0:
+            out.append(str(v[first]) if text else int(v[first]))
+            continue
+        word = 0
+        for k in range(width):
+            word |= (v[first + (width - 1 - k if big else k)] & 255) << (8 * k)
+        sign = 1 << (8 * width - 1)
+        out.append((word ^ sign) - sign)
+    return out
 
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
@@ -525,6 +607,9 @@ def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable
 
         def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
             return runtime_reader(self.rt, places)
+
+        def snapshot(self, places: list[Place]) -> list:
+            return runtime_snapshot(self.rt, places)
 
         def run_cycle(self) -> None:
             try:

@@ -33,6 +33,7 @@ class ReferenceHalf(Protocol):
     def values(self) -> tuple[list, list]: ...               # compared values now: static columns, indexed columns
     def take_news(self) -> tuple[list, list, list]: ...      # new indexed columns, missing operands, failures
     def coverage(self) -> Any: ...                           # the machine's coverage (None without)
+    def final_values(self) -> list: ...                      # values read once after the last cycle
 
 
 def fork_available() -> bool:
@@ -108,7 +109,7 @@ def _serve(conn, half: ReferenceHalf, total: int) -> None:
                 handle(conn.recv())
             while cycle - acknowledged > AHEAD:
                 handle(conn.recv())
-        conn.send(("end", end, half.coverage() if end is None else None))
+        conn.send(("end", end, (half.coverage(), half.final_values()) if end is None else (None, [])))
         while True:
             handle(conn.recv())
     except EOFError:
@@ -137,7 +138,8 @@ class PipelinedReference:
         self._columns: dict[int, list] = {}
         self.missing: list = []
         self.failures: list = []
-        self._end: tuple[tuple[int, str] | None, Any] | None = None        # (fault, coverage) once the run ended
+        # (fault, (coverage, final values)) once the run ended
+        self._end: tuple[tuple[int, str] | None, tuple[Any, list]] | None = None
         self._values: dict[int, tuple[list, list]] = {}
         self._acknowledged = 0
 
@@ -192,7 +194,13 @@ class PipelinedReference:
         """The coverage of a run that went through all its cycles (the reference process sends it at its end)."""
         while self._end is None:
             self._receive()
-        return self._end[1]
+        return self._end[1][0]
+
+    def final_values(self) -> list:
+        """The values read after the last cycle of a run that went through all its cycles."""
+        while self._end is None:
+            self._receive()
+        return self._end[1][1]
 
     def close(self) -> None:
         self._process.kill()

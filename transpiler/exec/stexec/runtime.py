@@ -15,6 +15,7 @@ from transpiler.exec.stexec.model import CompiledProject, PouInfo, VarInfo
 from transpiler.exec.stexec.pycode import normalise_address, storage_attr
 from transpiler.exec.stexec.rtlib import HELPERS, f32, wrap_int
 
+_ELEMENT_PATH = re.compile(r"([A-Za-z_][A-Za-z0-9_.]*)\[([0-9]+)\]")
 _PATH_TOKEN = re.compile(r"\s*(?:(%[A-Za-z]+[0-9.]*[0-9])|([A-Za-z_][A-Za-z0-9_]*)|\.|\[([^\]]*)\])")
 
 
@@ -308,6 +309,11 @@ class Runtime:
         return out
 
     def _resolve_uncached(self, path: str) -> _Ref:
+        element = _ELEMENT_PATH.fullmatch(path)
+        if element is not None:
+            # `A[5]`, `inst.A[5]`: the array's reference is cached, so a sweep over all elements of an array
+            # resolves its name once.
+            return self._element(self._resolve(element.group(1)), element.group(2), path)
         toks = self._tokens(path)
         if not toks:
             raise KeyError(path)
@@ -397,6 +403,28 @@ class Runtime:
     def set(self, path: str, value: Any) -> None:
         ref = self._resolve(path)
         ref.set(ref.to_st(value))
+
+    def values(self, paths: list[str]) -> list:
+        """get(path) of every path, read once: the elements of a one-dimensional array are taken from the array
+        itself, so reading all elements of large arrays resolves each array once instead of every element."""
+        arrays: dict[str, tuple[Any, int, int, Callable[[Any], Any]] | None] = {}
+        out = []
+        for path in paths:
+            element = _ELEMENT_PATH.fullmatch(path)
+            if element is not None:
+                name = element.group(1)
+                if name not in arrays:
+                    ref = self._resolve(name)
+                    b = T.base(ref.ty)
+                    one_dim = isinstance(b, T.ArrayT) and len(b.dims) == 1
+                    arrays[name] = (ref.get(), *b.dims[0], from_st_converter(b.elem)) if one_dim else None
+                array = arrays[name]
+                index = int(element.group(2))
+                if array is not None and array[1] <= index <= array[2]:
+                    out.append(array[3](array[0][index - array[1]]))
+                    continue
+            out.append(self.get(path))
+        return out
 
     def reader(self, paths: list[str]) -> Callable[[], list]:
         """A function returning get(path) for every path, in order, in one call: the paths are resolved once and
