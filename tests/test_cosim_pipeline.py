@@ -40,7 +40,7 @@ def _assert_same(lockstep, piped):
     assert piped.cycles_run == lockstep.cycles_run
     assert piped.divergence == lockstep.divergence
     assert piped.error == lockstep.error and piped.error_side == lockstep.error_side
-    assert piped.compared_indexed == lockstep.compared_indexed
+    assert piped.compared_indexed == lockstep.compared_indexed and piped.swept == lockstep.swept
     assert piped.missing == lockstep.missing
     assert piped.expectation_failures == lockstep.expectation_failures
     assert lockstep.coverage is not None and piped.coverage == lockstep.coverage

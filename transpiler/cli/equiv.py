@@ -89,6 +89,8 @@ def _compared_text(r) -> str:
     text = f"{r.compared} operands compared per cycle"
     if r.compared_indexed:
         text += f" + {r.compared_indexed} indexed addresses from their first indexed store"
+    if r.swept:
+        text += f"; {r.swept} other addresses after the last cycle"
     return text
 
 

@@ -78,7 +78,7 @@ class CosimResult:
     excluded: tuple[tuple[str, str], ...] = ()              # (operand, reason) written by the original, not compared
     expectation_failures: tuple[ExpectationFailure, ...] = ()   # the scenario's `expect` entries, on the original
     coverage: Coverage | None = None    # of the reference over the compared cycles, when asked for
-    swept: int = 0                      # addresses compared once after the last cycle (sweep_refs)
+    swept: int = 0                      # addresses compared once after the last cycle (sweep_refs), if it came to that
 
     @property
     def equivalent(self) -> bool:
@@ -466,6 +466,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
         complete = result.cycles_run == total
         if complete and result.divergence is None and result.error is None:
+            result.swept = len(sweep)
             result.divergence = _swept_divergence(total - 1, sweep, reference.final_values(),
                                                   translated.final_values(sweep), names)
         if coverage and (complete or not pipelined):
@@ -477,7 +478,6 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     result.missing += tuple(m for cycle, m in reference.missing if cycle <= last)
     result.expectation_failures = tuple(f for f in reference.failures if f.cycle <= last)
     result.compared_indexed = len(translated.columns)
-    result.swept = len(sweep)
     if pipelined:
         result.machine = None           # this process's machine did not run
         if coverage and not complete:

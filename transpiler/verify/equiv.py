@@ -281,6 +281,7 @@ def report_json(result: EquivalenceResult) -> str:
         r = o.result
         runs.append({"scenario": r.scenario, "cycles": r.cycles_run, "compared_operands": r.compared,
                      "compared_indexed_addresses": r.compared_indexed,
+                     "compared_after_last_cycle": r.swept,
                      "equivalent": r.equivalent, "error": r.error, "seconds": round(r.seconds, 3),
                      "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
                      "compared": list(r.compared_operands),
