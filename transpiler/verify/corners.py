@@ -42,10 +42,18 @@ class Corners:
     remanent_markers: tuple[str, ...]             # markers the program writes (start values)
 
     def word_value(self, rng: random.Random, kind: str) -> int:
-        """A corner value in the range of a `kind` (B/W/D) operand: mostly near a constant, sometimes an edge."""
+        """A value in the range of a `kind` (B/W/D) operand: mostly near a constant, sometimes an edge, sometimes
+        a random bit pattern (a status word the program unpacks into bits has no constant to be near: a random
+        pattern sets any few of its bits at once with a fair chance)."""
         bits = _WIDTH_BITS.get(kind, 16)
         low, high = -(1 << (bits - 1)), (1 << (bits - 1)) - 1
-        value = rng.choice(self.values) if rng.random() < 0.85 else rng.choice(_EDGES)
+        draw = rng.random()
+        if draw < 0.7:
+            value = rng.choice(self.values)
+        elif draw < 0.85:
+            value = rng.choice(_EDGES)
+        else:
+            value = rng.randint(low, high)
         return max(low, min(high, value))
 
     def nc_value(self, rng: random.Random, low: int = 0, high: int = _WORD_MAX) -> int:

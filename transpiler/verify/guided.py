@@ -5,7 +5,8 @@ As a fuzzer does, the search keeps a corpus (the user's scenarios, then every ge
 coverage) and mutates its members: an NC job moved to a corner value (verify/corners.py), an NC job inserted at a
 random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner,
 rare random toggles added. Each candidate runs on the reference interpreter alone (no ST side, with coverage);
-one that reaches a branch outcome or CASE entry not seen before is kept, cut just after the last cycle that
+one that reaches a branch outcome or CASE entry not seen before, or a marker or output the program writes in a
+state (0 or 1) not seen before, is kept, cut just after the last cycle that
 brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
 budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
 
@@ -24,12 +25,12 @@ from transpiler.exec.compiled.shim import NcActionError
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.verify.corners import Corners, harvest
-from transpiler.verify.scenario import Event, NcAction, NameTable, RandomStimulus, Scenario, bind
-from transpiler.verify.simulate import apply_machine_data, build_machine
+from transpiler.verify.scenario import Event, NcAction, NameTable, OperandRef, RandomStimulus, Scenario, bind
+from transpiler.verify.simulate import apply_machine_data, build_machine, program_operands
 from transpiler.verify.stimulus import build_stimulus
 
 MARGIN = 5                  # cycles kept after the last one that brought new coverage (effects settle)
-SEARCH_FACTOR = 12          # interpreter cycles the search may spend per cycle of the budget
+SEARCH_FACTOR = 40          # interpreter cycles the search may spend per cycle of the budget
 SEARCH_MIN = 20_000
 SEARCH_MAX = 120_000
 STALE_LIMIT = 400           # candidates in a row without anything new: the search stops
@@ -57,6 +58,10 @@ class Search:
     base_mp: Mapping | None
     seen: set = dataclasses.field(default_factory=set)
     interpreter_cycles: int = 0
+    # Bit operands the program writes, whose 0 and 1 count as features too (toggle coverage): straight-line logic
+    # (a clamp that closes only after a delay, an output that needs several inputs at once) has no branch, and
+    # without this the search would never ask for the states that make it act.
+    toggled: tuple[OperandRef, ...] = ()
 
     def probe(self, scenario: Scenario) -> Probe | None:
         """Run `scenario` on the reference interpreter; None when the scenario is unusable (bad NC job)."""
@@ -69,6 +74,10 @@ class Search:
         local: set = set()
         new: set = set()
         last_new, count, ok = -1, 0, 0
+        read_toggled = machine.reader([(ref.kind, ref.addr) for ref in self.toggled])
+        # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
+        # per-cycle check costs little once the common states were seen.
+        unseen = [(i, v) for i, ref in enumerate(self.toggled) for v in (0, 1) if ("bit", str(ref), v) not in self.seen]
         for cycle in range(stimulus.cycles):
             for data in stimulus.machine_updates(cycle):
                 apply_machine_data(machine.sys, data)
@@ -89,6 +98,13 @@ class Search:
                 if fresh:
                     new |= fresh
                     last_new = cycle
+            if unseen:
+                values = read_toggled()
+                reached = [(i, v) for i, v in unseen if values[i] == v]
+                if reached:
+                    new.update(("bit", str(self.toggled[i]), v) for i, v in reached)
+                    last_new = cycle
+                    unseen = [pair for pair in unseen if pair not in reached]
         return Probe(ok, frozenset(new), last_new)
 
     def keep(self, probe: Probe) -> None:
@@ -191,7 +207,10 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         return []
     rng = random.Random(seed)
     corners = harvest(program, names)
-    search = Search(program, names, corners, compile_program(program, coverage=True, exact=False), base_mp)
+    toggled = tuple(sorted((ref for ref in program_operands(program)[1] if ref.kind in "MO"),
+                           key=lambda ref: (ref.kind, ref.addr)))
+    search = Search(program, names, corners, compile_program(program, coverage=True, exact=False), base_mp,
+                    toggled=toggled)
     limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
     corpus: list[Scenario] = []
     for scenario in seeds:
