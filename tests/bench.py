@@ -183,8 +183,25 @@ def bench_readability() -> list[dict]:
     return out
 
 
-BENCHES: dict[str, Callable[..., object]] = {"readability": bench_readability, "mutants": bench_mutants, "frontend": bench_frontend, "interpreter": bench_interpreter,
-                                             "transpile": bench_transpile, "cosim": bench_cosim}
+GENERATOR_TARGET = 0.05            # seconds per random program of the differential tests (issue 8)
+
+
+def bench_difftest_generator(programs: int = 40) -> dict:
+    """The random-program generator of the differential tests: seconds per program."""
+    from tests.difftest.generator import generate
+    start = time.perf_counter()
+    for seed in range(programs):
+        generate(seed)
+    per_program = (time.perf_counter() - start) / programs
+    print(f"difftest generator: {programs} programs, {per_program * 1000:.1f} ms per program; "
+          f"target <= {GENERATOR_TARGET * 1000:.0f} ms: {'met' if per_program <= GENERATOR_TARGET else 'MISSED'}")
+    return {"seconds_per_program": round(per_program, 4)}
+
+
+BENCHES: dict[str, Callable[..., object]] = {"readability": bench_readability, "mutants": bench_mutants,
+                                             "frontend": bench_frontend, "interpreter": bench_interpreter,
+                                             "transpile": bench_transpile, "cosim": bench_cosim,
+                                             "difftest": bench_difftest_generator}
 
 
 def main(argv: list[str] | None = None) -> int:
