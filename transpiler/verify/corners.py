@@ -38,7 +38,9 @@ class Corners:
     inputs: tuple[str, ...]                       # display names of the inputs the program reads
     foreign_words: tuple[tuple[str, str], ...]    # (name, kind) of B/W/D read, never written, not the NC model's
     foreign_markers: tuple[str, ...]              # markers read, never written, not the NC model's
-    remanent_words: tuple[tuple[str, str], ...]   # (name, kind) of B/W/D the program writes (start values)
+    # (name, kind) of B/W/D whose power-on value the stimulus chooses: the ones the program writes, and the ones
+    # it only reads outside the NC interface (memory another module fills)
+    remanent_words: tuple[tuple[str, str], ...]
     remanent_markers: tuple[str, ...]             # markers the program writes (start values)
 
     def word_value(self, rng: random.Random, kind: str) -> int:
@@ -122,7 +124,8 @@ def harvest(program: Program, names: NameTable) -> Corners:
     foreign_words = tuple((name(r), r.kind) for r in foreign if r.kind in _WIDTH_BITS
                           and profile.is_interface(r.kind, r.addr, _WIDTH_BITS[r.kind] // 8))
     foreign_markers = tuple(name(r) for r in foreign if r.kind == "M")
-    remanent = sorted((r for r in written if drivable(r)), key=lambda r: (r.kind, r.addr))
+    filled_elsewhere = {r for r in foreign if r.kind in _WIDTH_BITS and (name(r), r.kind) not in foreign_words}
+    remanent = sorted((r for r in set(written) | filled_elsewhere if drivable(r)), key=lambda r: (r.kind, r.addr))
     return Corners(
         constants=tuple(sorted(constants)),
         tables=tuple(sorted(tables)),
