@@ -197,7 +197,7 @@ def test_fall_through_into_a_routine_is_a_call_when_another_file_has_a_routine_a
     assert (1, sub_b.index) in entries                  # the case this test is about really occurs
     out = transpile_program(result.program, Diagnostics(), {}, {"st"})
     sub_a = out.st_text.split("FUNCTION_BLOCK Sub_a", 1)[1].split("END_FUNCTION_BLOCK", 1)[0]
-    assert "i_Sub_b();" in sub_a and "O1 := I1;" not in sub_a
+    assert "Sub_b_1();" in sub_a and "O1 := I1;" not in sub_a
 
 
 def test_fall_through_target_keeps_the_registers_live_at_the_end_of_the_routine_that_falls_in(tmp_path):

@@ -133,5 +133,5 @@ def test_jobs_run_in_a_second_program_after_the_main_one_with_their_own_register
     runner = st_text[st_text.index("PROGRAM HH_SubmitJobs"):]
     runner = runner[:runner.index("END_PROGRAM")]
     # X is saved, cleared for the job and restored around the job's call
-    save, clear, call, restore = (runner.index(t) for t in (":= HH_X;", "HH_X := 0;", "i_Job();", "HH_X := main_"))
+    save, clear, call, restore = (runner.index(t) for t in (":= HH_X;", "HH_X := 0;", "Job_1();", "HH_X := main_"))
     assert save < clear < call < restore

@@ -86,8 +86,13 @@ class StBackend:
         self.pou_names: dict[tuple[int, int], str] = {}
         for r in self.program.routines:
             self.pou_names[r.key] = self.names.name(f"pou:{r.file}:{r.index}", r.label)
+
+    def _name_instances(self) -> None:
+        """One instance per subprogram (its markers are the program's, so every call shares it), named after it
+        as the module call blocks are (`Clamp_axis_1`); named after the layout, so that the program's own symbols
+        keep their names where one looks like an instance's."""
         self.instance_names: dict[tuple[int, int], str] = {
-            key: self.names.name(f"inst:{key}", f"i_{name}") for key, name in self.pou_names.items()}
+            key: self.names.name(f"inst:{key}", f"{name}_1") for key, name in self.pou_names.items()}
 
     # ---- build
 
@@ -96,6 +101,7 @@ class StBackend:
         self._reserve_pou_names(helpers)
         layout = Layout(self.program, self.names, self.helpers_used.add)
         self.layout = layout
+        self._name_instances()
         self.liveness = Liveness(self.program)
         self.stack: tuple[str, str] | None = None
         self.stack_analysis = StackAnalysis(self.program, _module_effect)
