@@ -383,9 +383,9 @@ class StBackend:
         comments = list(file.ops[entry.index].comments) if body and not is_main else []
         if comments:
             comment += "\n" + "\n".join(comments)
-        return passes.propagate_temporaries(
-            Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), printer.body_text(statements),
-                comment=comment, source_map=(SourceRange(file.path, first, last),)))
+        pou = Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "",
+                  comment=comment, source_map=(SourceRange(file.path, first, last),))
+        return passes.propagate_temporaries(printer.with_statements(pou, statements))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""
@@ -403,12 +403,12 @@ class StBackend:
         else:
             write = S.Assign(element, value)
             read = S.Assign("Q", E.Expr(element, "BOOL", frozenset([arr.upper(), "IDX"]), var=element))
-        body = printer.body_text([S.If(E.var("WRITE", "BOOL"), (write,)), read])
-        return Pou(layout.bit_access[kind], "FUNCTION_BLOCK", (
+        return printer.with_statements(Pou(layout.bit_access[kind], "FUNCTION_BLOCK", (
             VarSection("VAR_INPUT", (IecVar("IDX", "DINT", comment=f"{kind} operand address (base + X)"),
                                      IecVar("WRITE", "BOOL"), IecVar("VALUE", "BOOL"))),
             VarSection("VAR_OUTPUT", (IecVar("Q", "BOOL", comment="value of the operand (after a write: the new one)"),)),
-        ), body, comment=f"indexed access to the {kind} operands: named operands keep their variables")
+        ), "", comment=f"indexed access to the {kind} operands: named operands keep their variables"),
+            [S.If(E.var("WRITE", "BOOL"), (write,)), read])
 
     def _presets(self, layout: Layout) -> dict[str, int]:
         """Preset variables (in cycles) of the timers and counters the program uses; the MP file gives the defaults."""
@@ -454,9 +454,8 @@ class StBackend:
                                     "the data stack is empty at the start of each cycle (A-19)"))
         if service:
             service.append(S.Comment("phase 4: main program"))
-        body = "\n".join([printer.body_text(service), main.body] if service else [main.body])
         sections = (VarSection("VAR", tuple(local)),) + main.sections[1:] if local else main.sections
-        return dataclasses.replace(main, body=body, sections=sections)
+        return printer.with_statements(dataclasses.replace(main, sections=sections), service + list(main.statements))
 
     def _order(self, pous: dict[tuple[int, int], Pou]) -> list[Pou]:
         """Callees before callers (matiec needs declarations before use)."""

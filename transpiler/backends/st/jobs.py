@@ -152,10 +152,10 @@ def jobs_program(name: str, queue: str, model: str, calls: list[JobCall], own: l
         statements.append(command(PHASE_END))
     local = [IecVar(c.instance, c.fb_type, comment=f"job {c.number}") for c in calls]
     local += [IecVar(local, v.typ, comment=f"the main program's {v.target} while a job runs") for v, local in saved]
-    return Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), printer.body_text(statements), comment=(
+    return printer.with_statements(Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "", comment=(
         "Phase 5 of the PLC cycle: the submit jobs the main program queued run now, one after the other, each to "
         "its end. A job starts with cleared accumulators, index register, data stack and error markers; the main "
-        "program's are put back after it."))
+        "program's are put back after it.")), statements)
 
 
 def queue_types(model: str) -> list[DataType]:

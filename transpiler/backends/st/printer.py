@@ -6,9 +6,10 @@ already (exprs.py prints them). The body is unindented: the writers indent it in
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Iterable
 
-from transpiler.backends.iec_model import st_comment
+from transpiler.backends.iec_model import Pou, st_comment
 from transpiler.backends.st.stmt import (SIMPLE, Assign, Call, Case, CaseBranch, Comment, Exit, If, Repeat, Return,
                                         Stmt, While)
 
@@ -18,6 +19,12 @@ INDENT = "    "
 def body_text(block: Iterable[Stmt]) -> str:
     """The ST text of a POU body."""
     return "\n".join(lines(block))
+
+
+def with_statements(pou: Pou, block: Iterable[Stmt]) -> Pou:
+    """`pou` with `block` as its statement tree and the body printed from it."""
+    statements = tuple(block)
+    return dataclasses.replace(pou, statements=statements, body=body_text(statements))
 
 
 def lines(block: Iterable[Stmt], depth: int = 0) -> list[str]:

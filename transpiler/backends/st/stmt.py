@@ -114,6 +114,18 @@ def blocks(stmt: Stmt) -> Iterator[tuple[Stmt, ...]]:
         yield stmt.body
 
 
+def with_blocks(stmt: Stmt, new: list[tuple[Stmt, ...]]) -> Stmt:
+    """`stmt` with its nested blocks replaced by `new`, given in the order of `blocks(stmt)`."""
+    if isinstance(stmt, If):
+        return dataclasses.replace(stmt, then=new[0], orelse=new[1])
+    if isinstance(stmt, Case):
+        branches = tuple(dataclasses.replace(b, body=body) for b, body in zip(stmt.branches, new))
+        return dataclasses.replace(stmt, branches=branches, orelse=new[-1])
+    if isinstance(stmt, (While, Repeat)):
+        return dataclasses.replace(stmt, body=new[0])
+    return stmt
+
+
 def walk(block: tuple[Stmt, ...] | list[Stmt]) -> Iterator[Stmt]:
     """Every statement of `block`, nested ones included, in textual order."""
     for stmt in block:
