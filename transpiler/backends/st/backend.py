@@ -19,7 +19,7 @@ from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
-from transpiler.backends.st import passes, printer
+from transpiler.backends.st import passes, printer, simplify
 from transpiler.backends.st import stmt as S
 from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
@@ -385,6 +385,8 @@ class StBackend:
             comment += "\n" + "\n".join(comments)
         pou = Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "",
                   comment=comment, source_map=(SourceRange(file.path, first, last),))
+        registers = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
+        statements = simplify.simplify(statements, registers)
         return passes.propagate_temporaries(printer.with_statements(pou, statements))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
