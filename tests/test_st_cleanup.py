@@ -8,7 +8,9 @@ from pathlib import Path
 from transpiler import api
 from transpiler.backends.iec_model import IecVar, Pou, VarSection
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.passes import propagate_temporaries
+from transpiler.backends.st.printer import with_statements
 from transpiler.backends.st.readability import measure
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -30,26 +32,54 @@ def test_boolean_constants_drop_out():
     assert E.b_or(a, E.bool_const(True)).text == "TRUE"
 
 
-def _fb(body: str, temps: list[str]) -> Pou:
+def _fb(statements: list[S.Stmt], temps: list[str]) -> Pou:
     local = tuple(IecVar(t, "BOOL") for t in temps) + (IecVar("keep", "BOOL"),)
-    return Pou("F", "FUNCTION_BLOCK", (VarSection("VAR", local),), body)
+    return with_statements(Pou("F", "FUNCTION_BLOCK", (VarSection("VAR", local),), ""), statements)
+
+
+def _b(name: str) -> E.Expr:
+    return E.var(name, "BOOL")
 
 
 def test_temporary_read_once_by_the_next_statement_is_propagated():
-    pou = propagate_temporaries(_fb("tmp1 := a AND b;\nIF tmp1 THEN\n    x := TRUE;\nEND_IF;\ny := NOT tmp2;", ["tmp1", "tmp2"]))
+    pou = propagate_temporaries(_fb([S.Assign("tmp1", E.b_and(_b("a"), _b("b"))),
+                                     S.If(_b("tmp1"), (S.Assign("x", E.bool_const(True)),)),
+                                     S.Assign("y", E.b_not(_b("tmp2")))], ["tmp1", "tmp2"]))
     assert pou.body.startswith("IF (a AND b) THEN") and "tmp1" not in pou.body
+    assert pou.statements[0].cond.deps == {"A", "B"}
     assert [v.name for v in pou.sections[0].vars] == ["tmp2", "keep"]
 
 
 def test_temporary_read_in_a_loop_condition_or_later_stays():
-    body = "tmp1 := a;\nWHILE tmp1 DO\n    a := FALSE;\nEND_WHILE;\ntmp2 := b;\nb := FALSE;\nc := tmp2;"
-    pou = propagate_temporaries(_fb(body, ["tmp1", "tmp2"]))
-    assert pou.body == body
+    statements = [S.Assign("tmp1", _b("a")), S.While(_b("tmp1"), (S.Assign("a", E.bool_const(False)),)),
+                  S.Assign("tmp2", _b("b")), S.Assign("b", E.bool_const(False)), S.Assign("c", _b("tmp2"))]
+    pou = _fb(statements, ["tmp1", "tmp2"])
+    assert propagate_temporaries(pou) == pou
 
 
 def test_temporary_read_twice_stays():
-    body = "tmp1 := a;\nx := tmp1 AND tmp1;"
-    assert propagate_temporaries(_fb(body, ["tmp1"])).body == body
+    pou = _fb([S.Assign("tmp1", _b("a")), S.Assign("x", E.b_and(_b("tmp1"), _b("tmp1")))], ["tmp1"])
+    assert propagate_temporaries(pou) == pou
+
+
+def test_temporary_propagates_inside_a_nested_block_past_comments():
+    # Catches: only the top-level block searched, or a comment taken for the statement that reads the value.
+    inner = (S.Assign("tmp1", E.b_not(_b("a"))), S.Comment("source comment"), S.Assign("x", _b("tmp1")))
+    pou = propagate_temporaries(_fb([S.If(_b("c"), inner, (S.Return(),))], ["tmp1"]))
+    assert pou.body == "IF c THEN\n    (* source comment *)\n    x := (NOT a);\nELSE\n    RETURN;\nEND_IF;"
+
+
+def test_fb_output_passed_to_its_own_next_call_stays_named():
+    # The call reads its input before it changes its output: the temporary holds the old output.
+    statements = [S.Assign("tmp1", E.var("acc.Q", "BOOL")), S.Call("acc", (("IDX", E.int_const(3)), ("VALUE", _b("tmp1"))))]
+    pou = _fb(statements, ["tmp1"])
+    assert propagate_temporaries(pou) == pou
+
+
+def test_temporary_written_by_the_next_statement_stays():
+    # Catches: an occurrence as the next statement's target taken for a read (the value would be lost).
+    pou = _fb([S.Assign("tmp1", _b("a")), S.Assign("tmp1", _b("b"))], ["tmp1"])
+    assert propagate_temporaries(pou) == pou
 
 
 def test_sample_has_no_unfolded_constant_comparison_and_no_stack_lines():

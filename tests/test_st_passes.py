@@ -14,6 +14,7 @@ from transpiler.backends.st.arith import wrap32
 from transpiler.backends.st.layout import Layout
 from transpiler.backends.st.liveness import Liveness, use_def
 from transpiler.backends.st.names import MAX_LEN, NameTable, legalise
+from transpiler.backends.st import printer
 from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.symbolic import Executor
@@ -69,14 +70,14 @@ def routine_lines(program: Program, entry: CallTarget | None = None, fallback: b
     ctx = RoutineContext(layout, out, lambda i: live.at(key, i + 1) if i + 1 < len(file.ops) else frozenset(),
                          register, helpers.add, temp, lambda o: "KF", lambda: ("HH_STACK", "HH_SP"),
                          lambda n: f"MODULE{n}()", program.semantics, AccessorPool().pick)
-    info = RoutineInfo(key, entry, file, body, entry.key == (0, 0), lambda t: f"i_{t.label}()", {},
+    info = RoutineInfo(key, entry, file, body, entry.key == (0, 0), lambda t: f"i_{t.label}", {},
                        live.exit(key), lambda i: live.at(key, i))
     if fallback:
         state_machine(info, Executor(ctx))
     else:
         Structurer(info, Executor(ctx)).region(min(body), max(body) + 1)
     out.flush_comments()
-    return [line for line in out.lines if not line.strip().startswith("(*")]
+    return [line for line in printer.lines(out.block) if not line.strip().startswith("(*")]
 
 
 def structure_lines(program: Program, fallback: bool = False) -> list[str]:

@@ -63,7 +63,10 @@ class DataType:
 
 @dataclasses.dataclass(frozen=True)
 class Pou:
-    """A POU. `body` is the complete ST statement text of the body, unindented, lines joined with '\\n'."""
+    """A POU. `body` is the complete ST statement text of the body, unindented, lines joined with '\\n'.
+
+    `statements` is the statement tree (backends/st/stmt.py) the ST back end printed `body` from; POUs whose body
+    is written as text (the library) have none, and a rewrite of the text alone drops it."""
 
     name: str
     kind: PouKind
@@ -72,6 +75,7 @@ class Pou:
     return_type: str | None = None
     comment: str | None = None
     source_map: tuple[SourceRange, ...] = ()
+    statements: tuple[object, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)

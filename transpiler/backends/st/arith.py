@@ -6,6 +6,7 @@ from types import MappingProxyType
 
 from transpiler.ir import Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.routine import ExecutorPart
 
@@ -90,23 +91,16 @@ class ArithmeticMixin(ExecutorPart):
         self.s.regs["WA"] = None
         self.prepare_write(result_var.upper())
         if a.var is None or a.var.upper() != result_var.upper():
-            self.ctx.out.line(f"{result_var} := {a.text};")
-        a_text = result_var
+            self.ctx.out.add(S.Assign(result_var, a))
+        wa = E.var(result_var, "DINT")
         marker = self.ctx.layout.bit_lvalue(Operand("M", flag))
         self.prepare_write(E.base_name(marker.text))
         self.ctx.helper(fn)
-        out = self.ctx.out
-        out.line(f"IF {b.wrap(E.PREC_EQ)} <> 0 THEN")
-        out.indent += 1
-        out.line(f"{result_var} := {fn}({a_text}, {b.text});")
-        out.line(f"{marker.text} := FALSE;")
-        out.indent -= 1
-        out.line("ELSE")
-        out.indent += 1
-        out.line(f"{marker.text} := TRUE;")
-        out.indent -= 1
-        out.line("END_IF;")
-        return E.var(result_var, "DINT")
+        nonzero = E.binop("<>", b, E.int_const(0), "BOOL", E.PREC_EQ, 0, 1)
+        self.ctx.out.add(S.If(nonzero, (S.Assign(result_var, E.call(fn, [wa, b], "DINT")),
+                                        S.Assign(marker.text, E.bool_const(False))),
+                              (S.Assign(marker.text, E.bool_const(True)),)))
+        return wa
 
     def _sext(self, a: Expr, width: int) -> Expr:
         if width == 32:

@@ -19,10 +19,11 @@ from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.layout import GlobalVar, Layout
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
-from transpiler.backends.st import passes
+from transpiler.backends.st import passes, printer, simplify
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
-from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported
+from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported, tag
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
 
@@ -294,7 +295,7 @@ class StBackend:
 
         def call_name(target: CallTarget) -> str:
             callees.add(target.key)
-            return f"{self.instance_names[target.key]}()"
+            return self.instance_names[target.key]
 
         iface = self._interface(key)
         slots: dict[tuple[int, str], str] = {}
@@ -320,9 +321,8 @@ class StBackend:
                 return False
             callees.add(target.key)
             params, results = self._names_of_interface(target.key)
-            span = file.ops[i].span
             executors[-1].call_interface(self.instance_names[target.key], callee, params, results, live,
-                                         f"(* {span.file}:{span.line} *)")
+                                         tag(file.ops[i].span))
             return True
 
         accessors = AccessorPool()
@@ -352,13 +352,14 @@ class StBackend:
             self.diags.report("E-UNSUPPORTED", where, f"{pou_name}: not translated: {exc}; the whole routine is "
                               "left out of the ST")
             emitter = Emitter()
-            emitter.line(f"(* NOT TRANSLATED: {str(exc).replace('*)', '* )')} *)")
-            emitter.line(f"{self._register('LA')} := {self._register('LA')};")
+            emitter.add(S.Comment(f"NOT TRANSLATED: {exc}"))
+            la = self._register("LA")
+            emitter.add(S.Assign(la, E.var(la, "BOOL")))
         emitter.flush_comments()
         self.calls[key] = callees
-        lines = emitter.lines
-        if not any(not line.strip().startswith("(*") for line in lines):
-            lines = lines + ["RETURN; (* the subprogram does nothing *)"]
+        statements = emitter.block
+        if not S.has_code(statements):
+            statements = statements + [S.Return("the subprogram does nothing")]
         local = [IecVar(self.instance_names[c], self.pou_names[c]) for c in sorted(callees)]
         local += [IecVar(inst, self.layout.bit_access[kind], comment=f"indexed access to {kind} operands")
                   for kind, inst in accessors.instances()]
@@ -367,7 +368,7 @@ class StBackend:
         local += [IecVar(n, t) for n, t in temps]
         if not structured:
             local.append(IecVar("HH_STATE", "DINT", comment="state of the irreducible control flow"))
-        if not local and (iface is None or iface.empty) and not any(not line.strip().startswith("(*") or "RETURN" in line for line in lines[:-1]):
+        if not local and (iface is None or iface.empty) and _at_most_one_line_of_code(statements):
             # matiec rejects a FUNCTION_BLOCK or PROGRAM without any declaration.
             local.append(IecVar("HH_UNUSED", "BOOL", comment="placeholder: the subprogram has no data of its own"))
         sections = []
@@ -388,27 +389,34 @@ class StBackend:
         comments = list(file.ops[entry.index].comments) if body and not is_main else []
         if comments:
             comment += "\n" + "\n".join(comments)
-        return passes.propagate_temporaries(
-            Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "\n".join(lines),
-                comment=comment, source_map=(SourceRange(file.path, first, last),)))
+        pou = Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "",
+                  comment=comment, source_map=(SourceRange(file.path, first, last),))
+        registers = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
+        statements = simplify.simplify(statements, registers)
+        return passes.propagate_temporaries(printer.with_statements(pou, statements))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""
         layout = self.layout
         arr = layout.bit_arrays[kind]
         named = layout.named_bits(kind)
-        write = [f"        {addr}: {name} := VALUE;" for addr, name in named]
-        read = [f"    {addr}: Q := {name};" for addr, name in named]
+        index, value = E.var("IDX", "DINT"), E.var("VALUE", "BOOL")
+        element = f"{arr}[IDX]"
         if named:
-            body = ("IF WRITE THEN\n    CASE IDX OF\n" + "\n".join(write) + f"\n    ELSE\n        {arr}[IDX] := VALUE;\n"
-                    "    END_CASE;\nEND_IF;\nCASE IDX OF\n" + "\n".join(read) + f"\nELSE\n    Q := {arr}[IDX];\nEND_CASE;")
+            write: S.Stmt = S.Case(index, tuple(S.CaseBranch((addr,), (S.Assign(name, value),)) for addr, name in named),
+                                   (S.Assign(element, value),))
+            read: S.Stmt = S.Case(index, tuple(S.CaseBranch((addr,), (S.Assign("Q", E.var(name, "BOOL")),))
+                                               for addr, name in named),
+                                  (S.Assign("Q", E.Expr(element, "BOOL", frozenset([arr.upper(), "IDX"]), var=element)),))
         else:
-            body = f"IF WRITE THEN\n    {arr}[IDX] := VALUE;\nEND_IF;\nQ := {arr}[IDX];"
-        return Pou(layout.bit_access[kind], "FUNCTION_BLOCK", (
+            write = S.Assign(element, value)
+            read = S.Assign("Q", E.Expr(element, "BOOL", frozenset([arr.upper(), "IDX"]), var=element))
+        return printer.with_statements(Pou(layout.bit_access[kind], "FUNCTION_BLOCK", (
             VarSection("VAR_INPUT", (IecVar("IDX", "DINT", comment=f"{kind} operand address (base + X)"),
                                      IecVar("WRITE", "BOOL"), IecVar("VALUE", "BOOL"))),
             VarSection("VAR_OUTPUT", (IecVar("Q", "BOOL", comment="value of the operand (after a write: the new one)"),)),
-        ), body, comment=f"indexed access to the {kind} operands: named operands keep their variables")
+        ), "", comment=f"indexed access to the {kind} operands: named operands keep their variables"),
+            [S.If(E.var("WRITE", "BOOL"), (write,)), read])
 
     def _presets(self, layout: Layout) -> dict[str, int]:
         """Preset variables (in cycles) of the timers and counters the program uses; the MP file gives the defaults."""
@@ -428,32 +436,34 @@ class StBackend:
 
     def _with_services(self, main: Pou, layout: Layout) -> Pou:
         prof = self.semantics.profile
-        lines: list[str] = []
+        service: list[S.Stmt] = []
         local = list(main.sections[0].vars) if main.sections else []
         if layout.timers or layout.counters:
-            lines.append("(* phase 3: timer and counter service, see docs/language.md#timers-and-counters *)")
+            service.append(S.Comment("phase 3: timer and counter service, see docs/language.md#timers-and-counters"))
         for t in layout.timers:
             inst = self.names.name(f"timer:{t}", f"HH_Timer{t}")
             local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
             start = layout.timer_var("T", t)
             running = layout.timer_var("T", t - prof.timer_start[0] + prof.timer_running[0])
-            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(TIMER_MP, t)]});")
-            lines.append(f"{running.text} := {inst}.RUNNING;")
+            preset = E.var(self.preset_vars[(TIMER_MP, t)], "DINT")
+            service.append(S.Call(inst, (("START", start), ("PRESET", preset))))
+            service.append(S.Assign(running.text, E.var(f"{inst}.RUNNING", "BOOL")))
         for c in layout.counters:
             inst = self.names.name(f"counter:{c}", f"HH_Counter{c}")
             local.append(IecVar(inst, "HH_COUNTER", comment=f"service of C{c}"))
             start = layout.timer_var("C", prof.counter_start[0] + c)
             running = layout.timer_var("C", prof.counter_running[0] + c)
             release = layout.timer_var("C", prof.counter_release[0] + c)
-            lines.append(f"{inst}(START := {start.text}, PRESET := {self.preset_vars[(COUNTER_MP, c)]}, RELEASE := {release.text});")
-            lines.append(f"{running.text} := {inst}.RUNNING;")
+            preset = E.var(self.preset_vars[(COUNTER_MP, c)], "DINT")
+            service.append(S.Call(inst, (("START", start), ("PRESET", preset), ("RELEASE", release))))
+            service.append(S.Assign(running.text, E.var(f"{inst}.RUNNING", "BOOL")))
         if self.stack is not None:
-            lines.append(f"{self.stack[1]} := 0; (* the data stack is empty at the start of each cycle (A-19) *)")
-        if lines:
-            lines.append("(* phase 4: main program *)")
-        body = "\n".join(lines + [main.body])
+            service.append(S.Assign(self.stack[1], E.int_const(0, "INT"),
+                                    "the data stack is empty at the start of each cycle (A-19)"))
+        if service:
+            service.append(S.Comment("phase 4: main program"))
         sections = (VarSection("VAR", tuple(local)),) + main.sections[1:] if local else main.sections
-        return dataclasses.replace(main, body=body, sections=sections)
+        return printer.with_statements(dataclasses.replace(main, sections=sections), service + list(main.statements))
 
     def _order(self, pous: dict[tuple[int, int], Pou]) -> list[Pou]:
         """Callees before callers (matiec needs declarations before use)."""
@@ -537,6 +547,13 @@ class StBackend:
                                             job_program.name))
         return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
                              (Task(task, cycle, 0),), tuple(programs), tuple(sections))
+
+
+def _at_most_one_line_of_code(statements: list[S.Stmt]) -> bool:
+    """Every statement but the last is a comment (one that names no RETURN), and the last prints as one line."""
+    *before, last = statements
+    return all(isinstance(s, S.Comment) and "RETURN" not in s.text + (s.note or "") for s in before) \
+        and printer.one_line(last)
 
 
 def _module_effect(number: int) -> Effect | None:

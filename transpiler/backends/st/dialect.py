@@ -131,7 +131,7 @@ def _without_externals(pou: Pou, owner: dict[str, str], qualify: bool) -> Pou:
             return match.group(0)
         return f"{owner[name.upper()]}.{name}"
 
-    return dataclasses.replace(pou, sections=sections, body=_TOKEN.sub(rewrite, pou.body))
+    return dataclasses.replace(pou, sections=sections, body=_TOKEN.sub(rewrite, pou.body), statements=())
 
 
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)?"
@@ -152,7 +152,7 @@ def _with_bit_access(pous: tuple[Pou, ...]) -> tuple[Pou, ...]:
             return pou
         body = _BIT_OF_NARROW.sub(narrow, pou.body)
         body = _BIT_OF_DINT.sub(lambda m: f"{m.group('var')}.{m.group('k')}", body)
-        return dataclasses.replace(pou, body=body)
+        return dataclasses.replace(pou, body=body, statements=())
 
     out = tuple(rewrite(p) if p.name != "HH_BIT" else p for p in pous)
     if not any("HH_BIT(" in p.body for p in out if p.name != "HH_BIT"):

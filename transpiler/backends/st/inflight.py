@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Callable
 
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.liveness import REGS
 from transpiler.backends.st.routine import ExecutorPart
@@ -75,10 +76,10 @@ class InFlightMixin(ExecutorPart):
         # is evaluated before the assignment, so it may read the variable.
         self.s.regs[reg] = None
         self.prepare_write(name.upper())
-        self.ctx.out.line(f"{name} := {value.text};")
+        self.ctx.out.add(S.Assign(name, value))
 
     def _assign_raw(self, lvalue: str, value: Expr) -> None:
-        self.ctx.out.line(f"{lvalue} := {value.text};")
+        self.ctx.out.add(S.Assign(lvalue, value))
 
     def store(self, target: Callable[[], Expr], value: Callable[[], Expr], keep: frozenset[str]) -> Expr:
         """Emit `target := value`; both are built after in-flight values that read the target were saved."""
@@ -86,7 +87,7 @@ class InFlightMixin(ExecutorPart):
         deferred = self.prepare_write(E.base_name(t.text), keep)
         t = target()
         v = value()
-        self.ctx.out.line(f"{t.text} := {v.text};")
+        self.ctx.out.add(S.Assign(t.text, v))
         self.drop(deferred)
         return t
 

@@ -20,6 +20,9 @@ from typing import Callable
 
 from transpiler.backends.iec_model import ArrayDim, DataType, IecVar, Pou, VarSection
 from transpiler.frontend.flow import routine_body, routines_entered
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st import printer
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.routine import Unsupported
 from transpiler.ir import CallTarget, Op, Program
 
@@ -127,30 +130,32 @@ def jobs_program(name: str, queue: str, model: str, calls: list[JobCall], own: l
     them; `local_name` gives unique names."""
     calls = sorted(calls, key=lambda c: c.number)
     saved = [(v, local_name(f"main_{v.target.replace('[', '_').replace(']', '')}")) for v in own]
-    lines = [f"{queue}(CMD := {TAKE});",
-             f"WHILE {queue}.RESULT <> 0 DO"]
-    body = [f"{local} := {v.target};" for v, local in saved]
-    body += [f"{v.target} := {v.clear};" for v, _ in saved]
+    def command(number: int) -> S.Call:
+        return S.Call(queue, (("CMD", E.int_const(number)),))
+
+    result = E.Expr(f"{queue}.RESULT", "DINT", frozenset([queue.upper()]), 0, MAX_ID)
+    body: list[S.Stmt] = [S.Assign(local, E.Expr(v.target, v.typ, frozenset([E.base_name(v.target)]), var=v.target))
+                          for v, local in saved]
+    body += [S.Assign(v.target, E.Expr(v.clear, v.typ)) for v, _ in saved]
     if stack_pointer is not None:
-        body.append(f"{stack_pointer} := 0;")
+        body.append(S.Assign(stack_pointer, E.int_const(0, "INT")))
     if in_job is not None:
-        body.append(f"{in_job} := TRUE;")
-    body.append(f"CASE {queue}.RESULT OF")
-    body += [f"    {c.number}: {c.instance}(); (* {c.label} *)" for c in calls]
-    body.append("END_CASE;")
+        body.append(S.Assign(in_job, E.bool_const(True)))
+    body.append(S.Case(result, tuple(S.CaseBranch((c.number,), (S.Call(c.instance, note=c.label),)) for c in calls)))
     if in_job is not None:
-        body.append(f"{in_job} := FALSE;")
-    body += [f"{v.target} := {local};" for v, local in saved]
-    body += [f"{queue}(CMD := {ENDED});", f"{queue}(CMD := {TAKE});"]
-    lines += ["    " + line for line in body] + ["END_WHILE;"]
+        body.append(S.Assign(in_job, E.bool_const(False)))
+    body += [S.Assign(v.target, E.var(local, v.typ)) for v, local in saved]
+    body += [command(ENDED), command(TAKE)]
+    pending = E.binop("<>", result, E.int_const(0), "BOOL", E.PREC_EQ, 0, 1)
+    statements: list[S.Stmt] = [command(TAKE), S.While(pending, tuple(body))]
     if model != "same_cycle":
-        lines.append(f"{queue}(CMD := {PHASE_END});")
+        statements.append(command(PHASE_END))
     local = [IecVar(c.instance, c.fb_type, comment=f"job {c.number}") for c in calls]
     local += [IecVar(local, v.typ, comment=f"the main program's {v.target} while a job runs") for v, local in saved]
-    return Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "\n".join(lines), comment=(
+    return printer.with_statements(Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "", comment=(
         "Phase 5 of the PLC cycle: the submit jobs the main program queued run now, one after the other, each to "
         "its end. A job starts with cleared accumulators, index register, data stack and error markers; the main "
-        "program's are put back after it."))
+        "program's are put back after it.")), statements)
 
 
 def queue_types(model: str) -> list[DataType]:

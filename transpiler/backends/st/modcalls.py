@@ -17,11 +17,12 @@ from __future__ import annotations
 
 from transpiler.ir import Op, Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.iec_model import Pou
 from transpiler.backends.st import hh_sys, pure_lib
 from transpiler.backends.st.hh_sys import FAULT, FAULT_CODE, IN_JOB, interface
 from transpiler.backends.st.liveness import REGS
-from transpiler.backends.st.routine import Unsupported
+from transpiler.backends.st.routine import Unsupported, tag
 from transpiler.language.module_table import MODULE_TABLE, PURE
 
 IN_JOB_VAR = "HH_IN_JOB"
@@ -83,12 +84,10 @@ def _emit_conditional(ex, op: Op, live: frozenset[str], in_job: str, used: set[i
     ex.flush(live | frozenset(["LA"]))
     cond = ex.la_is(op.code == "CALLT")
     out = ex.ctx.out
-    out.line(f"IF {cond.text} THEN (* {op.mnemonic} {op.span.file}:{op.span.line} *)")
-    out.indent += 1
-    _emit_call(ex, op, live, in_job, used, decimal_point)
-    ex.flush(live)
-    out.indent -= 1
-    out.line("END_IF;")
+    with out.nested() as then:
+        _emit_call(ex, op, live, in_job, used, decimal_point)
+        ex.flush(live)
+    out.add(S.If(cond, tuple(then), note=f"{op.mnemonic} {tag(op.span)}"))
     ex.forget()
 
 
@@ -113,9 +112,8 @@ def _emit_call(ex, op: Op, live: frozenset[str], in_job: str, used: set[int], de
     ex.flush_stack()
     inst = ctx.instance(itf.name)
     used.add(number)
-    named = [f"{name} := {arg.text}" for name, arg in zip(itf.inputs, args)] + [f"{IN_JOB} := {in_job}"]
-    span = op.span
-    ctx.out.line(f"{inst}({', '.join(named)}); (* CM {number} {row.st_name}  {span.file}:{span.line} *)")
+    named = tuple(zip(itf.inputs, args)) + ((IN_JOB, E.var(in_job, "BOOL")),)
+    ctx.out.add(S.Call(inst, named, f"CM {number} {row.st_name}  {tag(op.span)}"))
     _error_marker(ex, inst)
     ex.forget()
     for name in reversed(itf.outputs):
@@ -129,8 +127,7 @@ def _emit_stack_depth(ex, op: Op, live: frozenset[str]) -> None:
         raise Unsupported("internal: PLC module 9019 on a static data stack", op.span)
     _prepare(ex, live, 0)
     _, sp = ex.ctx.stack_names()
-    span = op.span
-    ex.ctx.out.comment(f"CM 9019 (data stack depth in bytes)  {span.file}:{span.line}")
+    ex.ctx.out.comment(f"CM 9019 (data stack depth in bytes)  {tag(op.span)}")
     depth = ex._temp_copy(E.Expr(f"INT_TO_DINT({sp}) * 2", "DINT", frozenset([sp.upper()]), 0, 65534))
     marker = Operand("M", ex.ctx.semantics.profile.interface.module_err)
     ex.bit_store(marker, lambda: E.bool_const(False), frozenset())     # 9019 never fails
@@ -152,10 +149,7 @@ def _error_marker(ex, inst: str) -> None:
     assignments = layout.write_value(Operand("W", word), None, E.var(f"{inst}.{FAULT_CODE}", "DINT"))
     for lhs, _ in assignments:
         ex.prepare_write(E.base_name(lhs).upper())
-    ex.ctx.out.line(f"IF {inst}.{FAULT} THEN")
-    for lhs, value in assignments:
-        ex.ctx.out.line(f"    {lhs} := {value.text};")
-    ex.ctx.out.line("END_IF;")
+    ex.ctx.out.add(S.If(fault, tuple(S.Assign(lhs, value) for lhs, value in assignments)))
 
 
 def _prepare(ex, live: frozenset[str], nparams: int) -> list[E.Expr]:
@@ -171,45 +165,48 @@ def _prepare(ex, live: frozenset[str], nparams: int) -> list[E.Expr]:
 
 
 class _StringRef:
-    """A string number given to a pure module: whether it is valid (ST BOOL text) and its variable (or None)."""
+    """A string number given to a pure module: whether it is valid (a BOOL expression) and its variable (or None)."""
 
     def __init__(self, ex, arg: E.Expr, span):
         layout = ex.ctx.layout
         count = layout.profile.ranges.size("S")
+        self.var: E.Expr | None = None
         if arg.const is not None:
-            self.ok = "TRUE" if 0 <= arg.const < count else "FALSE"
-            self.var = None
-            if self.ok == "TRUE":
+            self.ok = E.bool_const(0 <= arg.const < count)
+            if self.ok.bool_const:
                 if layout.string_array is None:
                     layout.declare_string(arg.const)     # also a string only module calls touch
-                self.var = layout.string_lvalue(Operand("S", arg.const), None).text
+                self.var = layout.string_lvalue(Operand("S", arg.const), None)
             return
         if layout.string_array is None:
             raise Unsupported("a PLC module's string number computed at run time in a program without indexed "
                               "string access", span)
         index = ex.ctx.temp("DINT")
-        ex.ctx.out.line(f"{index} := {arg.text};")
-        self.ok = f"({index} >= 0 AND {index} < {count})"
-        self.var = f"{layout.string_array}[{index}]"
+        ex.ctx.out.add(S.Assign(index, arg))
+        i = E.var(index, "DINT")
+        self.ok = E.Expr(f"({E.binop('>=', i, E.int_const(0), 'BOOL', E.PREC_CMP).text} AND "
+                         f"{E.binop('<', i, E.int_const(count), 'BOOL', E.PREC_CMP).text})", "BOOL", i.deps, 0, 1)
+        array = layout.string_array
+        self.var = E.Expr(f"{array}[{index}]", "STRING", frozenset([array.upper()]) | i.deps, var=f"{array}[{index}]")
 
-    def read(self, ex) -> str:
-        """A STRING temporary with the contents ('' for an invalid number: the module fails before reading)."""
+    def read(self, ex) -> E.Expr:
+        """The contents, through a STRING temporary where the number may be invalid ('' for an invalid number:
+        the module fails before reading)."""
         if self.var is None:
-            return "''"
-        if self.ok == "TRUE":
+            return E.Expr("''", "STRING")
+        if self.ok.bool_const:
             return self.var
         tmp = ex.ctx.temp("STRING")
-        ex.ctx.out.line(f"{tmp} := '';")
-        ex.ctx.out.line(f"IF {self.ok} THEN {tmp} := {self.var}; END_IF;")
-        return tmp
+        ex.ctx.out.add(S.Assign(tmp, E.Expr("''", "STRING")))
+        ex.ctx.out.add(S.If(self.ok, (S.Assign(tmp, self.var),), inline=True))
+        return E.var(tmp, "STRING")
 
     def write(self, ex, inst: str, value: str) -> None:
         if self.var is None:
             return
-        ex.prepare_write(E.base_name(self.var).upper())
-        ex.ctx.out.line(f"IF NOT {inst}.{FAULT} THEN")
-        ex.ctx.out.line(f"    {self.var} := {inst}.{value};")
-        ex.ctx.out.line("END_IF;")
+        ex.prepare_write(E.base_name(self.var.text).upper())
+        failed = E.var(f"{inst}.{FAULT}", "BOOL")
+        ex.ctx.out.add(S.If(E.b_not(failed), (S.Assign(self.var.text, E.var(f"{inst}.{value}", "STRING")),)))
 
 
 def _emit_pure(ex, op: Op, live: frozenset[str], used: set[int], point: str) -> None:
@@ -227,34 +224,43 @@ def _emit_pure(ex, op: Op, live: frozenset[str], used: set[int], point: str) -> 
     inst = ctx.instance(pure_lib.fb_name(number))
     used.add(number)
     mem_size = layout.profile.ranges.size("B")
-    tag = f"(* CM {number} {row.st_name}  {span.file}:{span.line} *)"
+    note = f"CM {number} {row.st_name}  {tag(span)}"
+
+    def memory() -> tuple[tuple[str, E.Expr], ...]:
+        return ("MEM_SIZE", E.int_const(mem_size)), ("MEM", E.var(layout.mem_array, "ARRAY"))
+
     outputs: tuple[str, ...] = ()
     if number == 9050:
         ref = _StringRef(ex, args[2], span)
-        ctx.out.line(f"{inst}(MANTISSA := {args[0].text}, EXPONENT := {args[1].text}, STRING_OK := {ref.ok}, "
-                     f"POINT := '{point}'); {tag}")
+        point_text = E.Expr(f"'{point}'", "STRING")
+        ctx.out.add(S.Call(inst, (("MANTISSA", args[0]), ("EXPONENT", args[1]), ("STRING_OK", ref.ok),
+                                  ("POINT", point_text)), note))
         ref.write(ex, inst, "TEXT")
     elif number == 9052:
         ref = _StringRef(ex, args[0], span)
-        ctx.out.line(f"{inst}(TEXT := {ref.read(ex)}, STRING_OK := {ref.ok}); {tag}")
+        ctx.out.add(S.Call(inst, (("TEXT", ref.read(ex)), ("STRING_OK", ref.ok)), note))
         outputs = ("VALUE", "EXPONENT")
     elif number == 9070:
         src, dst = _StringRef(ex, args[0], span), _StringRef(ex, args[1], span)
-        ok = src.ok if dst.ok == "TRUE" else dst.ok if src.ok == "TRUE" else f"{src.ok} AND {dst.ok}"
-        ctx.out.line(f"{inst}(TEXT := {src.read(ex)}, STRINGS_OK := {ok}); {tag}")
+        if dst.ok.bool_const:
+            ok = src.ok
+        elif src.ok.bool_const:
+            ok = dst.ok
+        else:
+            # Not b_and: a number known to be invalid still shows in the text, as the module receives it.
+            ok = E.Expr(f"{src.ok.text} AND {dst.ok.text}", "BOOL", src.ok.deps | dst.ok.deps, 0, 1, E.PREC_AND)
+        ctx.out.add(S.Call(inst, (("TEXT", src.read(ex)), ("STRINGS_OK", ok)), note))
         dst.write(ex, inst, "NUMBER_TEXT")
         outputs = ("OFFSET",)
     elif number == 9053:
         ref = _StringRef(ex, args[1], span)
-        ctx.out.line(f"{inst}(ADDRESS := {args[0].text}, COUNT := {args[2].text}, STRING_OK := {ref.ok}, "
-                     f"MEM_SIZE := {mem_size}, MEM := {layout.mem_array}); {tag}")
+        ctx.out.add(S.Call(inst, (("ADDRESS", args[0]), ("COUNT", args[2]), ("STRING_OK", ref.ok)) + memory(), note))
         ref.write(ex, inst, "TEXT")
     else:   # 9054
         ref = _StringRef(ex, args[0], span)
         text = ref.read(ex)
         ex.prepare_write(layout.mem_array.upper())
-        ctx.out.line(f"{inst}(TEXT := {text}, STRING_OK := {ref.ok}, ADDRESS := {args[1].text}, "
-                     f"MEM_SIZE := {mem_size}, MEM := {layout.mem_array}); {tag}")
+        ctx.out.add(S.Call(inst, (("TEXT", text), ("STRING_OK", ref.ok), ("ADDRESS", args[1])) + memory(), note))
     _error_marker(ex, inst)
     ex.forget()
     for name in reversed(outputs):

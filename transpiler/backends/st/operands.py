@@ -6,6 +6,7 @@ from typing import Callable
 
 from transpiler.ir import BYTES, Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.routine import ExecutorPart, Unsupported
 
@@ -57,7 +58,7 @@ class OperandMixin(ExecutorPart):
         live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
         inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live))
         self.drop([key for kind, key in list(self._dependents(inst.upper())) if kind == "reg"])
-        self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := FALSE);")
+        self.ctx.out.add(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(False)))))
         held.add(inst)
         return E.Expr(f"{inst}.Q", "BOOL", frozenset([inst.upper()]), 0, 1)
 
@@ -82,7 +83,7 @@ class OperandMixin(ExecutorPart):
         live = self.ctx.live_after(self.index)
         inst = self.ctx.bit_accessor(o.kind, lambda name: self.saves_nothing(name.upper(), live))
         deferred += self.prepare_write(inst.upper(), keep)
-        self.ctx.out.line(f"{inst}(IDX := {index.text}, WRITE := TRUE, VALUE := {value().text});")
+        self.ctx.out.add(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(True)), ("VALUE", value()))))
         self.drop(deferred)
         return None
 

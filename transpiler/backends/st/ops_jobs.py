@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from transpiler.ir import Op
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st import jobs
-from transpiler.backends.st.routine import ExecutorPart, Unsupported
+from transpiler.backends.st.routine import ExecutorPart, Unsupported, tag
 
 
 class JobOpsMixin(ExecutorPart):
@@ -16,12 +17,12 @@ class JobOpsMixin(ExecutorPart):
             raise Unsupported(f"submit jobs ({op.mnemonic})", op.span)
         return self.ctx.jobs
 
-    def _queue(self, op: Op, args: str) -> str:
+    def _queue(self, op: Op, command: int, argument: tuple[str, E.Expr]) -> str:
         """Emit one call of the queue block (values in flight that read its RESULT are saved first)."""
         queue = self._jobs(op).queue
         self.prepare_write(queue.upper())
-        span = op.span
-        self.ctx.out.line(f"{queue}({args}); (* {op.mnemonic} {span.file}:{span.line} *)")
+        args = (("CMD", E.int_const(command)), argument)
+        self.ctx.out.add(S.Call(queue, args, f"{op.mnemonic} {tag(op.span)}"))
         return queue
 
     def _result(self, queue: str, hi: int) -> E.Expr:
@@ -29,12 +30,12 @@ class JobOpsMixin(ExecutorPart):
 
     def op_SUBM(self, op: Op) -> None:
         number = self._jobs(op).number(op)
-        queue = self._queue(op, f"CMD := {jobs.SUBMIT}, JOB := {number}")
+        queue = self._queue(op, jobs.SUBMIT, ("JOB", E.int_const(number)))
         self.s.set("WA", self._result(queue, jobs.MAX_ID))
 
     def op_RPLY(self, op: Op) -> None:
         ident = E.to_dint(self.value(op.operand))
-        queue = self._queue(op, f"CMD := {jobs.REPLY}, ID := {ident.text}")
+        queue = self._queue(op, jobs.REPLY, ("ID", ident))
         self.s.set("WA", self._result(queue, 2))
 
     def op_CAN(self, op: Op) -> None:
@@ -43,10 +44,9 @@ class JobOpsMixin(ExecutorPart):
             raise Unsupported("CAN in a subprogram that a submit job calls (cancelling the running job from there "
                               "would have to end its callers too)", op.span)
         ident = E.to_dint(self.value(op.operand))
-        queue = self._queue(op, f"CMD := {jobs.CANCEL}, ID := {ident.text}")
+        queue = self._queue(op, jobs.CANCEL, ("ID", ident))
         if not routine.is_job:
             return      # only a job can be the running one
         # Nothing of a job runs after it cancelled itself.
-        self.ctx.out.line(f"IF {queue}.RESULT = 1 THEN")
-        self.ctx.out.line("    RETURN; (* the running job cancelled itself *)")
-        self.ctx.out.line("END_IF;")
+        cancelled = E.binop("=", self._result(queue, 2), E.int_const(1), "BOOL", E.PREC_EQ, 0, 1)
+        self.ctx.out.add(S.If(cancelled, (S.Return("the running job cancelled itself"),)))

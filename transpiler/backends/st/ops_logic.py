@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from transpiler.ir import Op
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.routine import ExecutorPart
 
 
@@ -60,12 +61,7 @@ class LogicOpsMixin(ExecutorPart):
         target = self.bit(op.operand)
         la = self.s.reg("LA")
         cond = la if when else E.b_not(la)
-        out = self.ctx.out
-        out.line(f"IF {cond.text} THEN")
-        out.indent += 1
-        out.line(f"{target.text} := {'TRUE' if value else 'FALSE'};")
-        out.indent -= 1
-        out.line("END_IF;")
+        self.ctx.out.add(S.If(cond, (S.Assign(target.text, E.bool_const(value)),)))
         self.drop(deferred)
 
     def op_SET(self, op): self._conditional_bit(op, True, True)

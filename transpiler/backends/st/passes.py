@@ -1,8 +1,11 @@
-"""Clean-up of a POU body before printing: a temporary written once and read once, in the very next statement,
-is replaced by its value (copy propagation). The symbolic executor already folds constants and simplifies boolean
-expressions while it builds them (exprs.py); this pass works on the emitted statements, one per line, and only
-where the next statement evaluates the read before anything it does itself (an assignment's right side, an IF or
-CASE condition, the inputs of an FB call), so the value cannot have changed in between.
+"""Clean-up of a POU's statement tree before printing: a temporary written once and read once, by the very next
+statement, is replaced by its value (copy propagation).
+
+The symbolic executor already folds constants and simplifies boolean expressions while it builds them
+(exprs.py). A temporary is propagated only where the next statement evaluates the read before anything it does
+itself: an assignment's right side (or the index of its target), an IF or CASE condition, the inputs of an FB
+call. So the value cannot have changed in between. Loop conditions are evaluated again on every pass and stay
+named. An FB's output passed to the next call of that FB stays named too: the call reads the old value.
 """
 
 from __future__ import annotations
@@ -11,15 +14,17 @@ import dataclasses
 import re
 
 from transpiler.backends.iec_model import Pou
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st import printer
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.names import TEMP_PREFIX
 
-_DEF = re.compile(r"^(\s*)(" + TEMP_PREFIX + r"[0-9]+) := (.*);$")
-_LOOP_HEADS = ("WHILE ", "UNTIL ", "ELSIF ", "REPEAT", "FOR ", "END_", "ELSE", "RETURN", "EXIT")
-_COMMENT = re.compile(r"\(\*.*?\*\)")
+_TEMP = re.compile(TEMP_PREFIX + r"[0-9]+")
 
 
-def _code(line: str) -> str:
-    return _COMMENT.sub("", line)
+def _word(name: str) -> re.Pattern[str]:
+    """`name` as a variable in expression text (a member `fb.name` is another variable)."""
+    return re.compile(r"(?<![A-Za-z0-9_.])" + re.escape(name) + r"(?![A-Za-z0-9_])", re.I)
 
 
 def _atomic(text: str) -> bool:
@@ -33,45 +38,117 @@ def _atomic(text: str) -> bool:
     return True
 
 
-def _uses(lines: list[str], name: str) -> int:
-    word = re.compile(r"(?<![A-Za-z0-9_.])" + name + r"(?![A-Za-z0-9_])", re.I)
-    return sum(len(word.findall(_code(line))) for line in lines)
+def _texts(stmt: S.Stmt) -> list[str]:
+    """The expression and lvalue texts a statement itself holds (not those of nested blocks), in printed order."""
+    if isinstance(stmt, S.Assign):
+        return [stmt.target, stmt.value.text]
+    if isinstance(stmt, S.Call):
+        return [stmt.callee] + [value.text for _, value in stmt.args]
+    if isinstance(stmt, S.If):
+        return [stmt.cond.text]
+    if isinstance(stmt, S.Case):
+        return [stmt.selector.text]
+    if isinstance(stmt, S.While):
+        return [stmt.cond.text]
+    if isinstance(stmt, S.Repeat):
+        return [stmt.until.text]
+    return []
+
+
+def _uses(block: list[S.Stmt] | tuple[S.Stmt, ...], word: re.Pattern[str]) -> int:
+    return sum(len(word.findall(text)) for stmt in S.walk(block) for text in _texts(stmt))
+
+
+class _Substitution:
+    """The first occurrence of a temporary, in printed order, replaced by its value (each use is one call)."""
+
+    def __init__(self, word: re.Pattern[str], value: E.Expr):
+        self.word = word
+        self.value = value
+        self.text = value.text if _atomic(value.text) else f"({value.text})"
+        self.done = False
+
+    def in_text(self, text: str) -> str:
+        if self.done or not self.word.search(text):
+            return text
+        self.done = True
+        return self.word.sub(lambda _: self.text, text, count=1)
+
+    def in_expr(self, expr: E.Expr) -> E.Expr:
+        if self.done or not self.word.search(expr.text):
+            return expr
+        self.done = True
+        if self.word.fullmatch(expr.text):
+            return self.value if self.text == self.value.text else E.Expr(
+                self.text, self.value.typ, self.value.deps, self.value.lo, self.value.hi)
+        name = self.word.search(expr.text).group(0).upper()
+        return dataclasses.replace(expr, text=self.word.sub(lambda _: self.text, expr.text, count=1),
+                                   deps=(expr.deps - {name}) | self.value.deps, var=None, const=None,
+                                   bool_const=None)
+
+    def in_statement(self, stmt: S.Stmt) -> S.Stmt:
+        if isinstance(stmt, S.Assign):
+            target = self.in_text(stmt.target)
+            return dataclasses.replace(stmt, target=target, value=self.in_expr(stmt.value))
+        if isinstance(stmt, S.Call):
+            return dataclasses.replace(stmt, args=tuple((name, self.in_expr(value)) for name, value in stmt.args))
+        if isinstance(stmt, S.If):
+            cond = self.in_expr(stmt.cond)
+            then = tuple(self.in_statement(s) for s in stmt.then) if stmt.inline else stmt.then
+            return dataclasses.replace(stmt, cond=cond, then=then)
+        if isinstance(stmt, S.Case):
+            return dataclasses.replace(stmt, selector=self.in_expr(stmt.selector))
+        return stmt
+
+
+def _reads_first(stmt: S.Stmt, word: re.Pattern[str], value: E.Expr) -> bool:
+    """`stmt` reads the temporary before it does anything else (see the module docstring)."""
+    if isinstance(stmt, S.Assign):
+        if word.search(stmt.target):
+            return "(" in stmt.target     # read in a call inside the target's index; else the target is written
+        return bool(word.search(stmt.value.text))
+    if isinstance(stmt, S.Call):
+        if stmt.callee.upper() == value.text.split(".", 1)[0].upper():
+            return False
+        return any(word.search(v.text) for _, v in stmt.args)
+    if isinstance(stmt, S.If) and stmt.inline:
+        return any(word.search(text) for text in [stmt.cond.text] + [t for s in stmt.then for t in _texts(s)])
+    if isinstance(stmt, (S.If, S.Case)):
+        return bool(word.search(_texts(stmt)[0]))
+    return False
+
+
+def _propagate_one(root: list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
+    """The tree with the first temporary (in printed order) that qualifies propagated, and its name; None when
+    no temporary does."""
+    def visit(block: tuple[S.Stmt, ...] | list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
+        for i, stmt in enumerate(block):
+            if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
+                word = _word(stmt.target)
+                j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
+                if j is not None and _uses(root, word) == 2 and _reads_first(block[j], word, stmt.value):
+                    new = list(block)
+                    new[j] = _Substitution(word, stmt.value).in_statement(block[j])
+                    del new[i]
+                    return new, stmt.target
+            inner = list(S.blocks(stmt))
+            for k, nested in enumerate(inner):
+                found = visit(nested)
+                if found is not None:
+                    inner[k] = tuple(found[0])
+                    return [*block[:i], S.with_blocks(stmt, inner), *block[i + 1:]], found[1]
+        return None
+
+    return visit(root)
 
 
 def propagate_temporaries(pou: Pou) -> Pou:
     """`pou` with every temporary that is read once, by the next statement, replaced by its value."""
-    lines = pou.body.split("\n")
+    statements = list(pou.statements)
     removed: set[str] = set()
-    changed = True
-    while changed:
-        changed = False
-        for i, line in enumerate(lines):
-            m = _DEF.match(line)
-            if m is None or _uses(lines, m.group(2)) != 2:
-                continue
-            indent, name, value = m.groups()
-            j = i + 1
-            while j < len(lines) and lines[j].strip().startswith("(*"):
-                j += 1
-            if j >= len(lines):
-                continue
-            nxt = lines[j]
-            stripped = nxt.strip()
-            if not nxt.startswith(indent) or nxt[len(indent):len(indent) + 1] == " " or stripped.startswith(_LOOP_HEADS):
-                continue
-            word = re.compile(r"(?<![A-Za-z0-9_.])" + name + r"(?![A-Za-z0-9_])", re.I)
-            code = _code(nxt)
-            target = code.split(":=", 1)[0] if " := " in code and not stripped.startswith("IF ") else ""
-            if not word.search(code) or word.search(target) and "(" not in target:
-                continue        # the temporary is written there, not read
-            if stripped.split("(", 1)[0].upper() == value.split(".", 1)[0].upper():
-                continue        # an FB's output passed to its own next call stays named: it reads the old value
-            text = value if _atomic(value) else f"({value})"
-            lines[j] = word.sub(lambda _: text, nxt, count=1)
-            del lines[i]
-            removed.add(name.upper())
-            changed = True
-            break
+    while (found := _propagate_one(statements)) is not None:
+        statements, name = found
+        removed.add(name.upper())
     if not removed:
         return pou
     sections = tuple(dataclasses.replace(s, vars=tuple(v for v in s.vars if v.name.upper() not in removed))
@@ -79,4 +156,4 @@ def propagate_temporaries(pou: Pou) -> Pou:
     sections = tuple(s for s in sections if s.vars or s.kind != "VAR")
     if not sections and pou.kind == "FUNCTION_BLOCK":
         return pou          # matiec rejects a FUNCTION_BLOCK without any declaration
-    return dataclasses.replace(pou, body="\n".join(lines), sections=sections)
+    return printer.with_statements(dataclasses.replace(pou, sections=sections), statements)

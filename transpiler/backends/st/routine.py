@@ -1,15 +1,16 @@
-"""The frame of one routine's symbolic execution: emitted lines, symbolic register state, what the backend provides."""
+"""The frame of one routine's symbolic execution: emitted statements, symbolic register state, what the backend provides."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from types import MappingProxyType
-from typing import Callable
+from typing import Callable, Iterator
 
-from transpiler.backends.iec_model import st_comment
 from transpiler.diagnostics import Span
 from transpiler.ir import Op, Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.layout import Layout
 from transpiler.backends.st.liveness import REGS
@@ -35,24 +36,45 @@ class Frame:
 
 
 class Emitter:
-    """Collects ST lines with indentation and pending source comments."""
+    """Collects the statements of a routine body (stmt.py), with the source comments waiting for the next one.
+
+    `block` is the statement list being filled: `nested` swaps in the list of a compound statement's branch."""
 
     def __init__(self) -> None:
-        self.lines: list[str] = []
-        self.indent = 0
+        self.block: list[S.Stmt] = []
         self.pending_comments: list[str] = []
 
     def comment(self, text: str) -> None:
         self.pending_comments.append(text)
 
     def flush_comments(self) -> None:
-        for text in self.pending_comments:
-            self.lines.append("    " * self.indent + st_comment(text))
+        self.block.extend(S.Comment(text) for text in self.pending_comments)
         self.pending_comments = []
 
-    def line(self, text: str) -> None:
+    def add(self, stmt: S.Stmt) -> None:
         self.flush_comments()
-        self.lines.append("    " * self.indent + text)
+        self.block.append(stmt)
+
+    @contextlib.contextmanager
+    def nested(self, comments_before: bool = True) -> Iterator[list[S.Stmt]]:
+        """Statements added inside go to the list yielded (a branch of the compound statement added after it).
+
+        Comments waiting when it opens go before the compound statement (`comments_before`) or into the branch;
+        those waiting when it closes end the branch."""
+        if comments_before:
+            self.flush_comments()
+        saved, self.block = self.block, []
+        inner = self.block
+        try:
+            yield inner
+            self.flush_comments()
+        finally:
+            self.block = saved
+
+
+def tag(span: Span) -> str:
+    """The note that ties a statement to its source line."""
+    return f"{span.file}:{span.line}"
 
 
 class SymbolicState:

@@ -13,6 +13,7 @@ from typing import Callable
 
 from transpiler.ir import Op
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.interfaces import StackInterface
 from transpiler.backends.st.liveness import REGS
@@ -46,17 +47,19 @@ class StackMixin(ExecutorPart):
     def _real_push(self, kind: str, value: Expr) -> None:
         stack, sp = self.ctx.stack_names()
         out = self.ctx.out
+        pointer = E.var(sp, "INT")
         if kind == "bit":
             self.ctx.helper("HH_BIT")
-            out.line(f"{stack}[{sp}] := BOOL_TO_INT({value.text}) * 128;")
-            out.line(f"{sp} := {sp} + 1;")
+            word = E.call("BOOL_TO_INT", [value], "INT", 0, 1)
+            out.add(S.Assign(f"{stack}[{sp}]", E.binop("*", word, E.int_const(128, "INT"), "INT", E.PREC_MUL, 0, 128)))
+            out.add(S.Assign(sp, E.binop("+", pointer, E.int_const(1, "INT"), "INT", E.PREC_ADD)))
             return
         v = self._stable(E.to_dint(value))
         self.ctx.helper("HH_LOWORD")
         self.ctx.helper("HH_HIWORD")
-        out.line(f"{stack}[{sp}] := HH_LOWORD({v.text});")
-        out.line(f"{stack}[{sp} + 1] := HH_HIWORD({v.text});")
-        out.line(f"{sp} := {sp} + 2;")
+        out.add(S.Assign(f"{stack}[{sp}]", E.call("HH_LOWORD", [v], "INT")))
+        out.add(S.Assign(f"{stack}[{sp} + 1]", E.call("HH_HIWORD", [v], "INT")))
+        out.add(S.Assign(sp, E.binop("+", pointer, E.int_const(2, "INT"), "INT", E.PREC_ADD)))
 
     static: StaticStack | None = None
 
@@ -68,13 +71,14 @@ class StackMixin(ExecutorPart):
         self.flush_stack()
         stack, sp = self.ctx.stack_names()
         out = self.ctx.out
+        pointer = E.var(sp, "INT")
         if kind == "bit":
             self.ctx.helper("HH_BIT")
-            out.line(f"{sp} := {sp} - 1;")
+            out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(1, "INT"), "INT", E.PREC_ADD)))
             value = E.Expr(f"HH_BIT(INT_TO_DINT({stack}[{sp}]), 7)", "BOOL", frozenset([stack.upper(), sp.upper()]), 0, 1)
         else:
             self.ctx.helper("HH_FROMWORDS")
-            out.line(f"{sp} := {sp} - 2;")
+            out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(2, "INT"), "INT", E.PREC_ADD)))
             value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT", frozenset([stack.upper(), sp.upper()]))
         # The popped value must be captured now: the stack pointer moves again later.
         return self._temp_copy(value)
@@ -126,11 +130,11 @@ class StackMixin(ExecutorPart):
                 continue
             self.prepare_write(slot.upper())    # type: ignore[attr-defined]
             value = self.s.stack[d][1]
-            self.ctx.out.line(f"{slot} := {value.text};")
+            self.ctx.out.add(S.Assign(slot, value))
             self.s.stack[d] = (kind, E.var(slot, SLOT_TYPES[kind]))
 
     def call_interface(self, instance: str, interface: StackInterface, params: tuple[str, ...],
-                       results: tuple[str, ...], live: frozenset[str], tag: str) -> None:
+                       results: tuple[str, ...], live: frozenset[str], note: str) -> None:
         """CM of a routine with an interface: the entries it pulls become its inputs, its outputs are pushed."""
         for reg in REGS:
             if reg in live:
@@ -141,8 +145,7 @@ class StackMixin(ExecutorPart):
         # Entries below the arguments may read what the callee writes: they go to their variables first.
         self.flush_stack()
         self.prepare_write(instance.upper())     # type: ignore[attr-defined]
-        text = ", ".join(f"{name} := {arg.text}" for name, arg in zip(params, args))
-        self.ctx.out.line(f"{instance}({text}); {tag}")
+        self.ctx.out.add(S.Call(instance, tuple(zip(params, args)), note))
         self.forget()                       # type: ignore[attr-defined]
         for name, (_, kind) in zip(results, interface.results):
             self.s.stack.append((kind, E.var(f"{instance}.{name}", SLOT_TYPES[kind])))

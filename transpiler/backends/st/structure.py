@@ -5,11 +5,11 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from transpiler.backends.iec_model import st_comment
 from transpiler.ir import CallTarget, FileCode, Op
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st import stmt as S
 from transpiler.backends.st.liveness import REGS
-from transpiler.backends.st.routine import Unsupported
+from transpiler.backends.st.routine import Unsupported, tag
 from transpiler.backends.st.symbolic import Executor
 
 JUMPS = ("JP", "JPT", "JPF")
@@ -31,7 +31,7 @@ class RoutineInfo:
     file: FileCode
     body: list[int]                 # reachable op indices
     is_main: bool
-    call_name: Callable[[CallTarget], str]     # FB instance call text for a subprogram
+    call_name: Callable[[CallTarget], str]     # the FB instance that runs a subprogram
     other_entries: dict[int, CallTarget]   # LBLs that start other routines (fall-through -> call + return)
     exit_live: frozenset[str]
     live_in: Callable[[int], frozenset[str]]
@@ -108,11 +108,10 @@ class Structurer:
 
     def _return(self, live_exit: frozenset[str]) -> None:
         self.ex.flush(live_exit)
-        self.out.line("RETURN;")
+        self.out.add(S.Return())
 
     def _tag(self, i: int) -> str:
-        span = self.ops[i].span
-        return f"(* {span.file}:{span.line} *)"
+        return tag(self.ops[i].span)
 
     # ---- regions
 
@@ -127,7 +126,7 @@ class Structurer:
                 # Falling through into another subprogram's label: call it and return (same effect, readable).
                 other = self.info.other_entries[i]
                 self.ex.flush(self._live(i))
-                self.out.line(f"{self.info.call_name(other)}; (* falls through into LBL {other.label} *)")
+                self.out.add(S.Call(self.info.call_name(other), note=f"falls through into LBL {other.label}"))
                 self.ex.forget()
                 self._return(self.info.exit_live)
                 return
@@ -168,7 +167,7 @@ class Structurer:
             self.ex.flush(live_exit)
             last = self.depth == 0 and not any(j > i for j in self.body)
             if not last:
-                self.out.line("RETURN;")
+                self.out.add(S.Return())
             self.ex.forget()
             return self._skip_dead(i + 1, hi)
         self._if_return(op.code == "EMT", live_exit)
@@ -182,11 +181,7 @@ class Structurer:
     def _if_return(self, when_la: bool, live: frozenset[str]) -> None:
         # Registers live at the exit reach their variables before the test, on both paths.
         self.ex.keep_live(live)
-        self.out.line(f"IF {self.ex.la_is(when_la).text} THEN")
-        self.out.indent += 1
-        self.out.line("RETURN;")
-        self.out.indent -= 1
-        self.out.line("END_IF;")
+        self.out.add(S.If(self.ex.la_is(when_la), (S.Return(),)))
 
     def _call(self, op: Op, i: int) -> None:
         if op.call is None or op.call.file < 0 and not op.call.is_module:
@@ -197,15 +192,11 @@ class Structurer:
             self.ex.ctx.module_call(self.ex, op, self._live(i))
             return
         self.ex.flush(self._live(i) | frozenset(["LA"] if op.code != "CALL" else []))
-        text = self.info.call_name(op.call)
+        instance = self.info.call_name(op.call)
         if op.code == "CALL":
-            self.out.line(f"{text}; {self._tag(i)}")
+            self.out.add(S.Call(instance, note=self._tag(i)))
         else:
-            self.out.line(f"IF {self.ex.la_is(op.code == 'CALLT').text} THEN {self._tag(i)}")
-            self.out.indent += 1
-            self.out.line(f"{text};")
-            self.out.indent -= 1
-            self.out.line("END_IF;")
+            self.out.add(S.If(self.ex.la_is(op.code == 'CALLT'), (S.Call(instance),), note=self._tag(i)))
         self.ex.forget()
 
     def _case(self, op: Op, i: int) -> None:
@@ -214,23 +205,19 @@ class Structurer:
             self.out.comment(text)
         selector = self.ex.value(op.operand)
         self.ex.flush(self._live(i))
-        if selector.typ == "DINT" or selector.typ in ("SINT", "INT"):
-            sel_text = selector.text
-        else:
-            sel_text = f"{selector.typ}_TO_DINT({selector.text})"
+        if selector.typ not in ("DINT", "SINT", "INT"):
+            selector = E.call(f"{selector.typ}_TO_DINT", [selector], "DINT")
         if not op.case_targets:
             # An empty table calls nothing; 'CASE x OF END_CASE;' is not valid ST (IEC needs at least one case).
-            self.out.line(f"(* CASE {sel_text} without entries: nothing to call *) {self._tag(i)}")
+            self.out.add(S.Comment(f"CASE {selector.text} without entries: nothing to call", self._tag(i)))
             self.ex.forget()
             return
-        self.out.line(f"CASE {sel_text} OF {self._tag(i)}")
+        branches = []
         for n, target in enumerate(op.case_targets):
             note = op.case_notes[n] if n < len(op.case_notes) else None
-            comment = ""
-            if note and note[1]:
-                comment = " " + st_comment(" ".join(note[1]))
-            self.out.line(f"    {n}: {self.info.call_name(target)};{comment}")
-        self.out.line("END_CASE;")
+            comment = " ".join(note[1]) if note and note[1] else None
+            branches.append(S.CaseBranch((n,), (S.Call(self.info.call_name(target), note=comment),)))
+        self.out.add(S.Case(selector, tuple(branches), note=self._tag(i)))
         self.ex.forget()
 
     def _forward_jump(self, i: int, hi: int) -> int:
@@ -242,17 +229,13 @@ class Structurer:
             # A jump to the end of the enclosing loop: EXIT.
             if op.code == "JP":
                 self.ex.flush(self._live(t))
-                self.out.line("EXIT;")
+                self.out.add(S.Exit())
                 return self._skip_dead(i + 1, hi)
             # Registers live after the loop or in the rest of the body reach their variables; LA stays
             # symbolic for the test itself.
             self.ex.keep_live(self._live(t) | self._live(i + 1))
             cond = self.ex.la_is(op.code == "JPT")
-            self.out.line(f"IF {cond.text} THEN")
-            self.out.indent += 1
-            self.out.line("EXIT;")
-            self.out.indent -= 1
-            self.out.line("END_IF;")
+            self.out.add(S.If(cond, (S.Exit(),)))
             return i + 1
         if t <= i:
             raise NotStructured(f"backward jump to {self.ops[t].label or t} outside a loop", i)
@@ -288,46 +271,35 @@ class Structurer:
         self.ex.keep_live(live_join)
         snap = self.ex.snapshot()
         cond = self.ex.la_is(op.code == "JPF")      # the block runs when the jump is NOT taken
-        then_lines = self._branch(i + 1, t if else_end is None else last, live_join)
-        else_lines: list[str] = []
+        then_block = self._branch(i + 1, t if else_end is None else last, live_join)
+        else_block: list[S.Stmt] = []
         if else_end is not None:
             self.ex.restore(snap)
-            else_lines = self._branch(t, else_end, live_join)
+            else_block = self._branch(t, else_end, live_join)
         self.ex.forget()
-        self._emit_if(cond, then_lines, else_lines, i)
+        self._emit_if(cond, then_block, else_block, i)
         return else_end if else_end is not None else t
 
-    def _branch(self, lo: int, hi: int, live_join: frozenset[str]) -> list[str]:
-        """Emit a branch into a separate list of lines (indented one level deeper)."""
-        saved_lines, saved_indent = self.out.lines, self.out.indent
-        self.out.lines = []
-        self.out.indent = saved_indent + 1
+    def _branch(self, lo: int, hi: int, live_join: frozenset[str]) -> list[S.Stmt]:
+        """The statements of a branch, built apart (comments waiting before it open it)."""
         self.depth += 1
         try:
-            self.region(lo, hi)
-            self.ex.flush(live_join)
-            self.out.flush_comments()
-            return self.out.lines
+            with self.out.nested(comments_before=False) as block:
+                self.region(lo, hi)
+                self.ex.flush(live_join)
+            return block
         finally:
             self.depth -= 1
-            self.out.lines, self.out.indent = saved_lines, saved_indent
 
-    def _emit_if(self, cond: E.Expr, then_lines: list[str], else_lines: list[str], i: int) -> None:
-        def has_code(lines: list[str]) -> bool:
-            return any(not line.strip().startswith("(*") for line in lines)
-        if not has_code(then_lines) and not has_code(else_lines):
-            self.out.lines.extend(then_lines + else_lines)
+    def _emit_if(self, cond: E.Expr, then_block: list[S.Stmt], else_block: list[S.Stmt], i: int) -> None:
+        if not S.has_code(then_block) and not S.has_code(else_block):
+            self.out.block.extend(then_block + else_block)
             return
-        if not has_code(then_lines):
-            cond, then_lines, else_lines = E.b_not(cond), else_lines, then_lines
-        self.out.line(f"IF {cond.text} THEN {self._tag(i)}")
-        self.out.lines.extend(then_lines)
-        if has_code(else_lines):
-            self.out.line("ELSE")
-            self.out.lines.extend(else_lines)
-        elif else_lines:
-            self.out.lines.extend(else_lines)
-        self.out.line("END_IF;")
+        if not S.has_code(then_block):
+            cond, then_block, else_block = E.b_not(cond), else_block, then_block
+        if not S.has_code(else_block):
+            then_block, else_block = then_block + else_block, []
+        self.out.add(S.If(cond, tuple(then_block), tuple(else_block), note=self._tag(i)))
 
     def _loop(self, h: int, hi: int) -> int:
         back = [s for s in self.jumps_to[h] if s >= h and s < hi]
@@ -348,38 +320,30 @@ class Structurer:
         self.loop_heads.add(h)
         try:
             if tail.code in ("JPT", "JPF"):
-                tag = self._tag(h)
-                saved_lines, saved_indent = self.out.lines, self.out.indent
-                self.out.lines, self.out.indent = [], saved_indent + 1
                 self.depth += 1
-                self.region(h, j)
-                # The back jump still reads LA: liveness is taken before it.
-                self.ex.index = j - 1
-                self.ex.keep_live(self._live(h) | self._live(exit_index))
-                cond = self.ex.la_is(tail.code == "JPF")     # leave when the back jump is not taken
-                self.out.flush_comments()
-                body = self.out.lines
+                with self.out.nested(comments_before=False) as body:
+                    self.region(h, j)
+                    # The back jump still reads LA: liveness is taken before it.
+                    self.ex.index = j - 1
+                    self.ex.keep_live(self._live(h) | self._live(exit_index))
+                    cond = self.ex.la_is(tail.code == "JPF")     # leave when the back jump is not taken
                 self.depth -= 1
-                self.out.lines, self.out.indent = saved_lines, saved_indent
                 self.ex.forget()
-                self.out.line(f"REPEAT {tag}")
-                self.out.lines.extend(body or ["    " * (saved_indent + 1) + f"{self.ex.ctx.register('LA')} := {self.ex.ctx.register('LA')};"])
-                self.out.line(f"UNTIL {cond.text}")
-                self.out.line("END_REPEAT;")
+                if not body:
+                    # REPEAT needs a statement: one that changes nothing.
+                    la = self.ex.ctx.register("LA")
+                    body.append(S.Assign(la, E.var(la, "BOOL")))
+                self.out.add(S.Repeat(tuple(body), cond, note=self._tag(h)))
                 return exit_index
             # Unconditional back jump: a WHILE loop; a conditional exit right at the head becomes its condition.
             head = self.ops[h]
             if head.code in ("JPT", "JPF") and head.target == exit_index:
                 cond = self.ex.la_is(head.code == "JPF")
                 body = self._branch(h + 1, j, self._live(h) | frozenset(["LA"]))
-                self.out.line(f"WHILE {cond.text} DO {self._tag(h)}")
-                self.out.lines.extend(body)
-                self.out.line("END_WHILE;")
+                self.out.add(S.While(cond, tuple(body), note=self._tag(h)))
                 return exit_index
             body = self._branch(h, j, self._live(h))
-            self.out.line(f"WHILE TRUE DO {self._tag(h)}")
-            self.out.lines.extend(body)
-            self.out.line("END_WHILE;")
+            self.out.add(S.While(E.bool_const(True), tuple(body), note=self._tag(h)))
             return exit_index
         finally:
             self.loop_exits.pop()
@@ -404,59 +368,58 @@ def state_machine(info: RoutineInfo, ex: Executor) -> None:
     structurer = Structurer(info, ex)
     all_regs = frozenset(REGS)
     ex.flush(all_regs)
-    out.line(f"HH_STATE := {block_id[info.entry.index]};")
-    out.line("WHILE HH_STATE >= 0 DO (* irreducible control flow: one state per basic block *)")
-    out.indent += 1
-    out.line("CASE HH_STATE OF")
-    out.indent += 1
+    state = E.var("HH_STATE", "DINT")
+    out.add(S.Assign(state.text, E.int_const(block_id[info.entry.index])))
+    branches = []
     for n, start in enumerate(starts):
         end = starts[n + 1] if n + 1 < len(starts) else max(body) + 1
-        out.line(f"{n}: (* {ops[start].span.file}:{ops[start].span.line} *)")
-        out.indent += 1
-        ex.forget()
-        i = start
-        next_state = None
-        while i < end:
-            if i not in body_set:
-                i += 1
-                continue
-            op = ops[i]
-            if op.code == "JP":
-                ex.flush(all_regs)
-                next_state = str(block_id[op.target])
-                break
-            if op.code in ("JPT", "JPF", "EMT", "EMF"):
-                # Conditional jump or return: the taken branch goes to its target (or ends), else fall through.
-                ex.flush(all_regs)
-                cond = ex.la_is(op.code in ("JPT", "EMT"))
-                taken = block_id[op.target] if op.code in ("JPT", "JPF") else -1
-                out.line(f"IF {cond.text} THEN")
-                out.line(f"    HH_STATE := {taken};")
-                out.line("ELSE")
-                out.line(f"    HH_STATE := {block_id.get(i + 1, -1)};")
-                out.line("END_IF;")
-                next_state = ""
-                break
-            if op.code == "EM":
-                ex.flush(all_regs)
-                next_state = "-1"
-                break
-            if op.code == "CALL" and info.interface_call is not None and info.interface_call(op, i, structurer._live(i)):
-                pass
-            elif op.code in ("CALL", "CALLT", "CALLF"):
-                structurer._call(op, i)
-            elif op.code == "CASE":
-                structurer._case(op, i)
-            else:
-                ex.run(op, i)
+        with out.nested(comments_before=False) as block:
+            next_state = _state_block(info, ex, structurer, block_id, start, end)
+            if next_state is not None:
+                out.add(S.Assign(state.text, E.int_const(next_state)))
+        branches.append(S.CaseBranch((n,), tuple(block), tag(ops[start].span)))
+    running = E.binop(">=", state, E.int_const(0), "BOOL", E.PREC_CMP, 0, 1)
+    out.add(S.While(running, (S.Case(state, tuple(branches)),),
+                    note="irreducible control flow: one state per basic block"))
+
+
+def _state_block(info: RoutineInfo, ex: Executor, structurer: Structurer, block_id: dict[int, int], start: int,
+                 end: int) -> int | None:
+    """The statements of one basic block [start, end) of the state machine; returns the state that follows
+    (None when the block chose it itself, -1 when the routine ends)."""
+    ops = info.file.ops
+    body_set = set(info.body)
+    all_regs = frozenset(REGS)
+    state = "HH_STATE"
+    ex.forget()
+    i = start
+    while i < end:
+        if i not in body_set:
             i += 1
-        if next_state is None:
+            continue
+        op = ops[i]
+        if op.code == "JP":
             ex.flush(all_regs)
-            next_state = str(block_id.get(end, -1))
-        if next_state:
-            out.line(f"HH_STATE := {next_state};")
-        out.indent -= 1
-    out.indent -= 1
-    out.line("END_CASE;")
-    out.indent -= 1
-    out.line("END_WHILE;")
+            return block_id[op.target]
+        if op.code in ("JPT", "JPF", "EMT", "EMF"):
+            # Conditional jump or return: the taken branch goes to its target (or ends), else fall through.
+            ex.flush(all_regs)
+            cond = ex.la_is(op.code in ("JPT", "EMT"))
+            taken = block_id[op.target] if op.code in ("JPT", "JPF") else -1
+            ex.ctx.out.add(S.If(cond, (S.Assign(state, E.int_const(taken)),),
+                                (S.Assign(state, E.int_const(block_id.get(i + 1, -1))),)))
+            return None
+        if op.code == "EM":
+            ex.flush(all_regs)
+            return -1
+        if op.code == "CALL" and info.interface_call is not None and info.interface_call(op, i, structurer._live(i)):
+            pass
+        elif op.code in ("CALL", "CALLT", "CALLF"):
+            structurer._call(op, i)
+        elif op.code == "CASE":
+            structurer._case(op, i)
+        else:
+            ex.run(op, i)
+        i += 1
+    ex.flush(all_regs)
+    return block_id.get(end, -1)
