@@ -75,3 +75,23 @@ def test_if_without_statements_leaves_its_comments():
 def test_dead_store_inside_a_branch_is_dropped():
     block = [S.If(_b("a"), (S.Assign("HH_LA", _b("b")), S.Assign("HH_LA", _b("c")))), S.Assign("x", _b("y"))]
     assert _text(block) == "IF a THEN\n    HH_LA := c;\nEND_IF;\nx := y;"
+
+
+def test_consecutive_ifs_on_one_condition_become_one():
+    cond = E.b_or(_b("m3"), _b("key"))
+    block = [S.If(cond, (S.Assign("cw", E.bool_const(True)),)), S.If(cond, (S.Assign("ccw", E.bool_const(False)),)),
+             S.If(cond, (S.Assign("orient", E.bool_const(False)),), note="Spindle.src:66")]
+    assert _text(block) == ("IF m3 OR key THEN\n    cw := TRUE;\n    ccw := FALSE;\n"
+                            "    orient := FALSE; (* Spindle.src:66 *)\nEND_IF;")
+
+
+def test_ifs_stay_apart_where_the_first_changes_the_condition_or_calls():
+    # Catches: a join that ignores a write to the condition's variable (the second IF would see the new value),
+    # an FB call in the first body (it may write any global), an ELSE, or different conditions.
+    cond = E.b_or(_b("m3"), _b("key"))
+    for first in (S.If(cond, (S.Assign("key", E.bool_const(False)),)),
+                  S.If(cond, (S.Call("Sub_1"),)),
+                  S.If(cond, (S.Assign("cw", E.bool_const(True)),), (S.Assign("ccw", E.bool_const(True)),)),
+                  S.If(_b("m4"), (S.Assign("cw", E.bool_const(True)),))):
+        block = [first, S.If(cond, (S.Assign("ccw", E.bool_const(False)),))]
+        assert simplify(block, REGS) == block

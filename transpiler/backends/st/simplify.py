@@ -3,7 +3,10 @@
 - a store of an accumulator register (HH_LA, HH_WA, ...) that a later store of the same register overwrites
   before anything can read it is dropped;
 - `IF c THEN x := TRUE; ELSE x := FALSE; END_IF;` becomes `x := c;` (and the swapped form `x := NOT c;`);
-- an IF without statements in either branch leaves only its comments.
+- an IF without statements in either branch leaves only its comments;
+- consecutive IFs on the same condition become one where the first cannot change the condition (its body only
+  assigns, to nothing the condition reads): a HEIDENHAIN S/R sequence on one logic result (`S a`, `R b`, `R c`)
+  is one IF with three assignments.
 
 Expressions only read variables (the functions they call are FUNCTIONs, which see no global), so dropping an
 IF's condition or a store's value loses no effect. Registers are globals: a subprogram called in between, a
@@ -38,8 +41,34 @@ def _block(block: Block, registers: frozenset[str]) -> Block:
                 out.extend(stmt.then + stmt.orelse)
                 continue
             stmt = _flag_from_condition(stmt)
+            if out and isinstance(stmt, S.If) and isinstance(out[-1], S.If) and _same_condition(out[-1], stmt):
+                out[-1] = _joined(out[-1], stmt)
+                continue
         out.append(stmt)
     return tuple(out)
+
+
+def _same_condition(first: S.If, second: S.If) -> bool:
+    """Whether `second` may join `first`: the same condition, no ELSE, and a first body of assignments only,
+    to none of the variables the condition reads (so the condition has the same value for the second)."""
+    if first.orelse or second.orelse or first.cond.text != second.cond.text:
+        return False
+    if not all(isinstance(s, (S.Assign, S.Comment)) for s in first.then):
+        return False
+    written = {E.base_name(s.target) for s in first.then if isinstance(s, S.Assign)}
+    return not written & {d.upper() for d in first.cond.deps} and not written & _names(first.cond.text)
+
+
+def _joined(first: S.If, second: S.If) -> S.If:
+    """One IF with both bodies; the second's source note moves to its first statement if that has none."""
+    then = second.then
+    if second.note is not None and second.note != first.note:
+        head = then[0]
+        if not isinstance(head, (S.Assign, S.Call)) or head.note is not None:
+            then = (S.Comment(second.note),) + then
+        else:
+            then = (dataclasses.replace(head, note=second.note),) + then[1:]
+    return dataclasses.replace(first, then=first.then + then, inline=False)
 
 
 def _flag_from_condition(stmt: S.If) -> S.Stmt:
