@@ -57,3 +57,44 @@ def test_machine_events_reach_the_translated_program_too(tmp_path):
     project, scenario = _project(tmp_path)
     result = api.check_equivalence(project, scenarios=[scenario], backend="builtin")
     assert result.equivalent, result.result
+
+
+STATUS_PROGRAM = """\
+LN    M10
+IFT
+SUBM  Status_job
+=     W20
+L     K1
+=     M10
+ENDI
+EM
+
+LBL Status_job
+PS    K1
+CM    9035              ; NC status information 1
+PL    W12
+PS    K50
+CM    9035
+PL    W14
+EM
+"""
+
+STATUS_SCENARIO = """\
+name: status
+cycles: 4
+machine:
+  status: {1: 42, 50: -3}
+expect:
+  - {cycle: 3, values: {W12: 42, W14: -3}}
+"""
+
+
+def test_nc_status_information_reaches_both_sides(tmp_path):
+    # Catches: `status` not applied (9035 reads 0), or applied to one side only (a divergence).
+    (tmp_path / "main.src").write_text(STATUS_PROGRAM, encoding="utf-8")
+    (tmp_path / "status.yaml").write_text(STATUS_SCENARIO, encoding="utf-8")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    run = api.simulate(project, tmp_path / "status.yaml").run
+    assert run.failures == [] and run.cycles_run == 4
+    result = api.check_equivalence(project, scenarios=[tmp_path / "status.yaml"], backend="builtin")
+    assert result.equivalent, result.result

@@ -246,6 +246,7 @@ class NcAction(_Model):
 TABLE_FILES: Mapping[str, int] = MappingProxyType({"T": 0, "D": 1, "TCH": 2})
 AXES = 16
 TABLE_ELEMENTS = 63
+STATUS_ENTRIES = 256        # entries of the NC status table modules 9035/9036 read and write (the C model's size)
 
 
 class Axis(_Model):
@@ -272,16 +273,17 @@ class TableEntry(_Model):
 
 
 class MachineData(_Model):
-    """What the control's PLC modules read about the machine: axes, drives, table contents."""
+    """What the control's PLC modules read about the machine: axes, drives, table contents, NC status values."""
 
     axes: dict[Annotated[int, Field(ge=0, lt=AXES)], Axis] = {}
     drives: Drives | None = None
     tables: list[TableEntry] = []
+    status: dict[Annotated[int, Field(ge=0, lt=STATUS_ENTRIES)], _DWord] = {}   # NC status information (9035)
 
     @model_validator(mode="after")
     def _not_empty(self) -> MachineData:
-        if not self.axes and self.drives is None and not self.tables:
-            raise ValueError("`machine` needs `axes`, `drives` or `tables`")
+        if not self.axes and self.drives is None and not self.tables and not self.status:
+            raise ValueError("`machine` needs `axes`, `drives`, `tables` or `status`")
         return self
 
     def as_dict(self) -> dict[str, Any]:

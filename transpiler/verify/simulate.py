@@ -134,8 +134,12 @@ class SimulationResult:
 
 def effective_machine_parameters(scenario: Scenario, diags: Diagnostics, base_mp: Mapping | None = None
                                  ) -> tuple[dict[tuple[int, int], Decimal], dict]:
-    """`base_mp` (the machine parameters the translation was made with) overridden by the scenario's own."""
+    """The machine parameters a scenario runs with: its MP file where it names one, else `base_mp` (the ones the
+    translation was made with), and its inline `mp` values over either. A file replaces the base as a whole: a
+    machine whose parameter file lacks an entry (module 9032 then reports an error) is a scenario of its own."""
     mp, spans = machine_parameters(scenario, diags)
+    if scenario.machine_parameters is not None:
+        return mp, spans
     return {**(base_mp or {}), **mp}, spans
 
 
@@ -163,7 +167,9 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
 
 
 def apply_machine_data(sys, data: MachineData) -> None:
-    """Load `data` (axes, drives, table elements) into a system context of the PLC module models."""
+    """Load `data` (axes, drives, table elements, NC status) into a system context of the PLC module models."""
+    for number, value in data.status.items():
+        sys.set_status(number, value)
     for axis, values in data.axes.items():
         sys.set_axis(axis, values.active, values.position)
     if data.drives is not None:
