@@ -441,17 +441,17 @@ class StBackend:
         if layout.timers or layout.counters:
             service.append(S.Comment("phase 3: timer and counter service, see docs/language.md#timers-and-counters"))
         for t in layout.timers:
-            inst = self.names.name(f"timer:{t}", f"HH_Timer{t}")
-            local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
             start = layout.timer_var("T", t)
+            inst = self.names.name(f"timer:{t}", _service_name(start, "timer", f"Timer{t}"))
+            local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
             running = layout.timer_var("T", t - prof.timer_start[0] + prof.timer_running[0])
             preset = E.var(self.preset_vars[(TIMER_MP, t)], "DINT")
             service.append(S.Call(inst, (("START", start), ("PRESET", preset))))
             service.append(S.Assign(running.text, E.var(f"{inst}.RUNNING", "BOOL")))
         for c in layout.counters:
-            inst = self.names.name(f"counter:{c}", f"HH_Counter{c}")
-            local.append(IecVar(inst, "HH_COUNTER", comment=f"service of C{c}"))
             start = layout.timer_var("C", prof.counter_start[0] + c)
+            inst = self.names.name(f"counter:{c}", _service_name(start, "counter", f"Counter{c}"))
+            local.append(IecVar(inst, "HH_COUNTER", comment=f"service of C{c}"))
             running = layout.timer_var("C", prof.counter_running[0] + c)
             release = layout.timer_var("C", prof.counter_release[0] + c)
             preset = E.var(self.preset_vars[(COUNTER_MP, c)], "DINT")
@@ -554,6 +554,12 @@ def _at_most_one_line_of_code(statements: list[S.Stmt]) -> bool:
     *before, last = statements
     return all(isinstance(s, S.Comment) and "RETURN" not in s.text + (s.note or "") for s in before) \
         and printer.one_line(last)
+
+
+def _service_name(start: E.Expr, what: str, fallback: str) -> str:
+    """The service FB instance of a timer or counter, named after its start operand (`TS_unclamp_Z_timer`); an
+    operand held in an array element (reached through the index register) gives `Timer8`."""
+    return f"{start.text}_{what}" if start.var is not None and start.text.isidentifier() else fallback
 
 
 def _module_effect(number: int) -> Effect | None:
