@@ -9,11 +9,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tests.test_interp import cycles, machine
 from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou, ProgramInstance, Task, VarSection
 from transpiler.backends.plcopen.writer import extract_st_bodies
 from transpiler.backends.st import hh_lib
+from transpiler.backends.st.arith import gate_value
 from transpiler.backends.st.check import check_blark, find_iec2c
 from transpiler.backends.st.library import helper_pous
 from transpiler.backends.st.writer import extract_pou_bodies, render_st
@@ -334,3 +337,11 @@ def test_transpile_writes_the_library_beside_project_st(tmp_path: Path, capsys) 
     # The blocks follow the project's semantics (here the default ones) and the header says so.
     assert lib["HH_TIMER"] == hh_lib.library_pous(make_semantics())[-2].body
     assert "counter_counts = cycles" in lib_st
+
+
+@given(a=st.integers(MIN, 2 ** 31 - 1), v=st.integers(MIN, 2 ** 31 - 1), width=st.sampled_from((8, 16, 32)))
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_constant_word_gates_fold_to_what_the_helpers_give(builtin, a: int, v: int, width: int) -> None:
+    """The back end folds a gate of two constants (gate_value); the helper must give the same on every input."""
+    for name, kind in (("HH_WAND", "A"), ("HH_WOR", "O"), ("HH_WXOR", "X")):
+        assert gate_value(kind, a, v, width) == _call(builtin, name, (a, v, width)), (name, a, v, width)

@@ -124,3 +124,14 @@ def test_mutate_cli_on_the_timers_construct_reports_survivors_score_and_exit_cod
 def test_mutate_cli_bad_input_exits_2_without_traceback(tmp_path, capsys):
     code = main(["mutate", str(TIMERS / "main.src"), "--scenario", str(tmp_path / "none.yaml")])
     assert code == 2 and "does not exist" in capsys.readouterr().err
+
+
+def test_the_width_32_of_a_word_gate_is_never_mutated():
+    # Catches: 31/33 generated for a width the gate treats as 32 anyway (equivalent by construction), or the
+    # filter also swallowing a width 8/16 (whose +-1 does change the gate) or a 32 that is no width.
+    text = ("PROGRAM Main\nVAR\n    w : DINT;\nEND_VAR\n"
+            "    w := HH_WAND(w, 32, 32);\n    w := HH_WOR(w, 5, 16);\n    w := HH_SHL(w, 32);\nEND_PROGRAM\n")
+    constants = [m.description for m in mutation_sites(text) if m.operator == "constant"]
+    assert "32 -> 33 at column 25" not in constants and "32 -> 31 at column 25" not in constants
+    assert {"32 -> 33 at column 21", "16 -> 17 at column 23", "16 -> 15 at column 23"} <= set(constants)
+    assert "32 -> 33 at column 20" in constants          # HH_SHL's count is no width

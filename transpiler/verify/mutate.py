@@ -2,8 +2,9 @@
 
 Mutants of the emitted ST, each one place in the body of one translated POU changed (the emitted HH_* library is
 left alone): an assignment or call that loses its effect, AND<->OR, a negation dropped, TRUE<->FALSE, an
-integer constant +-1, a comparison operator replaced, two neighbouring CASE branches swapped. Each mutant is
-judged by the same co-simulation as `equiv`, shortest scenario first: it is KILLED by a divergence, an operand
+integer constant +-1 (except the width 32 of a word gate, which cannot matter), a comparison operator replaced,
+two neighbouring CASE branches swapped. Each mutant is judged by the same co-simulation as `equiv`, shortest
+scenario first: it is KILLED by a divergence, an operand
 missing in the translation, or a fault of the translated side (what `equiv` calls NOT EQUIVALENT); ST the
 executor rejects makes it INVALID (excluded); a mutant whose runs end only in harness exceptions is an ERROR
 (never a kill); else it SURVIVED. A file of judged-equivalent mutants (each with its reason) takes those out of
@@ -105,6 +106,24 @@ def _replace_at(line: str, start: int, end: int, new: str) -> str:
     return line[:start] + new + line[end:]
 
 
+# The word gates of the emitted library take the operand width last and treat every width but 8 and 16 as 32
+# bits, so 31 and 33 in place of 32 cannot change anything: equivalent by construction, never generated.
+_GATES = frozenset({"HH_WAND", "HH_WOR", "HH_WXOR"})
+
+
+def _width_of_a_gate(code: str, start: int, end: int, value: int) -> bool:
+    """Whether the literal code[start:end] is a width 32 given to a word gate (its last argument)."""
+    if value != 32 or not code[end:].lstrip().startswith(")") or not code[:start].rstrip().endswith(","):
+        return False
+    depth = 0
+    for i in range(start - 1, -1, -1):
+        depth += {")": 1, "(": -1}.get(code[i], 0)
+        if depth < 0:
+            callee = re.search(r"([A-Za-z_][A-Za-z0-9_]*)\s*$", code[:i])
+            return callee is not None and callee.group(1).upper() in _GATES
+    return False
+
+
 def mutation_sites(st_text: str) -> list[Mutant]:
     """Every single-place mutation of the translated bodies, in file order."""
     lines = st_text.splitlines()
@@ -143,6 +162,8 @@ def mutation_sites(st_text: str) -> list[Mutant]:
         if not CASE_LABEL.match(code):
             for m in INTEGER.finditer(plain):
                 value = int(m.group(0))
+                if _width_of_a_gate(plain, m.start(), m.end(), value):
+                    continue
                 for delta in (1, -1):
                     if value + delta >= 0:
                         add("constant", index, pou, f"{value} -> {value + delta} at column {m.start() + 1}",

@@ -125,8 +125,20 @@ class ArithmeticMixin(ExecutorPart):
         return E.binop(REL[rel], a, b, "BOOL", prec, 0, 1)
 
     def _gate(self, kind: str, a: Expr, b: Expr, width: int) -> Expr:
+        a, b = E.to_dint(a), E.to_dint(b)
+        if a.const is not None and b.const is not None:
+            return E.int_const(gate_value(kind, a.const, b.const, width))
         fn = {"A": "HH_WAND", "O": "HH_WOR", "X": "HH_WXOR"}[kind]
-        return self._fn(fn, [E.to_dint(a), E.to_dint(b), E.int_const(width)])
+        return self._fn(fn, [a, b, E.int_const(width)])
+
+
+def gate_value(kind: str, a: int, b: int, width: int) -> int:
+    """What HH_WAND/HH_WOR/HH_WXOR (A/O/X) give for constant arguments: the operand's `width` bits of the word
+    accumulator combined, the bits above them kept (AND) or combined with zeros (OR, XOR)."""
+    mask = {8: 0xFF, 16: 0xFFFF}.get(width, 0xFFFFFFFF)
+    a, u = a & 0xFFFFFFFF, b & mask
+    value = {"A": (a & ~mask) | (a & u), "O": a | u, "X": a ^ u}[kind]
+    return wrap32(value)
 
 
 def wrap32(v: int) -> int:
