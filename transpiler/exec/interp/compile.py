@@ -41,6 +41,7 @@ _GROUP = 8                      # blocks per leaf of the dispatch tree
 _EXITS_COND = frozenset({"JPT", "JPF", "EMT", "EMF"})
 _EXITS_UNCOND = frozenset({"JP", "EM"})
 _NOT_COUNTED = frozenset({"LBL", "KFIELD"})
+_CONDITIONAL = frozenset({"JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF"})
 
 
 def counts_as_instruction(op: Op) -> bool:
@@ -58,6 +59,11 @@ class CompiledProgram:
     op_index: tuple[tuple[int, int], ...]           # op id -> (file index, op index)
     exact: bool
     coverage: bool
+    # Coverage marks (see CoverageMarks): branch slot -> (op id, outcome), the same in every variant of a program;
+    # branch slot -> op ids its mark also shows as executed; stretch mark -> the op ids it stands for.
+    branch_slots: tuple[tuple[int, int], ...] = ()
+    branch_ops: tuple[tuple[int, ...], ...] = ()
+    stretch_ops: tuple[tuple[int, ...], ...] = ()
 
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
         """Instantiate against a machine: (file functions, get_registers, set_registers)."""
@@ -82,7 +88,25 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     gen = _Generator(program, exact=exact, coverage=coverage, native=native)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
-    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage)
+    branch_ops = tuple(gen.branch_ops.get(opid, ()) for opid, _ in gen.branch_slots)
+    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage,
+                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops))
+
+
+def branch_slots(program: Program) -> list[tuple[int, int]]:
+    """Every (op id, outcome) that coverage records, in op order: 1 and 0 of each conditional jump, call and module
+    end, then each entry of a CASE followed by its -1 (no entry). A CASE's entry slots are consecutive so that the
+    generated code finds the slot of entry s by adding s."""
+    slots: list[tuple[int, int]] = []
+    opid = 0
+    for code in program.files:
+        for op in code.ops:
+            if op.code in _CONDITIONAL:
+                slots += [(opid, 1), (opid, 0)]
+            elif op.code == "CASE":
+                slots += [(opid, entry) for entry in range(len(op.case_targets))] + [(opid, -1)]
+            opid += 1
+    return slots
 
 
 def _entries(program: Program) -> list[set[int]]:
@@ -130,6 +154,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
             self.op_index.extend((f, i) for i in range(len(code.ops)))
+        self.branch_slots = branch_slots(program)
+        self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
+        self.branch_ops: dict[int, tuple[int, ...]] = {}    # op id of a conditional exit -> its stretch's op ids
+        self.stretch_ops: list[tuple[int, ...]] = []
 
     # ------------------------------------------------------------------ output
 
@@ -155,7 +183,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
                    "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six", "srx",
-                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "branch", "ixw")
+                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "ixw")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
         self.out(1, "LA = 0; WA = 0; X = 0; SA = ''; n = 0; d = 0; _em = -1")
@@ -209,9 +237,11 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         ops = code.ops[first:end]
         if not self.exact:
             self._precount(ops, 0, indent, base + first)
-        # The fast variant marks the ops of a straight-line stretch as executed in one slice store just before its
-        # exit (each op on its own in the exact variant): a fault inside the stretch leaves its ops unmarked, so
-        # coverage may miss ops of a faulting cycle but never claims an op that did not run.
+        # The fast variant marks the ops of a straight-line stretch as executed with one store just before its exit
+        # (each op on its own in the exact variant): a fault inside the stretch leaves its ops unmarked, so coverage
+        # may miss ops of a faulting cycle but never claims an op that did not run. A stretch that ends in a
+        # conditional exit needs no store of its own: either branch mark of the exit, set right after the stretch,
+        # stands for it (a stretch has one entry, so reaching its exit means all of it ran, in either variant).
         pending: list[int] = []
         for offset, op in enumerate(ops):
             opid = base + first + offset
@@ -225,7 +255,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                     else:
                         pending.append(opid)
             # CAN may end the running job from inside the stretch (JobCancelled): its marks go first as well
-            if pending and (op.code in _EXITS_COND or op.code in _EXITS_UNCOND or op.code == "CAN"):
+            if pending and op.code in _EXITS_COND:
+                self.branch_ops[opid] = tuple(pending)
+                pending = []
+            elif pending and (op.code in _EXITS_UNCOND or op.code == "CAN"):
                 self._mark(indent, pending)
                 pending = []
             self._op(op, opid, f, seg_of, indent)
@@ -241,18 +274,9 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(indent, "_falloff()")
 
     def _mark(self, indent: int, opids: list[int]) -> None:
-        """Coverage marks of `opids` (ascending), one slice store per run of consecutive ids."""
-        run_start = prev = opids[0]
-        for opid in [*opids[1:], None]:
-            if opid is not None and opid == prev + 1:
-                prev = opid
-                continue
-            if prev == run_start:
-                self.out(indent, f"_hit[{run_start}] = 1", run_start)
-            else:
-                self.out(indent, f"_hit[{run_start}:{prev + 1}] = {bytes([1] * (prev + 1 - run_start))!r}", run_start)
-            if opid is not None:
-                run_start = prev = opid
+        """The coverage mark of a stretch: one item store, the stretch's op ids go to the table."""
+        self.out(indent, f"_sh[{len(self.stretch_ops)}] = 1", opids[0])
+        self.stretch_ops.append(tuple(opids))
 
     def _precount(self, ops: tuple[Op, ...], start: int, indent: int, opid: int) -> None:
         """Fast variant: count the straight-line instructions up to the next exit once, before running them."""

@@ -103,7 +103,7 @@ class Machine:
         if compiled is None or compiled.coverage != coverage or len(compiled.op_index) != op_count:
             compiled = compile_program(program, coverage=coverage)
         self._primary = compiled
-        self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(len(compiled.op_index), coverage))
+        self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(compiled, coverage))
         self._exact: tuple[CompiledProgram, tuple, Any, Any] | None = None
         self.halted = False
         self.next_cycle = 0
@@ -304,7 +304,7 @@ class Machine:
         if self._exact is None:
             # with coverage when the machine records it: the ops of the overrunning cycle's last blocks count too
             compiled = compile_program(self.program, exact=True, coverage=self.coverage_enabled)
-            funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), self.coverage_enabled))
+            funcs, get, set_ = compiled.make(self.runtime.env(compiled, self.coverage_enabled))
             self._exact = (compiled, funcs, get, set_)
         return self._exact
 
@@ -406,21 +406,24 @@ class Machine:
         """How many distinct (op, outcome) pairs of conditional jumps, calls, module ends and CASE entries this
         machine has taken so far; it only grows, so a caller watching for new outcomes compares it each cycle and
         asks for branch_outcomes() only when it changed (0 without coverage)."""
-        return len(self.runtime.branches)
+        marks = self.runtime.marks
+        return 0 if marks is None else marks.branch_outcome_count()
 
     def branch_outcomes(self) -> frozenset[tuple[int, int]]:
         """The distinct (op id, outcome) pairs taken so far, as a snapshot (op ids as in the compiled program)."""
-        return frozenset(self.runtime.branches)
+        marks = self.runtime.marks
+        return frozenset() if marks is None else marks.branch_outcomes()
 
     @property
     def coverage(self) -> Coverage:
-        if not self.coverage_enabled:
+        marks = self.runtime.marks
+        if not self.coverage_enabled or marks is None:
             raise ValueError("the machine was created without coverage=True")
         index = self._primary.op_index
-        executed = frozenset(index[i] for i, hit in enumerate(self.runtime.hits) if hit)
+        executed = frozenset(index[i] for i in marks.executed())
         branches: dict[tuple[int, int], set[int]] = {}
-        for opid, outcome in self.runtime.branches:
-            branches.setdefault(index[opid], set()).add(int(outcome))
+        for opid, outcome in marks.branch_outcomes():
+            branches.setdefault(index[opid], set()).add(outcome)
         return Coverage(executed, {k: frozenset(v) for k, v in branches.items()})
 
     @property

@@ -6,6 +6,8 @@ import collections
 from typing import Callable
 
 from transpiler.language.semantics import Semantics
+from transpiler.exec.interp.compile import CompiledProgram
+from transpiler.exec.interp.coverage import CoverageMarks
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
 from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
@@ -42,17 +44,23 @@ class Runtime:
         self.unknown_modules: dict[int, int] = {}
         mp7280 = sys.get_mp(7280, 0)
         self.pure_env = PureEnv(lambda: len(self.stack), "," if mp7280 is not None and mp7280 == 0 else ".")
-        self.hits = bytearray(0)
-        self.branches: set[tuple[int, int]] = set()
+        self.marks: CoverageMarks | None = None
         # (kind, address) of every store made through an indexed operand, in first-write order (a dict is an
         # ordered set): co-simulation compares these operands from then on. W/D stores record their kind and
         # first byte. Stores to named operands never get here, so a program without indexed stores pays nothing.
         self.indexed_writes: dict[tuple[str, int], None] = {}
 
-    def env(self, op_count: int, coverage: bool) -> dict[str, object]:
+    def env(self, compiled: CompiledProgram, coverage: bool) -> dict[str, object]:
+        """The names the generated code of `compiled` binds; with coverage, the first program sets up the marks
+        that later variants of it write into as well."""
         st = self.state
-        if coverage and len(self.hits) != op_count:
-            self.hits = bytearray(op_count)
+        hits: bytearray | None = None
+        branch_hits: bytearray | None = None
+        stretch_hits: list[int] | None = None
+        if coverage:
+            if self.marks is None:
+                self.marks = CoverageMarks(compiled)
+            hits, branch_hits, stretch_hits = self.marks.arrays_for(compiled)
         env: dict[str, object] = {
             "M": st.M, "I": st.I, "O": st.O, "T": st.T, "C": st.C, "mem": st.mem, "mb": st.mb, "S": st.S,
             "stk": self.stack, "valid": st.valid, "st_h": st.st_h, "st_H": st.st_H, "st_i": st.st_i, "st_I": st.st_I,
@@ -64,7 +72,8 @@ class Runtime:
             "rply": self.jobs.reply, "can": self.cancel, "scat": self.concat, "six": self.string_index,
             "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
-            "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": self.hits, "branch": self.branches.add,
+            "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": hits, "bh": branch_hits,
+            "sh": stretch_hits,
             "ixw": self.indexed_writes.setdefault,
         }
         if st.native:
