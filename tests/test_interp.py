@@ -234,6 +234,41 @@ def test_stack_overflow_is_a_fault_at_the_push(tmp_path: Path) -> None:
         m.run_cycle(1)
 
 
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+@pytest.mark.parametrize("program, expected", [
+    # the operand of a push is read before the capacity check: its fault comes first
+    ("""
+        L   K99
+        =   X
+        PS  K1
+        PS  KF TAB[X]
+        EM
+        KFIELD TAB
+        K1
+        ENDK
+     """, ("E-RT-INDEX", 4, "KF TAB[X] with X = 99 is outside 0..0")),
+    ("""
+        PS  K1
+        PS  M1
+        EM
+     """, ("E-RT-STACK-OVERFLOW", 2, "data stack overflow (capacity 2 words)")),
+    ("""
+        PS  M1
+        PL  D0
+        EM
+     """, ("E-RT-STACK-UNDERFLOW", 2, "a 32-bit pull needs 2 words, the data stack holds 1")),
+    ("""
+        PL  M1
+        EM
+     """, ("E-RT-STACK-UNDERFLOW", 1, "pull from an empty data stack")),
+])
+def test_stack_faults_in_both_variants(tmp_path: Path, program: str, expected: tuple, exact: bool) -> None:
+    prog = compile_text(tmp_path, program, overrides={"data_stack_words": 2})
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    fault = fault_of(cycles(m, 1))
+    assert (fault.code, fault.span.line, fault.message) == expected
+
+
 def test_fault_inside_a_module_file_names_that_file(tmp_path: Path) -> None:
     m = machine(tmp_path, """
         USES mod.src

@@ -182,7 +182,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 self.out(1, f"_u{name[3]} = env[{name!r}].unpack_from")
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
-                   "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six", "srx",
+                   "sat", "overflow", "underflow", "module", "subm", "rply", "can", "scat", "six", "srx",
                    "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "ixw")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")

@@ -67,8 +67,8 @@ class Runtime:
             "rb": self.read_bit_indexed, "wb": self.write_bit_indexed, "rx": self.read_val_indexed,
             "wx": self.write_val_indexed, "packx": self.pack_indexed, "unpackx": self.unpack_indexed,
             "pack": pack_bits, "unpack": unpack_bits, "kf": kf_read, "div": self.div, "mod": self.mod,
-            "shl": shl_checked, "shr": shr_checked, "sat": saturate, "ps16": self.push16, "ps32": self.push32,
-            "pl16": self.pop16, "pl32": self.pop32, "module": self.module, "subm": self.submit,
+            "shl": shl_checked, "shr": shr_checked, "sat": saturate, "overflow": self.stack_overflow,
+            "underflow": self.stack_underflow, "module": self.module, "subm": self.submit,
             "rply": self.jobs.reply, "can": self.cancel, "scat": self.concat, "six": self.string_index,
             "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
@@ -82,28 +82,29 @@ class Runtime:
 
     # ---- data stack (A-19): 16-bit words, a 32-bit value is two words with the high word on top
 
-    def push16(self, word: int) -> None:
-        if len(self.stack) + 1 > self.capacity:
-            raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
-        self.stack.append(word & 0xFFFF)
+    # The generated code pushes and pulls inline (gen_stack) and calls the two faults below; modules use these.
 
     def push32(self, value: int) -> None:
         if len(self.stack) + 2 > self.capacity:
-            raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
+            self.stack_overflow()
         self.stack.append(value & 0xFFFF)
         self.stack.append((value >> 16) & 0xFFFF)
 
-    def pop16(self) -> int:
-        if not self.stack:
-            raise Fault("E-RT-STACK-UNDERFLOW", "pull from an empty data stack")
-        return self.stack.pop()
-
     def pop32(self) -> int:
         if len(self.stack) < 2:
-            raise Fault("E-RT-STACK-UNDERFLOW", f"a 32-bit pull needs 2 words, the data stack holds {len(self.stack)}")
+            self.stack_underflow(2)
         high = self.stack.pop()
         low = self.stack.pop()
         return sext((high << 16) | low, 32)
+
+    def stack_overflow(self) -> None:
+        raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
+
+    def stack_underflow(self, words: int) -> int:
+        """The fault of a pull of `words` (1 or 2) words that the stack does not hold."""
+        if words == 1:
+            raise Fault("E-RT-STACK-UNDERFLOW", "pull from an empty data stack")
+        raise Fault("E-RT-STACK-UNDERFLOW", f"a 32-bit pull needs 2 words, the data stack holds {len(self.stack)}")
 
     # ---- indexed operands (6.13, A-21, A-22, A-53)
 
