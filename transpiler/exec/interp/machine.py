@@ -28,7 +28,7 @@ from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from transpiler.exec.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from transpiler.exec.interp.state import MachineState, byte_cells, sext
+from transpiler.exec.interp.state import MachineState, byte_cells, nonzero_positions, sext
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.exec.interp.support import Runtime
 from transpiler.language.presets import load_presets
@@ -252,9 +252,8 @@ class Machine:
         lo, hi = self.profile.interface.error_markers
         window = self.state.M[lo:hi + 1]
         if 1 in window:
-            for offset, bit in enumerate(window):
-                if bit:
-                    self.error_messages.setdefault(lo + offset, self.next_cycle)
+            for offset in nonzero_positions(window):
+                self.error_messages.setdefault(lo + offset, self.next_cycle)
         self.sys.tick()
         self.next_cycle += 1
 
