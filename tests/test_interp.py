@@ -850,19 +850,40 @@ def _programs(draw: st.DrawFn) -> str:
 def test_random_programs_run_the_same_in_fast_and_exact_code(tmp_path: Path, source: str, inputs: list) -> None:
     prog = compile_text(tmp_path, source, overrides={"max_instructions_per_cycle": 120})
     fast, exact = Machine(prog), Machine(prog, coverage=True)
+    covered = Machine(prog, compiled=compile_program(prog, coverage=True, exact=False), coverage=True)
     for cycle, bits in enumerate(inputs):
         writes = [("I", i, (bits >> i) & 1) for i in range(3)]
         outcomes = []
-        for m in (fast, exact):
+        for m in (fast, exact, covered):
             report = m.run_cycle(cycle, writes)
             # a cycle ended by a fault counts its last block whole in the fast code, so counts compare without one
             count = None if report.faults else report.instructions
             outcomes.append(([(f.code, f.op, f.cycle) for f in report.faults],
                              [(w.code, w.op) for w in report.warnings], count,
                              bytes(m.state.M[:8]), bytes(m.state.mem[:16]), m.registers))
-        assert outcomes[0] == outcomes[1], source
+        assert outcomes[0] == outcomes[1] == outcomes[2], source
         if fast.halted:
             break
+    # the fast code's coverage marks (per stretch, implied by branch marks) are the exact code's per-op marks
+    assert covered.coverage.branches == exact.coverage.branches, source
+    assert covered.coverage.executed <= exact.coverage.executed, source
+    if not covered.halted:
+        assert covered.coverage.executed == exact.coverage.executed, source
+
+
+@pytest.mark.parametrize("coverage", [False, True])
+def test_many_forward_jumps_in_one_block_stay_within_the_nesting_limit(tmp_path: Path, coverage: bool) -> None:
+    # each jump to the next block nests the rest of its block one level deeper, up to a cap
+    source = "\n".join(["L K0", "= W0"] + ["L W0", "+ K1", "= W0", "< K40", "JPF END"] * 150 + ["LBL END", "EM"])
+    prog = compile_text(tmp_path, source + "\n")
+    fast = Machine(prog, compiled=compile_program(prog, coverage=coverage, exact=False), coverage=coverage)
+    exact = Machine(prog, compiled=compile_program(prog, coverage=coverage, exact=True), coverage=coverage)
+    for m in (fast, exact):
+        report = m.run_cycle(0)
+        assert not report.faults and m.read("W", 0) == 40
+    assert fast.instructions == exact.instructions
+    if coverage:
+        assert fast.coverage == exact.coverage
 
 
 # ---------------------------------------------------------------------------------------------

@@ -38,6 +38,7 @@ from transpiler.language.semantics import Semantics
 
 GENERATED_FILENAME = "<hh2iec-interp>"
 _GROUP = 8                      # blocks per leaf of the dispatch tree
+_MAX_INDENT = 60                # deepest nesting of generated code (the tokenizer allows 100 levels)
 _EXITS_COND = frozenset({"JPT", "JPF", "EMT", "EMF"})
 _EXITS_UNCOND = frozenset({"JP", "EM"})
 _NOT_COUNTED = frozenset({"LBL", "KFIELD"})
@@ -151,6 +152,9 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.brackets: list[tuple[Op, str, int]] = []
         self.sizes = {k: space_size(self.sem.profile, k) for k in "MIOTCBWDS"}
         self.scale = self.sem["index_scaling"] == "elements"
+        self.leaf_size = _GROUP
+        self.max_indent = _MAX_INDENT
+        self.block = 0                              # the block being generated
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
             self.op_index.extend((f, i) for i in range(len(code.ops)))
@@ -233,6 +237,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         end = starts[k + 1] if k + 1 < len(starts) else len(code.ops)
         seg_of = self.seg_maps[f]
         base = self.op_base[f]
+        self.block = k
         self.brackets = []
         ops = code.ops[first:end]
         if not self.exact:
@@ -261,7 +266,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             elif pending and (op.code in _EXITS_UNCOND or op.code == "CAN"):
                 self._mark(indent, pending)
                 pending = []
-            self._op(op, opid, f, seg_of, indent)
+            indent = self._op(op, opid, f, seg_of, indent)
             if op.code in _EXITS_UNCOND:
                 return                       # the rest of the block is unreachable
             if op.code in _EXITS_COND and not self.exact and offset + 1 < len(ops):
@@ -290,20 +295,20 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(indent, f"if n > {self.budget}: raise _BudgetExceeded", opid)
     # ------------------------------------------------------------------ instructions
 
-    def _op(self, op: Op, opid: int, f: int, seg_of: dict[int, int], ind: int) -> None:
+    def _op(self, op: Op, opid: int, f: int, seg_of: dict[int, int], ind: int) -> int:
+        """Generate the op; returns the indentation of the code that follows (deeper after a jump that nests it)."""
         c = op.code
         o = op.operand
         handler = getattr(self, f"_op_{c}", None)
         if handler is not None:
-            handler(op, opid, ind, f, seg_of)
-            return
+            follow = handler(op, opid, ind, f, seg_of)
+            return ind if follow is None else follow
         if c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN"):
             self._bit_logic(c, o, opid, ind)
         elif c in ("WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN"):
             self._word_gate(c, o, opid, ind)
         elif c in ("ADD", "SUB", "MUL", "DIV", "MOD"):
             self._arith(c, "WA", self.value(o), opid, ind)
-        elif c in ("NOP", "LBL", "KFIELD"):
-            pass
-        else:
+        elif c not in ("NOP", "LBL", "KFIELD"):
             raise NotImplementedError(f"interpreter: no code generation for op {c}")
+        return ind

@@ -16,19 +16,34 @@ class FlowCode:
         if self.coverage:
             self.out(ind, f"_bh[{self.branch_slot[opid, outcome]}] = 1", opid)
 
-    def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
-        self.out(ind, f"b = {seg_of[op.target]}", opid)
-        self.out(ind, "continue", opid)
+    def _falls_to(self, block: int) -> bool:
+        """Whether a jump from the block being generated to `block` can fall through the remaining `if b == k`
+        tests of its dispatch leaf instead of going round the dispatch loop: `block` comes later in the same leaf."""
+        return self.block < block and block // self.leaf_size == self.block // self.leaf_size
 
-    def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> None:
+    def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
+        block = seg_of[op.target]
+        self.out(ind, f"b = {block}", opid)
+        if not self._falls_to(block):
+            self.out(ind, "continue", opid)
+
+    def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> int:
+        """Returns the indentation of the code after the jump: one level deeper when that code becomes the else
+        branch of a jump that falls through to a later block of the leaf (nesting is capped, Python limits it)."""
+        block = seg_of[op.target]
         self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
         self._cover(ind + 1, opid, 1)
-        self.out(ind + 1, f"b = {seg_of[op.target]}", opid)
+        self.out(ind + 1, f"b = {block}", opid)
+        if self._falls_to(block) and ind < self.max_indent:
+            self.out(ind, "else:", opid)
+            self._cover(ind + 1, opid, 0)
+            return ind + 1
         self.out(ind + 1, "continue", opid)
         self._cover(ind, opid, 0)
+        return ind
 
-    def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
-        self._op_JPT(op, opid, ind, f, seg_of, negate=True)
+    def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> int:
+        return self._op_JPT(op, opid, ind, f, seg_of, negate=True)
 
     def _call(self, op: Op, opid: int, ind: int) -> None:
         call = op.call
