@@ -32,7 +32,7 @@ from transpiler.exec.interp.gen_access import AccessCode
 from transpiler.exec.interp.gen_flow import FlowCode
 from transpiler.exec.interp.gen_stack import StackStringCode
 from transpiler.exec.interp.gen_word import WordCode
-from transpiler.exec.interp.state import space_size
+from transpiler.exec.interp.state import every_address_valid, space_size
 from transpiler.ir import FileCode, Op, Program
 from transpiler.language.semantics import Semantics
 
@@ -151,6 +151,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.case_tables: list[str] = []
         self.brackets: list[tuple[Op, str, int]] = []
         self.sizes = {k: space_size(self.sem.profile, k) for k in "MIOTCBWDS"}
+        self.every_valid = {k: every_address_valid(self.sem.profile, k) for k in "MIOTCBWD"}
         self.scale = self.sem["index_scaling"] == "elements"
         self.leaf_size = _GROUP
         self.max_indent = _MAX_INDENT

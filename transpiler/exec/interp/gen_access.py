@@ -9,7 +9,7 @@ from transpiler.ir import Op, Operand
 class AccessCode:
     """Mixin of the code generator: expressions that read and write registers and operands, and the ops that only
     move values (loads, stores, bit logic). Uses the generator's `out`, `sem`, `shared`, `x16`, `native`, `scale`,
-    `sizes` and `kf_tables`."""
+    `sizes`, `every_valid` and `kf_tables`."""
 
     # ------------------------------------------------------------------ registers
 
@@ -41,7 +41,8 @@ class AccessCode:
 
     def _ix_ok(self, o: Operand) -> str:
         # The inline test covers the valid case only; the helper raises the fault (or reads 0, A-22).
-        return f"0 <= (_a := {self._ix(o)}) < {self.sizes[o.kind]} and V{o.kind}[_a]"
+        in_range = f"0 <= (_a := {self._ix(o)}) < {self.sizes[o.kind]}"
+        return in_range if self.every_valid[o.kind] else f"{in_range} and V{o.kind}[_a]"
 
     def bit(self, o: Operand) -> str:
         if o.indexed:

@@ -79,6 +79,14 @@ def _valid_table(profile: Profile, kind: str, size: int) -> bytes:
     return bytes(table)
 
 
+def every_address_valid(profile: Profile, kind: str) -> bool:
+    """Whether an indexed bit or byte operand of `kind` may reach every address of its array: then the range test is
+    the whole check of an effective address (W and D also need alignment, S is never checked inline)."""
+    if kind not in BIT_SPACES and kind != "B":
+        return False
+    return 0 not in _valid_table(profile, kind, space_size(profile, kind))
+
+
 @dataclasses.dataclass
 class Snapshot:
     """Copy of the memory taken before the main program (used to re-run a cycle exactly)."""
@@ -189,7 +197,9 @@ class MachineState:
     # ---- snapshots for the exact re-run of a cycle
 
     def snapshot(self) -> Snapshot:
-        return Snapshot(tuple(bytes(self.bits(k)) for k in BIT_SPACES), bytes(self.mem), tuple(self.S))
+        # taken before every cycle's program phase: the spaces are spelled out, in BIT_SPACES order, to keep it cheap
+        return Snapshot((bytes(self.M), bytes(self.I), bytes(self.O), bytes(self.T), bytes(self.C)), bytes(self.mem),
+                        tuple(self.S))
 
     def restore(self, snap: Snapshot) -> None:
         for kind, data in zip(BIT_SPACES, snap.bits):
