@@ -871,6 +871,33 @@ def test_random_programs_run_the_same_in_fast_and_exact_code(tmp_path: Path, sou
         assert covered.coverage.executed == exact.coverage.executed, source
 
 
+_LOGIC = st.sampled_from(["L", "LN", "A", "AN", "O", "ON", "XO", "XON"]).flatmap(
+    lambda m: st.sampled_from([f"{m} M{i}" for i in range(6)] + [f"{m} I{i}" for i in range(3)]))
+_LOGIC_OR_STORE = st.one_of(_LOGIC, _LOGIC, _LOGIC, st.sampled_from(["= M0", "= M5", "SN M3", "S M1", "R M2",
+                                                                     "RN M4", "PSL", "PLL", "= O1"]))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(ops=st.lists(_LOGIC_OR_STORE, min_size=1, max_size=90), bits=st.integers(0, 511))
+def test_runs_of_bit_logic_give_the_exact_codes_results(tmp_path: Path, ops: list, bits: int) -> None:
+    # the fast code folds runs of bit logic into one expression of LA (long runs in pieces)
+    source = "\n".join(["PSL", *ops, "PLL", "EM"]) + "\n"
+    prog = compile_text(tmp_path, source)
+    fast = Machine(prog, compiled=compile_program(prog, exact=False))
+    exact = Machine(prog, compiled=compile_program(prog, exact=True))
+    results = []
+    for m in (fast, exact):
+        for i in range(6):
+            m.write("M", i, (bits >> i) & 1)
+        for i in range(3):
+            m.write("I", i, (bits >> (6 + i)) & 1)
+        report = m.run_cycle(0)
+        # a cycle ended by a fault (a pull from the empty stack) counts its last block whole in the fast code
+        count = report.instructions if report.ok else None
+        results.append(([f.code for f in report.faults], count, bytes(m.state.M[:8]), m.state.O[1], m.registers))
+    assert results[0] == results[1], source
+
+
 @pytest.mark.parametrize("coverage", [False, True])
 def test_many_forward_jumps_in_one_block_stay_within_the_nesting_limit(tmp_path: Path, coverage: bool) -> None:
     # each jump to the next block nests the rest of its block one level deeper, up to a cap

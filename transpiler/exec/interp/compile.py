@@ -156,6 +156,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.leaf_size = _GROUP
         self.max_indent = _MAX_INDENT
         self.block = 0                              # the block being generated
+        # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
+        # and checks every op, and with the shared accumulator LA is a bit of WA.
+        self.fuse_la = not exact and not self.shared
+        self.la_chain = None
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
             self.op_index.extend((f, i) for i in range(len(code.ops)))
@@ -167,6 +171,8 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
     # ------------------------------------------------------------------ output
 
     def out(self, indent: int, text: str, opid: int = -1) -> None:
+        if self.la_chain is not None:
+            self.flush_la()
         self.lines.append("    " * indent + text)
         self.line_ops.append(opid)
 

@@ -2,8 +2,26 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from transpiler.exec.interp.gen_exprs import M32, int32, norm, signed_literal
 from transpiler.ir import Op, Operand
+
+
+_CHAIN_OPS = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
+_CHAIN_SYMBOLS = {"AND": "and", "OR": "or", "XOR": "^"}
+_CHAIN_LIMIT = 32          # ops per folded LA expression: each change of operator nests a parenthesis
+
+
+@dataclasses.dataclass(frozen=True)
+class _LaChain:
+    """The pending expression of LA: its text, its outermost operator (for parentheses), where it goes."""
+
+    text: str
+    top: str
+    ind: int
+    opid: int
+    length: int = 1
 
 
 class AccessCode:
@@ -136,7 +154,12 @@ class AccessCode:
 
     def _bit_logic(self, c: str, o: Operand, opid: int, ind: int) -> None:
         """LD LDN AND ANDN OR ORN XOR XORN, ST STN, SET RES SETN RESN."""
-        if c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
+        if self.fuse_la and not o.indexed and c in _CHAIN_OPS:
+            self._chain(c, o, opid, ind)
+        elif self.fuse_la and not o.indexed and c == "ST" and self.la_chain is not None:
+            chain, self.la_chain = self.la_chain, None
+            self.out(ind, f"{self.bit(o)} = LA = {chain.text}", chain.opid)
+        elif c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
             b = self.bit(o)
             if c.endswith("N"):
                 b = f"({b} ^ 1)"
@@ -153,6 +176,37 @@ class AccessCode:
             cond = self.la() if c in ("SET", "RES") else f"not {self.la()}"
             self.out(ind, f"if {cond}:", opid)
             self.bit_store(ind + 1, o, "1" if c in ("SET", "SETN") else "0", opid)
+
+    def _chain(self, c: str, o: Operand, opid: int, ind: int) -> None:
+        """Fold a bit load or gate on a named operand into the pending expression of LA (fast variant).
+
+        A run of these ops becomes one assignment `LA = M[1] and not M[2] or M[3]`: no store and reload of LA per
+        op, and `and`/`or` skip the reads that cannot change the result. The reads may be skipped or delayed
+        because nothing in the run writes or faults (named bit operands only), and every other line flushes the
+        expression first (`out`). Bits are 0 or 1, so `and`/`or` give the values `&`/`|` give (as 0, 1 or a bool,
+        which LA already holds after a comparison)."""
+        b = self.bit(o)
+        if c in ("LD", "LDN"):
+            # a load makes a pending expression dead: its reads are dropped, they have no effect
+            self.la_chain = _LaChain(f"not {b}" if c == "LDN" else b, "not" if c == "LDN" else "atom", ind, opid)
+            return
+        chain = self.la_chain or _LaChain("LA", "atom", ind, opid)
+        kind = c.rstrip("N")
+        sym = _CHAIN_SYMBOLS[kind]
+        if c.endswith("N"):
+            right = f"({b} ^ 1)" if kind == "XOR" else f"not {b}"
+        else:
+            right = b
+        left = chain.text if chain.top in ("atom", sym) else f"({chain.text})"
+        self.la_chain = _LaChain(f"{left} {sym} {right}", sym, chain.ind, chain.opid, chain.length + 1)
+        if self.la_chain.length >= _CHAIN_LIMIT:
+            self.flush_la()
+
+    def flush_la(self) -> None:
+        """Emit the pending LA expression, if any (before any other line, see `out`)."""
+        chain, self.la_chain = self.la_chain, None
+        if chain is not None:
+            self.out(chain.ind, f"LA = {chain.text}", chain.opid)
 
     # loads and stores
 
