@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from transpiler.frontend.load import ProjectOptions
 from transpiler.exec.interp import Machine, MachineConfigError, MachineHalted, compile_program
 from transpiler.exec.interp.faults import CycleReport
+from transpiler.exec.interp.gen_exprs import norm
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import Semantics, make_semantics
@@ -916,6 +917,13 @@ def test_many_forward_jumps_in_one_block_stay_within_the_nesting_limit(tmp_path:
 # ---------------------------------------------------------------------------------------------
 # the fast code against hand-computed values (not against the exact code): each expected value follows from the
 # rules of the language description by hand, and the comment says which wrong implementation it rules out.
+
+
+@given(value=st.integers(-(1 << 40), 1 << 40))
+def test_the_int32_wrap_of_the_generated_code(value: int) -> None:
+    # a value in range is taken as it is, any other wraps; for a name and for an expression evaluated once
+    for expr in ("v", "v + 0"):
+        assert eval(norm(expr), {"v": value}) == ((value + (1 << 31)) % (1 << 32)) - (1 << 31)  # noqa: S307
 
 
 def fast_machine(folder: Path, program: str, **kwargs: Any) -> Machine:
