@@ -23,6 +23,7 @@ below a line is located from the traceback at no run-time cost.
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import sys
 import types
@@ -153,7 +154,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.sizes = {k: space_size(self.sem.profile, k) for k in "MIOTCBWDS"}
         self.every_valid = {k: every_address_valid(self.sem.profile, k) for k in "MIOTCBWD"}
         self.scale = self.sem["index_scaling"] == "elements"
-        self.leaf_size = _GROUP
+        self.leaf_of: dict[int, int] = {}           # block -> its dispatch leaf, in the file being generated
         self.max_indent = _MAX_INDENT
         self.block = 0                              # the block being generated
         # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
@@ -224,8 +225,27 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(2, "_falloff()")
             return
         self.out(2, "while True:")
-        groups = [list(range(i, min(i + _GROUP, len(starts)))) for i in range(0, len(starts), _GROUP)]
+        groups = self._leaves(f, code, starts)
+        self.leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
         self._dispatch(f, code, starts, groups, 3)
+
+    def _leaves(self, f: int, code: FileCode, starts: list[int]) -> list[list[int]]:
+        """The blocks split into dispatch leaves of at most _GROUP consecutive blocks. A loop head (the target of a
+        jump from itself or a later block) starts a leaf: going round the loop then tests it first in its leaf."""
+        seg_of = self.seg_maps[f]
+        heads = set()
+        for i, op in enumerate(code.ops):
+            if op.code in ("JP", "JPT", "JPF") and op.target in seg_of:
+                target = seg_of[op.target]
+                if target <= bisect.bisect_right(starts, i) - 1:
+                    heads.add(target)
+        leaves: list[list[int]] = []
+        for k in range(len(starts)):
+            if not leaves or len(leaves[-1]) == _GROUP or k in heads:
+                leaves.append([k])
+            else:
+                leaves[-1].append(k)
+        return leaves
 
     def _dispatch(self, f: int, code: FileCode, starts: list[int], groups: list[list[int]], indent: int) -> None:
         if len(groups) == 1:

@@ -19,7 +19,7 @@ class FlowCode:
     def _falls_to(self, block: int) -> bool:
         """Whether a jump from the block being generated to `block` can fall through the remaining `if b == k`
         tests of its dispatch leaf instead of going round the dispatch loop: `block` comes later in the same leaf."""
-        return self.block < block and block // self.leaf_size == self.block // self.leaf_size
+        return self.block < block and self.leaf_of[block] == self.leaf_of[self.block]
 
     def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
         block = seg_of[op.target]
