@@ -195,6 +195,30 @@ def test_extended_instructions(tmp_path: Path) -> None:
         "B0": 0, "W2": 32767, "M5": 0, "D4": -6, "D8": -1, "M6": 1, "D12": -7}
 
 
+@pytest.mark.parametrize("width", [16, 32])
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+def test_incx_and_decx_wrap_at_the_width_of_x(tmp_path: Path, width: int, exact: bool) -> None:
+    top = (1 << (width - 1)) - 1
+    prog = compile_text(tmp_path, f"""
+        L   K{top}
+        =   X
+        INCX
+        L   X
+        =   D0
+        DECX
+        L   X
+        =   D4
+        INCX
+        INCX
+        L   X
+        =   D8
+        EM
+    """, overrides={"index_register_width": width})
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    cycles(m, 1)
+    assert values(m, "D0", "D4", "D8") == {"D0": -top - 1, "D4": top, "D8": -top}
+
+
 def test_strings_truncate_with_a_warning_and_compare_bytewise(tmp_path: Path) -> None:
     long = "x" * 100
     m = machine(tmp_path, f"""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 from transpiler.exec.interp.gen_exprs import M32, int32, norm, signed_literal
 from transpiler.ir import Op, Operand
@@ -62,9 +63,16 @@ class AccessCode:
         in_range = f"0 <= (_a := {self._ix(o)}) < {self.sizes[o.kind]}"
         return in_range if self.every_valid[o.kind] else f"{in_range} and V{o.kind}[_a]"
 
+    def _ix_read(self, o: Operand, at: Callable[[str], str], slow: str) -> str:
+        """An indexed read, inline when its address is valid (`at` of the address), else the helper call `slow`."""
+        if self.every_valid[o.kind]:
+            # a bit or byte address in range is valid: a test of X alone, without a temporary
+            return f"({at(f'X + {o.addr}')} if {-o.addr} <= X < {self.sizes[o.kind] - o.addr} else {slow})"
+        return f"({at('_a')} if {self._ix_ok(o)} else {slow})"
+
     def bit(self, o: Operand) -> str:
         if o.indexed:
-            return f"({o.kind}[_a] if {self._ix_ok(o)} else _rb({o.kind!r}, {o.addr}, X))"
+            return self._ix_read(o, lambda a: f"{o.kind}[{a}]", f"_rb({o.kind!r}, {o.addr}, X)")
         return f"{o.kind}[{o.addr}]"
 
     def bit_store(self, indent: int, o: Operand, expr: str, opid: int) -> None:
@@ -89,7 +97,7 @@ class AccessCode:
             slow = f"_rx({k!r}, {o.addr}, X, {signed})"
             if k != "B" and not self.native:
                 return slow
-            return f"({self._mem_at(k, '_a', signed)} if {self._ix_ok(o)} else {slow})"
+            return self._ix_read(o, lambda a: self._mem_at(k, a, signed), slow)
         return self._mem_at(k, o.addr, signed)
 
     def _mem_at(self, k: str, a: int | str, signed: bool) -> str:
