@@ -38,7 +38,7 @@ from transpiler.ir import FileCode, Op, Program
 from transpiler.language.semantics import Semantics
 
 GENERATED_FILENAME = "<hh2iec-interp>"
-_GROUP = 8                      # blocks per leaf of the dispatch tree
+_GROUP = 16                     # blocks per leaf of the dispatch tree (at most)
 _MAX_INDENT = 60                # deepest nesting of generated code (the tokenizer allows 100 levels)
 _EXITS_COND = frozenset({"JPT", "JPF", "EMT", "EMF"})
 _EXITS_UNCOND = frozenset({"JP", "EM"})
