@@ -277,6 +277,13 @@ def test_stack_overflow_is_a_fault_at_the_push(tmp_path: Path) -> None:
         PS  M1
         EM
      """, ("E-RT-STACK-OVERFLOW", 2, "data stack overflow (capacity 2 words)")),
+    # a run of pushes is checked at once; without room for all of it, the push that overflows faults
+    ("""
+        PS  M1
+        PSL
+        PS  M3
+        EM
+     """, ("E-RT-STACK-OVERFLOW", 3, "data stack overflow (capacity 2 words)")),
     ("""
         PS  M1
         PL  D0
@@ -292,6 +299,30 @@ def test_stack_faults_in_both_variants(tmp_path: Path, program: str, expected: t
     m = Machine(prog, compiled=compile_program(prog, exact=exact))
     fault = fault_of(cycles(m, 1))
     assert (fault.code, fault.span.line, fault.message) == expected
+
+
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+def test_a_run_of_pushes_keeps_their_order(tmp_path: Path, exact: bool) -> None:
+    prog = compile_text(tmp_path, """
+        L   K7
+        L   M1
+        PS  K5
+        PS  M1
+        PSW
+        PSL
+        PSX
+        PLX
+        PL  M2
+        PL  D8
+        PL  M3
+        PL  D4
+        EM
+    """)
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    m.write("M", 1, 1)
+    m.write("X", 0, -3)
+    assert not cycles(m, 1)[0].faults
+    assert values(m, "X", "M2", "D8", "M3", "D4") == {"X": -3, "M2": 1, "D8": 7, "M3": 1, "D4": 5}
 
 
 def test_fault_inside_a_module_file_names_that_file(tmp_path: Path) -> None:

@@ -275,6 +275,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         # conditional exit needs no store of its own: either branch mark of the exit, set right after the stretch,
         # stands for it (a stretch has one entry, so reaching its exit means all of it ran, in either variant).
         pending: list[int] = []
+        run_end = 0                 # the ops before it form a run of pushes (fast variant)
         for offset, op in enumerate(ops):
             opid = base + first + offset
             if counts_as_instruction(op):
@@ -293,7 +294,20 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             elif pending and (op.code in _EXITS_UNCOND or op.code == "CAN"):
                 self._mark(indent, pending)
                 pending = []
-            indent = self._op(op, opid, f, seg_of, indent)
+            if not self.exact and offset >= run_end:
+                run = self._push_run(ops, offset)
+                if run is not None:
+                    # one capacity check and one extend for the whole run; without room for all of it, the ops one
+                    # by one, so that the push that overflows faults
+                    count, words = run
+                    self.out(indent, f"if len(stk) <= {int(self.sem['data_stack_words']) - len(words)}: "
+                                     f"stk.extend(({', '.join(words)},))", opid)
+                    self.out(indent, "else:", opid)
+                    run_end = offset + count
+            if offset < run_end:
+                self._op(op, opid, f, seg_of, indent + 1)
+            else:
+                indent = self._op(op, opid, f, seg_of, indent)
             if op.code in _EXITS_UNCOND:
                 return                       # the rest of the block is unreachable
             if op.code in _EXITS_COND and not self.exact and offset + 1 < len(ops):

@@ -33,6 +33,41 @@ class StackStringCode:
         self.out(ind, f"if len(stk) > {int(self.sem['data_stack_words']) - 2}: _overflow()", opid)
         self.out(ind, f"stk.append({expr} & 65535); stk.append(({expr} >> 16) & 65535)", opid)
 
+    def _pushed_words(self, op: Op) -> list[str] | None:
+        """The words a push op puts on the stack (low word first), if computing them can neither fault nor change
+        anything; None for any other op."""
+        c = op.code
+        if c == "PUSH" and op.operand.is_bit:
+            value = f"{self.bit(op.operand)} << 7"
+            return [value] if _SIDE_EFFECT_FREE.fullmatch(value) else None
+        if c == "PUSH":
+            value = self.value(op.operand)
+        elif c == "PSL":
+            return [f"{self.la()} << 7"]
+        elif c == "PSW":
+            value = "WA"
+        elif c == "PSX":
+            if int(self.sem["psx_width"]) == 16:
+                return ["X & 65535"]
+            value = "X"
+        else:
+            return None
+        if not _SIDE_EFFECT_FREE.fullmatch(value):
+            return None
+        return [f"{value} & 65535", f"({value} >> 16) & 65535"]
+
+    def _push_run(self, ops: tuple[Op, ...], start: int) -> tuple[int, list[str]] | None:
+        """A run of two or more such pushes from `start` on: (its number of ops, the words it pushes in order)."""
+        words: list[str] = []
+        count = 0
+        for op in ops[start:]:
+            pushed = self._pushed_words(op)
+            if pushed is None:
+                break
+            words += pushed
+            count += 1
+        return (count, words) if count >= 2 else None
+
     @staticmethod
     def _pull16() -> str:
         return "(stk.pop() if stk else _underflow(1))"
