@@ -91,9 +91,9 @@ def every_address_valid(profile: Profile, kind: str) -> bool:
 class Snapshot:
     """Copy of the memory taken before the main program (used to re-run a cycle exactly)."""
 
-    bits: tuple[bytes, ...]
-    mem: bytes
-    strings: tuple[str, ...]
+    bits: tuple[bytearray, ...]
+    mem: bytearray
+    strings: list[str]
 
 
 class MachineState:
@@ -196,10 +196,20 @@ class MachineState:
 
     # ---- snapshots for the exact re-run of a cycle
 
-    def snapshot(self) -> Snapshot:
-        # taken before every cycle's program phase: the spaces are spelled out, in BIT_SPACES order, to keep it cheap
-        return Snapshot((bytes(self.M), bytes(self.I), bytes(self.O), bytes(self.T), bytes(self.C)), bytes(self.mem),
-                        tuple(self.S))
+    def snapshot(self, reuse: Snapshot | None = None) -> Snapshot:
+        """A copy of the memory. It is taken before every cycle's program phase: `reuse`, an earlier snapshot that
+        is no longer needed, is overwritten in place instead of allocating new copies."""
+        if reuse is None:
+            return Snapshot(tuple(bytearray(self.bits(k)) for k in BIT_SPACES), bytearray(self.mem), list(self.S))
+        M, I, O, T, C = reuse.bits                      # noqa: E741 - the operand kinds
+        M[:] = self.M
+        I[:] = self.I
+        O[:] = self.O
+        T[:] = self.T
+        C[:] = self.C
+        reuse.mem[:] = self.mem
+        reuse.strings[:] = self.S
+        return reuse
 
     def restore(self, snap: Snapshot) -> None:
         for kind, data in zip(BIT_SPACES, snap.bits):
