@@ -16,13 +16,13 @@ class CoverageMarks:
         self.branch_slots = compiled.branch_slots
         self.branch_ops = compiled.branch_ops
         self.stretch_ops = compiled.stretch_ops
-        self.ops = bytearray(self.op_count)
-        # a bytearray: count(1) is a fast scan, and branch_outcome_count is asked after every cycle
-        self.branches = bytearray(len(self.branch_slots))
-        # a list: the generated code stores into it most often, and list item stores are the cheapest
+        # Lists of 0/1: an item store into a list is the cheapest store there is (the interpreter specializes it),
+        # and count(0) is a fast scan (0 is one object), for branch_outcome_count after every cycle.
+        self.ops = [0] * self.op_count
+        self.branches = [0] * len(self.branch_slots)
         self.stretches = [0] * len(self.stretch_ops)
 
-    def arrays_for(self, compiled: CompiledProgram) -> tuple[bytearray, bytearray, list[int]]:
+    def arrays_for(self, compiled: CompiledProgram) -> tuple[list[int], list[int], list[int]]:
         """The (ops, branches, stretches) arrays `compiled` writes into; it must be a variant of the same program,
         and its stretches (if any) the ones these marks were made for."""
         if len(compiled.op_index) != self.op_count or compiled.branch_slots != self.branch_slots:
@@ -48,4 +48,4 @@ class CoverageMarks:
 
     def branch_outcome_count(self) -> int:
         """How many distinct (op id, outcome) pairs are marked (it only grows)."""
-        return self.branches.count(1)
+        return len(self.branches) - self.branches.count(0)

@@ -54,8 +54,8 @@ class Runtime:
         """The names the generated code of `compiled` binds; with coverage, the first program sets up the marks
         that later variants of it write into as well."""
         st = self.state
-        hits: bytearray | None = None
-        branch_hits: bytearray | None = None
+        hits: list[int] | None = None
+        branch_hits: list[int] | None = None
         stretch_hits: list[int] | None = None
         if coverage:
             if self.marks is None:
