@@ -15,10 +15,13 @@ shared by all generated functions, so they behave like CPU registers; memory is 
 bytearrays and native memoryview casts with constant addresses folded in. Each file is one
 function `F<f>(b)`: `b` selects the block (a jump target or call entry) through a binary dispatch
 tree whose leaves are short runs of sequential `if b == k` tests, so falling through into the
-next block costs one comparison. The fast variant counts instructions per straight-line block
-(a pre-count that may only over-estimate); the exact variant counts and checks every instruction
-and can record coverage. Every generated line maps back to its op, so a fault raised anywhere
-below a line is located from the traceback at no run-time cost.
+next block costs one comparison, and so does a jump to a later block of the same leaf (the rest of
+the jumping block becomes an else branch); a loop head starts a leaf. The fast variant counts
+instructions per straight-line stretch (a pre-count that may only over-estimate), folds runs of bit
+logic into one expression of LA and checks a run of pushes against the stack capacity once; the
+exact variant counts and checks every instruction. Either can record coverage, with one list item
+store per mark (coverage.CoverageMarks). Every generated line maps back to its op, so a fault
+raised anywhere below a line is located from the traceback at no run-time cost.
 """
 
 from __future__ import annotations
