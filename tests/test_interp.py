@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from transpiler.frontend.load import ProjectOptions
 from transpiler.exec.interp import Machine, MachineConfigError, MachineHalted, compile_program
 from transpiler.exec.interp.faults import CycleReport
+from transpiler.exec.interp.gen_exprs import norm
 from transpiler.ir import Program
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import Semantics, make_semantics
@@ -194,6 +195,30 @@ def test_extended_instructions(tmp_path: Path) -> None:
         "B0": 0, "W2": 32767, "M5": 0, "D4": -6, "D8": -1, "M6": 1, "D12": -7}
 
 
+@pytest.mark.parametrize("width", [16, 32])
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+def test_incx_and_decx_wrap_at_the_width_of_x(tmp_path: Path, width: int, exact: bool) -> None:
+    top = (1 << (width - 1)) - 1
+    prog = compile_text(tmp_path, f"""
+        L   K{top}
+        =   X
+        INCX
+        L   X
+        =   D0
+        DECX
+        L   X
+        =   D4
+        INCX
+        INCX
+        L   X
+        =   D8
+        EM
+    """, overrides={"index_register_width": width})
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    cycles(m, 1)
+    assert values(m, "D0", "D4", "D8") == {"D0": -top - 1, "D4": top, "D8": -top}
+
+
 def test_strings_truncate_with_a_warning_and_compare_bytewise(tmp_path: Path) -> None:
     long = "x" * 100
     m = machine(tmp_path, f"""
@@ -232,6 +257,72 @@ def test_stack_overflow_is_a_fault_at_the_push(tmp_path: Path) -> None:
     assert m.halted
     with pytest.raises(MachineHalted):
         m.run_cycle(1)
+
+
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+@pytest.mark.parametrize("program, expected", [
+    # the operand of a push is read before the capacity check: its fault comes first
+    ("""
+        L   K99
+        =   X
+        PS  K1
+        PS  KF TAB[X]
+        EM
+        KFIELD TAB
+        K1
+        ENDK
+     """, ("E-RT-INDEX", 4, "KF TAB[X] with X = 99 is outside 0..0")),
+    ("""
+        PS  K1
+        PS  M1
+        EM
+     """, ("E-RT-STACK-OVERFLOW", 2, "data stack overflow (capacity 2 words)")),
+    # a run of pushes is checked at once; without room for all of it, the push that overflows faults
+    ("""
+        PS  M1
+        PSL
+        PS  M3
+        EM
+     """, ("E-RT-STACK-OVERFLOW", 3, "data stack overflow (capacity 2 words)")),
+    ("""
+        PS  M1
+        PL  D0
+        EM
+     """, ("E-RT-STACK-UNDERFLOW", 2, "a 32-bit pull needs 2 words, the data stack holds 1")),
+    ("""
+        PL  M1
+        EM
+     """, ("E-RT-STACK-UNDERFLOW", 1, "pull from an empty data stack")),
+])
+def test_stack_faults_in_both_variants(tmp_path: Path, program: str, expected: tuple, exact: bool) -> None:
+    prog = compile_text(tmp_path, program, overrides={"data_stack_words": 2})
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    fault = fault_of(cycles(m, 1))
+    assert (fault.code, fault.span.line, fault.message) == expected
+
+
+@pytest.mark.parametrize("exact", [False, True], ids=["fast", "exact"])
+def test_a_run_of_pushes_keeps_their_order(tmp_path: Path, exact: bool) -> None:
+    prog = compile_text(tmp_path, """
+        L   K7
+        L   M1
+        PS  K5
+        PS  M1
+        PSW
+        PSL
+        PSX
+        PLX
+        PL  M2
+        PL  D8
+        PL  M3
+        PL  D4
+        EM
+    """)
+    m = Machine(prog, compiled=compile_program(prog, exact=exact))
+    m.write("M", 1, 1)
+    m.write("X", 0, -3)
+    assert not cycles(m, 1)[0].faults
+    assert values(m, "X", "M2", "D8", "M3", "D4") == {"X": -3, "M2": 1, "D8": 7, "M3": 1, "D4": 5}
 
 
 def test_fault_inside_a_module_file_names_that_file(tmp_path: Path) -> None:
@@ -815,24 +906,79 @@ def _programs(draw: st.DrawFn) -> str:
 def test_random_programs_run_the_same_in_fast_and_exact_code(tmp_path: Path, source: str, inputs: list) -> None:
     prog = compile_text(tmp_path, source, overrides={"max_instructions_per_cycle": 120})
     fast, exact = Machine(prog), Machine(prog, coverage=True)
+    covered = Machine(prog, compiled=compile_program(prog, coverage=True, exact=False), coverage=True)
     for cycle, bits in enumerate(inputs):
         writes = [("I", i, (bits >> i) & 1) for i in range(3)]
         outcomes = []
-        for m in (fast, exact):
+        for m in (fast, exact, covered):
             report = m.run_cycle(cycle, writes)
             # a cycle ended by a fault counts its last block whole in the fast code, so counts compare without one
             count = None if report.faults else report.instructions
             outcomes.append(([(f.code, f.op, f.cycle) for f in report.faults],
                              [(w.code, w.op) for w in report.warnings], count,
                              bytes(m.state.M[:8]), bytes(m.state.mem[:16]), m.registers))
-        assert outcomes[0] == outcomes[1], source
+        assert outcomes[0] == outcomes[1] == outcomes[2], source
         if fast.halted:
             break
+    # the fast code's coverage marks (per stretch, implied by branch marks) are the exact code's per-op marks
+    assert covered.coverage.branches == exact.coverage.branches, source
+    assert covered.coverage.executed <= exact.coverage.executed, source
+    if not covered.halted:
+        assert covered.coverage.executed == exact.coverage.executed, source
+
+
+_LOGIC = st.sampled_from(["L", "LN", "A", "AN", "O", "ON", "XO", "XON"]).flatmap(
+    lambda m: st.sampled_from([f"{m} M{i}" for i in range(6)] + [f"{m} I{i}" for i in range(3)]))
+_LOGIC_OR_STORE = st.one_of(_LOGIC, _LOGIC, _LOGIC, st.sampled_from(["= M0", "= M5", "SN M3", "S M1", "R M2",
+                                                                     "RN M4", "PSL", "PLL", "= O1"]))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(ops=st.lists(_LOGIC_OR_STORE, min_size=1, max_size=90), bits=st.integers(0, 511))
+def test_runs_of_bit_logic_give_the_exact_codes_results(tmp_path: Path, ops: list, bits: int) -> None:
+    # the fast code folds runs of bit logic into one expression of LA (long runs in pieces)
+    source = "\n".join(["PSL", *ops, "PLL", "EM"]) + "\n"
+    prog = compile_text(tmp_path, source)
+    fast = Machine(prog, compiled=compile_program(prog, exact=False))
+    exact = Machine(prog, compiled=compile_program(prog, exact=True))
+    results = []
+    for m in (fast, exact):
+        for i in range(6):
+            m.write("M", i, (bits >> i) & 1)
+        for i in range(3):
+            m.write("I", i, (bits >> (6 + i)) & 1)
+        report = m.run_cycle(0)
+        # a cycle ended by a fault (a pull from the empty stack) counts its last block whole in the fast code
+        count = report.instructions if report.ok else None
+        results.append(([f.code for f in report.faults], count, bytes(m.state.M[:8]), m.state.O[1], m.registers))
+    assert results[0] == results[1], source
+
+
+@pytest.mark.parametrize("coverage", [False, True])
+def test_many_forward_jumps_in_one_block_stay_within_the_nesting_limit(tmp_path: Path, coverage: bool) -> None:
+    # each jump to the next block nests the rest of its block one level deeper, up to a cap
+    source = "\n".join(["L K0", "= W0"] + ["L W0", "+ K1", "= W0", "< K40", "JPF END"] * 150 + ["LBL END", "EM"])
+    prog = compile_text(tmp_path, source + "\n")
+    fast = Machine(prog, compiled=compile_program(prog, coverage=coverage, exact=False), coverage=coverage)
+    exact = Machine(prog, compiled=compile_program(prog, coverage=coverage, exact=True), coverage=coverage)
+    for m in (fast, exact):
+        report = m.run_cycle(0)
+        assert not report.faults and m.read("W", 0) == 40
+    assert fast.instructions == exact.instructions
+    if coverage:
+        assert fast.coverage == exact.coverage
 
 
 # ---------------------------------------------------------------------------------------------
 # the fast code against hand-computed values (not against the exact code): each expected value follows from the
 # rules of the language description by hand, and the comment says which wrong implementation it rules out.
+
+
+@given(value=st.integers(-(1 << 40), 1 << 40))
+def test_the_int32_wrap_of_the_generated_code(value: int) -> None:
+    # a value in range is taken as it is, any other wraps; for a name and for an expression evaluated once
+    for expr in ("v", "v + 0"):
+        assert eval(norm(expr), {"v": value}) == ((value + (1 << 31)) % (1 << 32)) - (1 << 31)  # noqa: S307
 
 
 def fast_machine(folder: Path, program: str, **kwargs: Any) -> Machine:

@@ -17,7 +17,10 @@ from transpiler.language.semantics import make_semantics
 ROOT = Path(__file__).resolve().parents[1]
 PROJECTS = [ROOT / "samples" / "basic_program" / "Main_PGM.src",
             ROOT / "samples" / "constructs" / "indexed" / "main.src",
-            ROOT / "samples" / "constructs" / "jumps_loop" / "main.src"]
+            ROOT / "samples" / "constructs" / "jumps_loop" / "main.src",
+            ROOT / "samples" / "constructs" / "case_chain" / "main.src",
+            ROOT / "samples" / "constructs" / "calls_cmt_cmf" / "main.src",
+            ROOT / "samples" / "constructs" / "submit_jobs" / "main.src"]
 
 
 def _program(main: Path):

@@ -15,14 +15,18 @@ shared by all generated functions, so they behave like CPU registers; memory is 
 bytearrays and native memoryview casts with constant addresses folded in. Each file is one
 function `F<f>(b)`: `b` selects the block (a jump target or call entry) through a binary dispatch
 tree whose leaves are short runs of sequential `if b == k` tests, so falling through into the
-next block costs one comparison. The fast variant counts instructions per straight-line block
-(a pre-count that may only over-estimate); the exact variant counts and checks every instruction
-and can record coverage. Every generated line maps back to its op, so a fault raised anywhere
-below a line is located from the traceback at no run-time cost.
+next block costs one comparison, and so does a jump to a later block of the same leaf (the rest of
+the jumping block becomes an else branch); a loop head starts a leaf. The fast variant counts
+instructions per straight-line stretch (a pre-count that may only over-estimate), folds runs of bit
+logic into one expression of LA and checks a run of pushes against the stack capacity once; the
+exact variant counts and checks every instruction. Either can record coverage, with one list item
+store per mark (coverage.CoverageMarks). Every generated line maps back to its op, so a fault
+raised anywhere below a line is located from the traceback at no run-time cost.
 """
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import sys
 import types
@@ -32,15 +36,17 @@ from transpiler.exec.interp.gen_access import AccessCode
 from transpiler.exec.interp.gen_flow import FlowCode
 from transpiler.exec.interp.gen_stack import StackStringCode
 from transpiler.exec.interp.gen_word import WordCode
-from transpiler.exec.interp.state import space_size
+from transpiler.exec.interp.state import every_address_valid, space_size
 from transpiler.ir import FileCode, Op, Program
 from transpiler.language.semantics import Semantics
 
 GENERATED_FILENAME = "<hh2iec-interp>"
-_GROUP = 8                      # blocks per leaf of the dispatch tree
+_GROUP = 16                     # blocks per leaf of the dispatch tree (at most)
+_MAX_INDENT = 60                # deepest nesting of generated code (the tokenizer allows 100 levels)
 _EXITS_COND = frozenset({"JPT", "JPF", "EMT", "EMF"})
 _EXITS_UNCOND = frozenset({"JP", "EM"})
 _NOT_COUNTED = frozenset({"LBL", "KFIELD"})
+_CONDITIONAL = frozenset({"JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF"})
 
 
 def counts_as_instruction(op: Op) -> bool:
@@ -58,6 +64,11 @@ class CompiledProgram:
     op_index: tuple[tuple[int, int], ...]           # op id -> (file index, op index)
     exact: bool
     coverage: bool
+    # Coverage marks (see CoverageMarks): branch slot -> (op id, outcome), the same in every variant of a program;
+    # branch slot -> op ids its mark also shows as executed; stretch mark -> the op ids it stands for.
+    branch_slots: tuple[tuple[int, int], ...] = ()
+    branch_ops: tuple[tuple[int, ...], ...] = ()
+    stretch_ops: tuple[tuple[int, ...], ...] = ()
 
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
         """Instantiate against a machine: (file functions, get_registers, set_registers)."""
@@ -82,7 +93,25 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     gen = _Generator(program, exact=exact, coverage=coverage, native=native)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
-    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage)
+    branch_ops = tuple(gen.branch_ops.get(opid, ()) for opid, _ in gen.branch_slots)
+    return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage,
+                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops))
+
+
+def branch_slots(program: Program) -> list[tuple[int, int]]:
+    """Every (op id, outcome) that coverage records, in op order: 1 and 0 of each conditional jump, call and module
+    end, then each entry of a CASE followed by its -1 (no entry). A CASE's entry slots are consecutive so that the
+    generated code finds the slot of entry s by adding s."""
+    slots: list[tuple[int, int]] = []
+    opid = 0
+    for code in program.files:
+        for op in code.ops:
+            if op.code in _CONDITIONAL:
+                slots += [(opid, 1), (opid, 0)]
+            elif op.code == "CASE":
+                slots += [(opid, entry) for entry in range(len(op.case_targets))] + [(opid, -1)]
+            opid += 1
+    return slots
 
 
 def _entries(program: Program) -> list[set[int]]:
@@ -126,14 +155,28 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.case_tables: list[str] = []
         self.brackets: list[tuple[Op, str, int]] = []
         self.sizes = {k: space_size(self.sem.profile, k) for k in "MIOTCBWDS"}
+        self.every_valid = {k: every_address_valid(self.sem.profile, k) for k in "MIOTCBWD"}
         self.scale = self.sem["index_scaling"] == "elements"
+        self.leaf_of: dict[int, int] = {}           # block -> its dispatch leaf, in the file being generated
+        self.max_indent = _MAX_INDENT
+        self.block = 0                              # the block being generated
+        # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
+        # and checks every op, and with the shared accumulator LA is a bit of WA.
+        self.fuse_la = not exact and not self.shared
+        self.la_chain = None
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
             self.op_index.extend((f, i) for i in range(len(code.ops)))
+        self.branch_slots = branch_slots(program)
+        self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
+        self.branch_ops: dict[int, tuple[int, ...]] = {}    # op id of a conditional exit -> its stretch's op ids
+        self.stretch_ops: list[tuple[int, ...]] = []
 
     # ------------------------------------------------------------------ output
 
     def out(self, indent: int, text: str, opid: int = -1) -> None:
+        if self.la_chain is not None:
+            self.flush_la()
         self.lines.append("    " * indent + text)
         self.line_ops.append(opid)
 
@@ -154,8 +197,8 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 self.out(1, f"_u{name[3]} = env[{name!r}].unpack_from")
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
-                   "sat", "ps16", "ps32", "pl16", "pl32", "module", "subm", "rply", "can", "scat", "six", "srx",
-                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "branch", "ixw")
+                   "sat", "overflow", "underflow", "module", "subm", "rply", "can", "scat", "six", "srx",
+                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "ixw")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
         self.out(1, "LA = 0; WA = 0; X = 0; SA = ''; n = 0; d = 0; _em = -1")
@@ -185,8 +228,27 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(2, "_falloff()")
             return
         self.out(2, "while True:")
-        groups = [list(range(i, min(i + _GROUP, len(starts)))) for i in range(0, len(starts), _GROUP)]
+        groups = self._leaves(f, code, starts)
+        self.leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
         self._dispatch(f, code, starts, groups, 3)
+
+    def _leaves(self, f: int, code: FileCode, starts: list[int]) -> list[list[int]]:
+        """The blocks split into dispatch leaves of at most _GROUP consecutive blocks. A loop head (the target of a
+        jump from itself or a later block) starts a leaf: going round the loop then tests it first in its leaf."""
+        seg_of = self.seg_maps[f]
+        heads = set()
+        for i, op in enumerate(code.ops):
+            if op.code in ("JP", "JPT", "JPF") and op.target in seg_of:
+                target = seg_of[op.target]
+                if target <= bisect.bisect_right(starts, i) - 1:
+                    heads.add(target)
+        leaves: list[list[int]] = []
+        for k in range(len(starts)):
+            if not leaves or len(leaves[-1]) == _GROUP or k in heads:
+                leaves.append([k])
+            else:
+                leaves[-1].append(k)
+        return leaves
 
     def _dispatch(self, f: int, code: FileCode, starts: list[int], groups: list[list[int]], indent: int) -> None:
         if len(groups) == 1:
@@ -205,14 +267,18 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         end = starts[k + 1] if k + 1 < len(starts) else len(code.ops)
         seg_of = self.seg_maps[f]
         base = self.op_base[f]
+        self.block = k
         self.brackets = []
         ops = code.ops[first:end]
         if not self.exact:
             self._precount(ops, 0, indent, base + first)
-        # The fast variant marks the ops of a straight-line stretch as executed in one slice store just before its
-        # exit (each op on its own in the exact variant): a fault inside the stretch leaves its ops unmarked, so
-        # coverage may miss ops of a faulting cycle but never claims an op that did not run.
+        # The fast variant marks the ops of a straight-line stretch as executed with one store just before its exit
+        # (each op on its own in the exact variant): a fault inside the stretch leaves its ops unmarked, so coverage
+        # may miss ops of a faulting cycle but never claims an op that did not run. A stretch that ends in a
+        # conditional exit needs no store of its own: either branch mark of the exit, set right after the stretch,
+        # stands for it (a stretch has one entry, so reaching its exit means all of it ran, in either variant).
         pending: list[int] = []
+        run_end = 0                 # the ops before it form a run of pushes (fast variant)
         for offset, op in enumerate(ops):
             opid = base + first + offset
             if counts_as_instruction(op):
@@ -225,10 +291,26 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                     else:
                         pending.append(opid)
             # CAN may end the running job from inside the stretch (JobCancelled): its marks go first as well
-            if pending and (op.code in _EXITS_COND or op.code in _EXITS_UNCOND or op.code == "CAN"):
+            if pending and op.code in _EXITS_COND:
+                self.branch_ops[opid] = tuple(pending)
+                pending = []
+            elif pending and (op.code in _EXITS_UNCOND or op.code == "CAN"):
                 self._mark(indent, pending)
                 pending = []
-            self._op(op, opid, f, seg_of, indent)
+            if not self.exact and offset >= run_end:
+                run = self._push_run(ops, offset)
+                if run is not None:
+                    # one capacity check and one extend for the whole run; without room for all of it, the ops one
+                    # by one, so that the push that overflows faults
+                    count, words = run
+                    self.out(indent, f"if len(stk) <= {int(self.sem['data_stack_words']) - len(words)}: "
+                                     f"stk.extend(({', '.join(words)},))", opid)
+                    self.out(indent, "else:", opid)
+                    run_end = offset + count
+            if offset < run_end:
+                self._op(op, opid, f, seg_of, indent + 1)
+            else:
+                indent = self._op(op, opid, f, seg_of, indent)
             if op.code in _EXITS_UNCOND:
                 return                       # the rest of the block is unreachable
             if op.code in _EXITS_COND and not self.exact and offset + 1 < len(ops):
@@ -241,18 +323,9 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(indent, "_falloff()")
 
     def _mark(self, indent: int, opids: list[int]) -> None:
-        """Coverage marks of `opids` (ascending), one slice store per run of consecutive ids."""
-        run_start = prev = opids[0]
-        for opid in [*opids[1:], None]:
-            if opid is not None and opid == prev + 1:
-                prev = opid
-                continue
-            if prev == run_start:
-                self.out(indent, f"_hit[{run_start}] = 1", run_start)
-            else:
-                self.out(indent, f"_hit[{run_start}:{prev + 1}] = {bytes([1] * (prev + 1 - run_start))!r}", run_start)
-            if opid is not None:
-                run_start = prev = opid
+        """The coverage mark of a stretch: one item store, the stretch's op ids go to the table."""
+        self.out(indent, f"_sh[{len(self.stretch_ops)}] = 1", opids[0])
+        self.stretch_ops.append(tuple(opids))
 
     def _precount(self, ops: tuple[Op, ...], start: int, indent: int, opid: int) -> None:
         """Fast variant: count the straight-line instructions up to the next exit once, before running them."""
@@ -266,20 +339,20 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(indent, f"if n > {self.budget}: raise _BudgetExceeded", opid)
     # ------------------------------------------------------------------ instructions
 
-    def _op(self, op: Op, opid: int, f: int, seg_of: dict[int, int], ind: int) -> None:
+    def _op(self, op: Op, opid: int, f: int, seg_of: dict[int, int], ind: int) -> int:
+        """Generate the op; returns the indentation of the code that follows (deeper after a jump that nests it)."""
         c = op.code
         o = op.operand
         handler = getattr(self, f"_op_{c}", None)
         if handler is not None:
-            handler(op, opid, ind, f, seg_of)
-            return
+            follow = handler(op, opid, ind, f, seg_of)
+            return ind if follow is None else follow
         if c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN"):
             self._bit_logic(c, o, opid, ind)
         elif c in ("WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN"):
             self._word_gate(c, o, opid, ind)
         elif c in ("ADD", "SUB", "MUL", "DIV", "MOD"):
             self._arith(c, "WA", self.value(o), opid, ind)
-        elif c in ("NOP", "LBL", "KFIELD"):
-            pass
-        else:
+        elif c not in ("NOP", "LBL", "KFIELD"):
             raise NotImplementedError(f"interpreter: no code generation for op {c}")
+        return ind

@@ -2,14 +2,33 @@
 
 from __future__ import annotations
 
+import dataclasses
+from typing import Callable
+
 from transpiler.exec.interp.gen_exprs import M32, int32, norm, signed_literal
 from transpiler.ir import Op, Operand
+
+
+_CHAIN_OPS = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
+_CHAIN_SYMBOLS = {"AND": "and", "OR": "or", "XOR": "^"}
+_CHAIN_LIMIT = 32          # ops per folded LA expression: each change of operator nests a parenthesis
+
+
+@dataclasses.dataclass(frozen=True)
+class _LaChain:
+    """The pending expression of LA: its text, its outermost operator (for parentheses), where it goes."""
+
+    text: str
+    top: str
+    ind: int
+    opid: int
+    length: int = 1
 
 
 class AccessCode:
     """Mixin of the code generator: expressions that read and write registers and operands, and the ops that only
     move values (loads, stores, bit logic). Uses the generator's `out`, `sem`, `shared`, `x16`, `native`, `scale`,
-    `sizes` and `kf_tables`."""
+    `sizes`, `every_valid` and `kf_tables`."""
 
     # ------------------------------------------------------------------ registers
 
@@ -41,11 +60,19 @@ class AccessCode:
 
     def _ix_ok(self, o: Operand) -> str:
         # The inline test covers the valid case only; the helper raises the fault (or reads 0, A-22).
-        return f"0 <= (_a := {self._ix(o)}) < {self.sizes[o.kind]} and V{o.kind}[_a]"
+        in_range = f"0 <= (_a := {self._ix(o)}) < {self.sizes[o.kind]}"
+        return in_range if self.every_valid[o.kind] else f"{in_range} and V{o.kind}[_a]"
+
+    def _ix_read(self, o: Operand, at: Callable[[str], str], slow: str) -> str:
+        """An indexed read, inline when its address is valid (`at` of the address), else the helper call `slow`."""
+        if self.every_valid[o.kind]:
+            # a bit or byte address in range is valid: a test of X alone, without a temporary
+            return f"({at(f'X + {o.addr}')} if {-o.addr} <= X < {self.sizes[o.kind] - o.addr} else {slow})"
+        return f"({at('_a')} if {self._ix_ok(o)} else {slow})"
 
     def bit(self, o: Operand) -> str:
         if o.indexed:
-            return f"({o.kind}[_a] if {self._ix_ok(o)} else _rb({o.kind!r}, {o.addr}, X))"
+            return self._ix_read(o, lambda a: f"{o.kind}[{a}]", f"_rb({o.kind!r}, {o.addr}, X)")
         return f"{o.kind}[{o.addr}]"
 
     def bit_store(self, indent: int, o: Operand, expr: str, opid: int) -> None:
@@ -70,7 +97,7 @@ class AccessCode:
             slow = f"_rx({k!r}, {o.addr}, X, {signed})"
             if k != "B" and not self.native:
                 return slow
-            return f"({self._mem_at(k, '_a', signed)} if {self._ix_ok(o)} else {slow})"
+            return self._ix_read(o, lambda a: self._mem_at(k, a, signed), slow)
         return self._mem_at(k, o.addr, signed)
 
     def _mem_at(self, k: str, a: int | str, signed: bool) -> str:
@@ -135,7 +162,12 @@ class AccessCode:
 
     def _bit_logic(self, c: str, o: Operand, opid: int, ind: int) -> None:
         """LD LDN AND ANDN OR ORN XOR XORN, ST STN, SET RES SETN RESN."""
-        if c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
+        if self.fuse_la and not o.indexed and c in _CHAIN_OPS:
+            self._chain(c, o, opid, ind)
+        elif self.fuse_la and not o.indexed and c == "ST" and self.la_chain is not None:
+            chain, self.la_chain = self.la_chain, None
+            self.out(ind, f"{self.bit(o)} = LA = {chain.text}", chain.opid)
+        elif c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
             b = self.bit(o)
             if c.endswith("N"):
                 b = f"({b} ^ 1)"
@@ -152,6 +184,37 @@ class AccessCode:
             cond = self.la() if c in ("SET", "RES") else f"not {self.la()}"
             self.out(ind, f"if {cond}:", opid)
             self.bit_store(ind + 1, o, "1" if c in ("SET", "SETN") else "0", opid)
+
+    def _chain(self, c: str, o: Operand, opid: int, ind: int) -> None:
+        """Fold a bit load or gate on a named operand into the pending expression of LA (fast variant).
+
+        A run of these ops becomes one assignment `LA = M[1] and not M[2] or M[3]`: no store and reload of LA per
+        op, and `and`/`or` skip the reads that cannot change the result. The reads may be skipped or delayed
+        because nothing in the run writes or faults (named bit operands only), and every other line flushes the
+        expression first (`out`). Bits are 0 or 1, so `and`/`or` give the values `&`/`|` give (as 0, 1 or a bool,
+        which LA already holds after a comparison)."""
+        b = self.bit(o)
+        if c in ("LD", "LDN"):
+            # a load makes a pending expression dead: its reads are dropped, they have no effect
+            self.la_chain = _LaChain(f"not {b}" if c == "LDN" else b, "not" if c == "LDN" else "atom", ind, opid)
+            return
+        chain = self.la_chain or _LaChain("LA", "atom", ind, opid)
+        kind = c.rstrip("N")
+        sym = _CHAIN_SYMBOLS[kind]
+        if c.endswith("N"):
+            right = f"({b} ^ 1)" if kind == "XOR" else f"not {b}"
+        else:
+            right = b
+        left = chain.text if chain.top in ("atom", sym) else f"({chain.text})"
+        self.la_chain = _LaChain(f"{left} {sym} {right}", sym, chain.ind, chain.opid, chain.length + 1)
+        if self.la_chain.length >= _CHAIN_LIMIT:
+            self.flush_la()
+
+    def flush_la(self) -> None:
+        """Emit the pending LA expression, if any (before any other line, see `out`)."""
+        chain, self.la_chain = self.la_chain, None
+        if chain is not None:
+            self.out(chain.ind, f"LA = {chain.text}", chain.opid)
 
     # loads and stores
 

@@ -14,8 +14,12 @@ def gate(kind: str, left: str, right: str, negate_fmt: str) -> str:
 
 
 def norm(expr: str) -> str:
-    """Reduce to int32 (two's complement wrap)."""
-    return f"((({expr}) + {H}) & {M32}) - {H}"
+    """Reduce to int32 (two's complement wrap). A value already in range (nearly always) is taken as it is: the
+    range test is cheaper than the wrap arithmetic, whose intermediate values are big ints to allocate. An
+    expression other than a name is evaluated once, into `_v`."""
+    if expr.isidentifier():
+        return f"({expr} if -{H} <= {expr} < {H} else (({expr} + {H}) & {M32}) - {H})"
+    return f"(_v if -{H} <= (_v := {expr}) < {H} else ((_v + {H}) & {M32}) - {H})"
 
 
 def sext_expr(expr: str, bits: int) -> str:

@@ -11,23 +11,39 @@ class FlowCode:
 
     # control flow
 
-    def _cover(self, ind: int, opid: int, outcome: str) -> None:
+    def _cover(self, ind: int, opid: int, outcome: int) -> None:
+        """The coverage mark of one outcome of a conditional jump, call or module end (a slot of branch_slots)."""
         if self.coverage:
-            self.out(ind, f"_branch(({opid}, {outcome}))", opid)
+            self.out(ind, f"_bh[{self.branch_slot[opid, outcome]}] = 1", opid)
+
+    def _falls_to(self, block: int) -> bool:
+        """Whether a jump from the block being generated to `block` can fall through the remaining `if b == k`
+        tests of its dispatch leaf instead of going round the dispatch loop: `block` comes later in the same leaf."""
+        return self.block < block and self.leaf_of[block] == self.leaf_of[self.block]
 
     def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
-        self.out(ind, f"b = {seg_of[op.target]}", opid)
-        self.out(ind, "continue", opid)
+        block = seg_of[op.target]
+        self.out(ind, f"b = {block}", opid)
+        if not self._falls_to(block):
+            self.out(ind, "continue", opid)
 
-    def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> None:
+    def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> int:
+        """Returns the indentation of the code after the jump: one level deeper when that code becomes the else
+        branch of a jump that falls through to a later block of the leaf (nesting is capped, Python limits it)."""
+        block = seg_of[op.target]
         self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
-        self._cover(ind + 1, opid, "1")
-        self.out(ind + 1, f"b = {seg_of[op.target]}", opid)
+        self._cover(ind + 1, opid, 1)
+        self.out(ind + 1, f"b = {block}", opid)
+        if self._falls_to(block) and ind < self.max_indent:
+            self.out(ind, "else:", opid)
+            self._cover(ind + 1, opid, 0)
+            return ind + 1
         self.out(ind + 1, "continue", opid)
-        self._cover(ind, opid, "0")
+        self._cover(ind, opid, 0)
+        return ind
 
-    def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
-        self._op_JPT(op, opid, ind, f, seg_of, negate=True)
+    def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> int:
+        return self._op_JPT(op, opid, ind, f, seg_of, negate=True)
 
     def _call(self, op: Op, opid: int, ind: int) -> None:
         call = op.call
@@ -52,11 +68,11 @@ class FlowCode:
 
     def _op_CALLT(self, op: Op, opid: int, ind: int, *_: object, negate: bool = False) -> None:
         self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
-        self._cover(ind + 1, opid, "1")
+        self._cover(ind + 1, opid, 1)
         self._call(op, opid, ind + 1)
         if self.coverage:
             self.out(ind, "else:", opid)
-            self._cover(ind + 1, opid, "0")
+            self._cover(ind + 1, opid, 0)
 
     def _op_CALLF(self, op: Op, opid: int, ind: int, *_: object) -> None:
         self._op_CALLT(op, opid, ind, negate=True)
@@ -67,10 +83,10 @@ class FlowCode:
 
     def _op_EMT(self, op: Op, opid: int, ind: int, *_: object, negate: bool = False) -> None:
         self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
-        self._cover(ind + 1, opid, "1")
+        self._cover(ind + 1, opid, 1)
         self.out(ind + 1, f"_em = {opid}", opid)
         self.out(ind + 1, "return", opid)
-        self._cover(ind, opid, "0")
+        self._cover(ind, opid, 0)
 
     def _op_EMF(self, op: Op, opid: int, ind: int, *_: object) -> None:
         self._op_EMT(op, opid, ind, negate=True)
@@ -87,11 +103,13 @@ class FlowCode:
         count = len(targets)
         self.out(ind, f"_s = {self.value(op.operand)}", opid)
         self.out(ind, f"if 0 <= _s < {count}:", opid)
-        self._cover(ind + 1, opid, "_s")
+        if self.coverage and count:
+            # the slots of entries 0..count-1 are consecutive (branch_slots)
+            self.out(ind + 1, f"_bh[_s + {self.branch_slot[opid, 0]}] = 1", opid)
         self._nested(ind + 1, opid, f"_f, _g = {table}[_s]", "_f(_g)")
         if self.coverage or self.sem["case_out_of_range"] == "fault":
             self.out(ind, "else:", opid)
-            self._cover(ind + 1, opid, "-1")
+            self._cover(ind + 1, opid, -1)
             if self.sem["case_out_of_range"] == "fault":
                 self.out(ind + 1, f"_case_fault(_s, {count})", opid)
 

@@ -118,10 +118,13 @@ class WordCode:
         self.out(ind, f"WA = {norm('WA - 1')}", opid)
 
     def _op_INCX(self, op: Op, opid: int, ind: int, *_: object) -> None:
-        self.out(ind, self.x_store("X + 1"), opid)
+        # X always holds a value of its width (x_store), so only its largest value wraps
+        top = 32767 if self.x16 else 2147483647
+        self.out(ind, f"X = X + 1 if X < {top} else {-top - 1}", opid)
 
     def _op_DECX(self, op: Op, opid: int, ind: int, *_: object) -> None:
-        self.out(ind, self.x_store("X - 1"), opid)
+        top = 32767 if self.x16 else 2147483647
+        self.out(ind, f"X = X - 1 if X > {-top - 1} else {top}", opid)
 
     def _op_NOTL(self, op: Op, opid: int, ind: int, *_: object) -> None:
         self.set_la(ind, f"{self.la()} ^ 1", opid)

@@ -28,7 +28,7 @@ from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from transpiler.exec.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from transpiler.exec.interp.state import MachineState, byte_cells, sext
+from transpiler.exec.interp.state import MachineState, Snapshot, byte_cells, nonzero_positions, sext
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.exec.interp.support import Runtime
 from transpiler.language.presets import load_presets
@@ -103,14 +103,17 @@ class Machine:
         if compiled is None or compiled.coverage != coverage or len(compiled.op_index) != op_count:
             compiled = compile_program(program, coverage=coverage)
         self._primary = compiled
-        self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(len(compiled.op_index), coverage))
+        self._primary_funcs, self._get, self._set = compiled.make(self.runtime.env(compiled, coverage))
         self._exact: tuple[CompiledProgram, tuple, Any, Any] | None = None
+        self._snapshot: Snapshot | None = None          # of the cycle's memory; reused from cycle to cycle
+        self._timers_first = sem["cycle_phases"] != "timers_after_main"
         self.halted = False
         self.next_cycle = 0
         self.faults: list[RuntimeFault] = []
         self.warnings: list[RuntimeFault] = []
         self.instructions = 0
         self.error_messages: dict[int, int] = {}     # PLC error-message marker -> first cycle it was set
+        self._errors_seen: tuple[bytearray, int] | None = None
         self._report = CycleReport(-1)
         self._x_bits = int(sem["index_register_width"])
 
@@ -200,12 +203,11 @@ class Machine:
             self._record(report, RuntimeFault(exc.code, str(exc), exc.cycle))
         if not self.halted:
             self.input_latch()
-            timers_first = self.semantics["cycle_phases"] != "timers_after_main"
-            if timers_first:
+            if self._timers_first:
                 self.timer_service()
             self.program_phase(cycle, report)
             if not self.halted:
-                if not timers_first:
+                if not self._timers_first:
                     self.timer_service()
                 self.output_flush()
         self.end_cycle()
@@ -251,10 +253,14 @@ class Machine:
         """Bookkeeping after the cycle: PLC error-message markers that are set (13.2), then the clock advances."""
         lo, hi = self.profile.interface.error_markers
         window = self.state.M[lo:hi + 1]
-        if 1 in window:
-            for offset, bit in enumerate(window):
-                if bit:
+        # A window as it was when last looked at (with as many messages listed) has no marker to list anew: markers
+        # tend to stay set for many cycles, and only the first cycle of each is listed.
+        seen = (window, len(self.error_messages))
+        if seen != self._errors_seen:
+            if 1 in window:
+                for offset in nonzero_positions(window):
                     self.error_messages.setdefault(lo + offset, self.next_cycle)
+            self._errors_seen = (window, len(self.error_messages))
         self.sys.tick()
         self.next_cycle += 1
 
@@ -269,7 +275,8 @@ class Machine:
         if self._primary.exact:
             self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
             return
-        snap = (self.state.snapshot(), self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings))
+        self._snapshot = self.state.snapshot(self._snapshot)
+        snap = (self._snapshot, self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings))
         rt.module_log = []
         rt.replay = None
         faults = len(report.faults)
@@ -304,7 +311,7 @@ class Machine:
         if self._exact is None:
             # with coverage when the machine records it: the ops of the overrunning cycle's last blocks count too
             compiled = compile_program(self.program, exact=True, coverage=self.coverage_enabled)
-            funcs, get, set_ = compiled.make(self.runtime.env(len(compiled.op_index), self.coverage_enabled))
+            funcs, get, set_ = compiled.make(self.runtime.env(compiled, self.coverage_enabled))
             self._exact = (compiled, funcs, get, set_)
         return self._exact
 
@@ -326,13 +333,13 @@ class Machine:
     def _run_jobs(self, compiled: CompiledProgram, funcs: tuple, get: Any, set_: Any, cycle: int,
                   report: CycleReport) -> None:
         rt = self.runtime
-        itf = self.profile.interface
-        markers = (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err)
-        word = itf.module_err_code_word
         while not self.halted:
             job = self.jobs.take(cycle)
             if job is None:
                 return
+            itf = self.profile.interface
+            markers = (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err)
+            word = itf.module_err_code_word
             main_regs = get()
             M = self.state.M
             saved = ([M[m] for m in markers], bytes(self.state.mem[word:word + 2]) if word is not None else b"")
@@ -406,21 +413,24 @@ class Machine:
         """How many distinct (op, outcome) pairs of conditional jumps, calls, module ends and CASE entries this
         machine has taken so far; it only grows, so a caller watching for new outcomes compares it each cycle and
         asks for branch_outcomes() only when it changed (0 without coverage)."""
-        return len(self.runtime.branches)
+        marks = self.runtime.marks
+        return 0 if marks is None else marks.branch_outcome_count()
 
     def branch_outcomes(self) -> frozenset[tuple[int, int]]:
         """The distinct (op id, outcome) pairs taken so far, as a snapshot (op ids as in the compiled program)."""
-        return frozenset(self.runtime.branches)
+        marks = self.runtime.marks
+        return frozenset() if marks is None else marks.branch_outcomes()
 
     @property
     def coverage(self) -> Coverage:
-        if not self.coverage_enabled:
+        marks = self.runtime.marks
+        if not self.coverage_enabled or marks is None:
             raise ValueError("the machine was created without coverage=True")
         index = self._primary.op_index
-        executed = frozenset(index[i] for i, hit in enumerate(self.runtime.hits) if hit)
+        executed = frozenset(index[i] for i in marks.executed())
         branches: dict[tuple[int, int], set[int]] = {}
-        for opid, outcome in self.runtime.branches:
-            branches.setdefault(index[opid], set()).add(int(outcome))
+        for opid, outcome in marks.branch_outcomes():
+            branches.setdefault(index[opid], set()).add(outcome)
         return Coverage(executed, {k: frozenset(v) for k, v in branches.items()})
 
     @property

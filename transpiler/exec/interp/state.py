@@ -19,6 +19,20 @@ def byte_cells(kind: str, addr: int) -> list[tuple[str, int]]:
     return [(kind, addr)] if width is None else [("B", byte) for byte in range(addr, addr + width)]
 
 
+def nonzero_positions(data: bytes | bytearray) -> list[int]:
+    """Positions of the non-zero bytes of `data`, found at C speed (cheap when there are few)."""
+    ones = data.translate(_NONZERO_TO_ONE)
+    found = []
+    i = ones.find(1)
+    while i >= 0:
+        found.append(i)
+        i = ones.find(1, i + 1)
+    return found
+
+
+_NONZERO_TO_ONE = bytes([0]) + bytes([1]) * 255
+
+
 def sext(value: int, bits: int) -> int:
     """The low `bits` bits of value as a signed number."""
     mask = (1 << bits) - 1
@@ -65,13 +79,21 @@ def _valid_table(profile: Profile, kind: str, size: int) -> bytes:
     return bytes(table)
 
 
+def every_address_valid(profile: Profile, kind: str) -> bool:
+    """Whether an indexed bit or byte operand of `kind` may reach every address of its array: then the range test is
+    the whole check of an effective address (W and D also need alignment, S is never checked inline)."""
+    if kind not in BIT_SPACES and kind != "B":
+        return False
+    return 0 not in _valid_table(profile, kind, space_size(profile, kind))
+
+
 @dataclasses.dataclass
 class Snapshot:
     """Copy of the memory taken before the main program (used to re-run a cycle exactly)."""
 
-    bits: tuple[bytes, ...]
-    mem: bytes
-    strings: tuple[str, ...]
+    bits: tuple[bytearray, ...]
+    mem: bytearray
+    strings: list[str]
 
 
 class MachineState:
@@ -174,8 +196,20 @@ class MachineState:
 
     # ---- snapshots for the exact re-run of a cycle
 
-    def snapshot(self) -> Snapshot:
-        return Snapshot(tuple(bytes(self.bits(k)) for k in BIT_SPACES), bytes(self.mem), tuple(self.S))
+    def snapshot(self, reuse: Snapshot | None = None) -> Snapshot:
+        """A copy of the memory. It is taken before every cycle's program phase: `reuse`, an earlier snapshot that
+        is no longer needed, is overwritten in place instead of allocating new copies."""
+        if reuse is None:
+            return Snapshot(tuple(bytearray(self.bits(k)) for k in BIT_SPACES), bytearray(self.mem), list(self.S))
+        M, I, O, T, C = reuse.bits                      # noqa: E741 - the operand kinds
+        M[:] = self.M
+        I[:] = self.I
+        O[:] = self.O
+        T[:] = self.T
+        C[:] = self.C
+        reuse.mem[:] = self.mem
+        reuse.strings[:] = self.S
+        return reuse
 
     def restore(self, snap: Snapshot) -> None:
         for kind, data in zip(BIT_SPACES, snap.bits):

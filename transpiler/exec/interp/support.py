@@ -6,6 +6,8 @@ import collections
 from typing import Callable
 
 from transpiler.language.semantics import Semantics
+from transpiler.exec.interp.compile import CompiledProgram
+from transpiler.exec.interp.coverage import CoverageMarks
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
 from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
@@ -42,29 +44,36 @@ class Runtime:
         self.unknown_modules: dict[int, int] = {}
         mp7280 = sys.get_mp(7280, 0)
         self.pure_env = PureEnv(lambda: len(self.stack), "," if mp7280 is not None and mp7280 == 0 else ".")
-        self.hits = bytearray(0)
-        self.branches: set[tuple[int, int]] = set()
+        self.marks: CoverageMarks | None = None
         # (kind, address) of every store made through an indexed operand, in first-write order (a dict is an
         # ordered set): co-simulation compares these operands from then on. W/D stores record their kind and
         # first byte. Stores to named operands never get here, so a program without indexed stores pays nothing.
         self.indexed_writes: dict[tuple[str, int], None] = {}
 
-    def env(self, op_count: int, coverage: bool) -> dict[str, object]:
+    def env(self, compiled: CompiledProgram, coverage: bool) -> dict[str, object]:
+        """The names the generated code of `compiled` binds; with coverage, the first program sets up the marks
+        that later variants of it write into as well."""
         st = self.state
-        if coverage and len(self.hits) != op_count:
-            self.hits = bytearray(op_count)
+        hits: list[int] | None = None
+        branch_hits: list[int] | None = None
+        stretch_hits: list[int] | None = None
+        if coverage:
+            if self.marks is None:
+                self.marks = CoverageMarks(compiled)
+            hits, branch_hits, stretch_hits = self.marks.arrays_for(compiled)
         env: dict[str, object] = {
             "M": st.M, "I": st.I, "O": st.O, "T": st.T, "C": st.C, "mem": st.mem, "mb": st.mb, "S": st.S,
             "stk": self.stack, "valid": st.valid, "st_h": st.st_h, "st_H": st.st_H, "st_i": st.st_i, "st_I": st.st_I,
             "rb": self.read_bit_indexed, "wb": self.write_bit_indexed, "rx": self.read_val_indexed,
             "wx": self.write_val_indexed, "packx": self.pack_indexed, "unpackx": self.unpack_indexed,
             "pack": pack_bits, "unpack": unpack_bits, "kf": kf_read, "div": self.div, "mod": self.mod,
-            "shl": shl_checked, "shr": shr_checked, "sat": saturate, "ps16": self.push16, "ps32": self.push32,
-            "pl16": self.pop16, "pl32": self.pop32, "module": self.module, "subm": self.submit,
+            "shl": shl_checked, "shr": shr_checked, "sat": saturate, "overflow": self.stack_overflow,
+            "underflow": self.stack_underflow, "module": self.module, "subm": self.submit,
             "rply": self.jobs.reply, "can": self.cancel, "scat": self.concat, "six": self.string_index,
             "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
-            "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": self.hits, "branch": self.branches.add,
+            "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": hits, "bh": branch_hits,
+            "sh": stretch_hits,
             "ixw": self.indexed_writes.setdefault,
         }
         if st.native:
@@ -73,28 +82,29 @@ class Runtime:
 
     # ---- data stack (A-19): 16-bit words, a 32-bit value is two words with the high word on top
 
-    def push16(self, word: int) -> None:
-        if len(self.stack) + 1 > self.capacity:
-            raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
-        self.stack.append(word & 0xFFFF)
+    # The generated code pushes and pulls inline (gen_stack) and calls the two faults below; modules use these.
 
     def push32(self, value: int) -> None:
         if len(self.stack) + 2 > self.capacity:
-            raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
+            self.stack_overflow()
         self.stack.append(value & 0xFFFF)
         self.stack.append((value >> 16) & 0xFFFF)
 
-    def pop16(self) -> int:
-        if not self.stack:
-            raise Fault("E-RT-STACK-UNDERFLOW", "pull from an empty data stack")
-        return self.stack.pop()
-
     def pop32(self) -> int:
         if len(self.stack) < 2:
-            raise Fault("E-RT-STACK-UNDERFLOW", f"a 32-bit pull needs 2 words, the data stack holds {len(self.stack)}")
+            self.stack_underflow(2)
         high = self.stack.pop()
         low = self.stack.pop()
         return sext((high << 16) | low, 32)
+
+    def stack_overflow(self) -> None:
+        raise Fault("E-RT-STACK-OVERFLOW", f"data stack overflow (capacity {self.capacity} words)")
+
+    def stack_underflow(self, words: int) -> int:
+        """The fault of a pull of `words` (1 or 2) words that the stack does not hold."""
+        if words == 1:
+            raise Fault("E-RT-STACK-UNDERFLOW", "pull from an empty data stack")
+        raise Fault("E-RT-STACK-UNDERFLOW", f"a 32-bit pull needs 2 words, the data stack holds {len(self.stack)}")
 
     # ---- indexed operands (6.13, A-21, A-22, A-53)
 

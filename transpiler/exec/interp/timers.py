@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
+from transpiler.exec.interp.state import nonzero_positions
 from transpiler.language.semantics import Semantics
 
 
@@ -28,6 +29,12 @@ class TimerService:
         self.rem = [0] * nt
         self.cnt = [0] * nc
         self.prev_release = bytearray(nc)
+        # Timers and counters with rem/cnt > 0, and the running bits they show: the service touches only these
+        # and the started ones, so idle timers and counters cost nothing.
+        self.t_active: set[int] = set()
+        self.c_active: set[int] = set()
+        self.t_running = bytearray(nt)
+        self.c_running = bytearray(nc)
 
     def service(self, T: bytearray, C: bytearray) -> None:
         self._timers(T)
@@ -36,32 +43,55 @@ class TimerService:
     def _timers(self, T: bytearray) -> None:
         first, n = self.t_first, len(self.rem)
         starts = T[first:first + n]
-        rem = self.rem
-        # Only timers that are started or still running change; the rest stay at rem = 0.
-        for i in (i for i in range(n) if starts[i] or rem[i]):
+        rem, preset = self.rem, self.t_preset
+        # Only started timers and running ones (rem > 0) can change: an idle timer stays as it is, and one left
+        # below 0 by a negative preset neither counts down nor (without restart) starts again.
+        touched = set(self.t_active)
+        if starts.count(0) != n:
+            touched.update(nonzero_positions(starts))
+        for i in touched:
             started = starts[i]
             if started and (self.t_restart or rem[i] == 0):
-                rem[i] = self.t_preset[i]
+                rem[i] = preset[i]
             elif rem[i] > 0:
                 rem[i] -= 1
             if started and self.t_consumed:
                 T[first + i] = 0
+        _track(touched, rem, self.t_active, self.t_running)
         run = first + self.t_run
-        T[run:run + n] = bytes(1 if r > 0 else 0 for r in rem)
+        T[run:run + n] = self.t_running       # also undoes any write of the program to a running bit
 
     def _counters(self, C: bytearray) -> None:
         first, n = self.c_first, len(self.cnt)
         starts = C[first:first + n]
         rel = first + self.c_rel
         release = C[rel:rel + n]
-        cnt = self.cnt
-        for i in (i for i in range(n) if starts[i] or cnt[i] or release[i] != self.prev_release[i]):
+        cnt, prev_release = self.cnt, self.prev_release
+        # As with timers: only started counters and running ones (cnt > 0) can change.
+        touched = set(self.c_active)
+        if starts.count(0) != n:
+            touched.update(nonzero_positions(starts))
+        for i in touched:
             if starts[i]:
                 cnt[i] = self.c_preset[i]
                 if self.c_consumed:
                     C[first + i] = 0
-            elif cnt[i] > 0 and release[i] and (not self.c_edges or not self.prev_release[i]):
+            elif cnt[i] > 0 and release[i] and (not self.c_edges or not prev_release[i]):
                 cnt[i] -= 1
-        self.prev_release[:] = release
+        prev_release[:] = release
+        _track(touched, cnt, self.c_active, self.c_running)
         run = first + self.c_run
-        C[run:run + n] = bytes(1 if c > 0 else 0 for c in cnt)
+        C[run:run + n] = self.c_running
+
+
+def _track(touched: set[int], remaining: list[int], active: set[int], running: bytearray) -> None:
+    """After an update of the `touched` entries: `active` holds the entries with remaining > 0, `running` is 1
+    exactly there."""
+    for i in touched:
+        if remaining[i] > 0:
+            active.add(i)
+            running[i] = 1
+        else:
+            active.discard(i)
+            running[i] = 0
+

@@ -1,0 +1,51 @@
+"""Coverage marks: the arrays the generated code writes while it runs with coverage, and what they stand for."""
+
+from __future__ import annotations
+
+from transpiler.exec.interp.compile import CompiledProgram
+
+
+class CoverageMarks:
+    """The marks of one machine, shared by its program variants (the fast code and the exact code that re-runs a
+    cycle): `ops` has one mark per op (the exact variant), `branches` one per branch slot (both variants: their
+    slots are the same), `stretches` one per straight-line stretch of the fast variant. A mark costs the generated
+    code one item store; marks become ops and branch outcomes only when coverage is read."""
+
+    def __init__(self, compiled: CompiledProgram):
+        self.op_count = len(compiled.op_index)
+        self.branch_slots = compiled.branch_slots
+        self.branch_ops = compiled.branch_ops
+        self.stretch_ops = compiled.stretch_ops
+        # Lists of 0/1: an item store into a list is the cheapest store there is (the interpreter specializes it),
+        # and count(0) is a fast scan (0 is one object), for branch_outcome_count after every cycle.
+        self.ops = [0] * self.op_count
+        self.branches = [0] * len(self.branch_slots)
+        self.stretches = [0] * len(self.stretch_ops)
+
+    def arrays_for(self, compiled: CompiledProgram) -> tuple[list[int], list[int], list[int]]:
+        """The (ops, branches, stretches) arrays `compiled` writes into; it must be a variant of the same program,
+        and its stretches (if any) the ones these marks were made for."""
+        if len(compiled.op_index) != self.op_count or compiled.branch_slots != self.branch_slots:
+            raise ValueError("coverage marks of another program")
+        if compiled.stretch_ops and compiled.stretch_ops != self.stretch_ops:
+            raise ValueError("coverage marks made for the stretches of another variant")
+        return self.ops, self.branches, self.stretches if compiled.stretch_ops else []
+
+    def executed(self) -> set[int]:
+        """Op ids marked as executed, by their own mark, their stretch's or a branch mark of their stretch's exit."""
+        executed = {opid for opid, mark in enumerate(self.ops) if mark}
+        for ops, mark in zip(self.stretch_ops, self.stretches):
+            if mark:
+                executed.update(ops)
+        for ops, mark in zip(self.branch_ops, self.branches):
+            if mark:
+                executed.update(ops)
+        return executed
+
+    def branch_outcomes(self) -> frozenset[tuple[int, int]]:
+        """The distinct (op id, outcome) pairs marked so far."""
+        return frozenset(slot for slot, mark in zip(self.branch_slots, self.branches) if mark)
+
+    def branch_outcome_count(self) -> int:
+        """How many distinct (op id, outcome) pairs are marked (it only grows)."""
+        return len(self.branches) - self.branches.count(0)
