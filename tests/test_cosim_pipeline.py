@@ -1,4 +1,4 @@
-"""The pipelined co-simulation (the reference interpreter in a forked process, compared by digest) gives the same
+"""The pipelined co-simulation (the reference interpreter in a forked process, sending its values in batches) gives the same
 result as the lockstep one: verdict, divergence, cycles run, coverage, indexed columns, missing operands, faults
 and expectation failures, on equivalent runs and on runs that end early."""
 
@@ -61,7 +61,7 @@ def test_equivalent_run_gives_the_same_result_and_coverage(sample):
 
 
 def test_divergence_is_found_at_the_same_cycle_and_operand(sample):
-    """A translation that ignores the door for the flood pump: the digest differs, the values locate it."""
+    """A translation that ignores the door for the flood pump: found at the same cycle and operand."""
     program, out, iomap, names = sample
     broken, count = re.subn(r"O_coolant_flood := ML_sel_flood AND MG_control_ok AND I_door_closed;",
                             "O_coolant_flood := ML_sel_flood AND MG_control_ok OR I_door_closed;", out.st_text)

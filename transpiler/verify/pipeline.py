@@ -2,28 +2,25 @@
 
 The two halves of a co-simulation never feed each other: each runs its own program, environment model and
 system context on the same stimulus. So the reference interpreter can run in a forked process while this process
-runs the translated program, and the two meet only at the comparison. Per cycle the reference process sends a
-digest of the values it compared (Python's hash of the value tuples); this process hashes the translated values
-the same way. Equal values always give equal digests, so a cycle whose digests agree needs nothing more. Where
-they differ, the values themselves are fetched from the reference process, which keeps every cycle not yet
-acknowledged, and the divergence is located exactly as the lockstep run locates it. Two different value lists
-with equal 64-bit digests would hide that cycle's difference: a chance of 2**-64 per cycle, and a difference that
-persists shows again in the next cycle.
-
-The reference process runs at most a few batches ahead, so what it keeps stays small, and it is killed when this
-process has what it needs (a run that stops early needs nothing more from it)."""
+runs the translated program, and the two meet only at the comparison: the reference process sends, batch by
+batch, the values it read after each cycle (with the indexed columns, missing operands and expectation failures
+found on the way), and this process compares them with the translated side's values exactly as the lockstep run
+does. The pipe between them bounds how far the reference runs ahead: a send blocks while a few batches wait
+unread. The reference process is killed when this process has what it needs (a run that stops early needs
+nothing more from it)."""
 
 from __future__ import annotations
 
+import collections
 import dataclasses
+import marshal
 import multiprocessing
 import os
+import pickle
 import traceback
-from array import array
 from typing import Any, Protocol
 
 BATCH = 128                 # cycles per message from the reference process
-AHEAD = 4 * BATCH           # cycles the reference may run beyond the last one acknowledged
 
 
 class ReferenceHalf(Protocol):
@@ -52,71 +49,46 @@ def worthwhile() -> bool:
 
 @dataclasses.dataclass
 class _Batch:
-    """What one message of the reference process says about its cycles `first` .. `first + len(digests) - 1`."""
+    """What one message of the reference process says about its cycles `first` .. `first + len(values) - 1`."""
 
     first: int
-    digests: array
+    values: list                    # per cycle: (static column values, indexed column values)
     columns: list                   # (cycle, [new indexed column, ...]) in cycle order
     missing: list                   # (cycle, operand the translation has no place for)
     failures: list                  # expectation failures (each names its cycle)
 
 
-def digest(values: tuple[list, list]) -> int:
-    """The hash both halves compute of one cycle's compared values."""
-    return hash((tuple(values[0]), tuple(values[1])))
-
-
 def _serve(conn, half: ReferenceHalf, total: int) -> None:
-    """The reference process: run every cycle, send digests in batches, answer requests for values."""
-    kept: dict[int, tuple[list, list]] = {}
-    acknowledged = 0
+    """The reference process: run every cycle and send what it compares, batch by batch, then the run's end."""
     end: tuple[int, str] | None = None
-
-    def handle(message) -> None:
-        nonlocal acknowledged
-        kind, cycle = message
-        if kind == "ack":
-            for c in range(acknowledged, cycle):
-                kept.pop(c, None)
-            acknowledged = max(acknowledged, cycle)
-        elif kind == "values":
-            conn.send(("values", cycle, kept[cycle]))
-
     try:
         cycle = 0
         while cycle < total and end is None:
-            first = cycle
-            digests = array("q")
-            columns: list = []
-            missing: list = []
-            failures: list = []
-            while cycle < min(first + BATCH, total):
+            batch = _Batch(cycle, [], [], [], [])
+            while cycle < min(batch.first + BATCH, total):
                 fault = half.step(cycle)
                 if fault is not None:
                     end = (cycle, fault)
                     break
-                values = half.values()
+                batch.values.append(half.values())
                 new_columns, new_missing, new_failures = half.take_news()
                 if new_columns:
-                    columns.append((cycle, new_columns))
-                missing += [(cycle, m) for m in new_missing]
-                failures += new_failures
-                kept[cycle] = values
-                digests.append(digest(values))
+                    batch.columns.append((cycle, new_columns))
+                batch.missing += [(cycle, m) for m in new_missing]
+                batch.failures += new_failures
                 cycle += 1
-            conn.send(("batch", _Batch(first, digests, columns, missing, failures)))
-            while conn.poll():
-                handle(conn.recv())
-            while cycle - acknowledged > AHEAD:
-                handle(conn.recv())
-        conn.send(("end", end, (half.coverage(), half.final_values()) if end is None else (None, [])))
-        while True:
-            handle(conn.recv())
-    except EOFError:
+            # The values (ints and texts) travel as marshal data, which is quicker both ways than pickle; the
+            # rarer findings, which are objects, are pickled.
+            news = (batch.columns, batch.missing, batch.failures)
+            conn.send_bytes(marshal.dumps(("batch", batch.first, batch.values,
+                                           pickle.dumps(news) if any(news) else None)))
+        final = (half.coverage(), half.final_values()) if end is None else (None, [])
+        conn.send_bytes(marshal.dumps(("end", pickle.dumps((end, final)))))
+    except (BrokenPipeError, EOFError):
         return
     except BaseException:  # noqa: BLE001 - whatever went wrong is told to the other side, which raises it
         try:
-            conn.send(("crash", traceback.format_exc()))
+            conn.send_bytes(marshal.dumps(("crash", traceback.format_exc())))
         except OSError:
             pass
 
@@ -126,7 +98,7 @@ class ReferenceProcessFailed(RuntimeError):
 
 
 class PipelinedReference:
-    """The other end of _serve: per cycle, a fault or the digest to compare against, and values on request."""
+    """The other end of _serve: per cycle, in order, a fault or the values to compare against."""
 
     def __init__(self, half: ReferenceHalf, total: int):
         context = multiprocessing.get_context("fork")
@@ -134,61 +106,55 @@ class PipelinedReference:
         self._process = context.Process(target=_serve, args=(child, half, total), daemon=True)
         self._process.start()
         child.close()
-        self._digests = array("q")
+        self._values: collections.deque = collections.deque()      # values of cycles `_first` .. received
+        self._first = 0
         self._columns: dict[int, list] = {}
         self.missing: list = []
         self.failures: list = []
-        # (fault, (coverage, final values)) once the run ended
-        self._end: tuple[tuple[int, str] | None, tuple[Any, list]] | None = None
-        self._values: dict[int, tuple[list, list]] = {}
-        self._acknowledged = 0
+        self._end: tuple[tuple[int, str] | None, tuple[Any, list]] | None = None     # (fault, (coverage, final))
 
     def _receive(self) -> None:
         try:
-            kind, *rest = self._conn.recv()
+            kind, *rest = marshal.loads(self._conn.recv_bytes())
         except EOFError:
             raise ReferenceProcessFailed("the reference interpreter's process ended without an answer") from None
         if kind == "batch":
-            batch: _Batch = rest[0]
-            self._digests.extend(batch.digests)
-            for cycle, columns in batch.columns:
-                self._columns[cycle] = columns
-            self.missing += batch.missing
-            self.failures += batch.failures
+            _, values, news = rest
+            self._values.extend(values)
+            if news is not None:
+                columns, missing, failures = pickle.loads(news)
+                for cycle, new in columns:
+                    self._columns[cycle] = new
+                self.missing += missing
+                self.failures += failures
         elif kind == "end":
-            self._end = (rest[0], rest[1])
-        elif kind == "values":
-            self._values[rest[0]] = rest[1]
+            self._end = pickle.loads(rest[0])
         else:
             raise ReferenceProcessFailed(f"the reference interpreter failed:\n{rest[0]}")
 
     def fault(self, cycle: int) -> str | None:
-        """Wait until cycle `cycle` of the reference is known; the fault text if the reference faulted in it."""
-        while len(self._digests) <= cycle:
+        """Wait until cycle `cycle` of the reference is known (cycles come in order; the earlier ones are dropped);
+        the fault text if the reference faulted in it."""
+        while self._first + len(self._values) <= cycle:
             if self._end is not None:
                 fault = self._end[0]
                 if fault is not None and fault[0] == cycle:
                     return fault[1]
                 raise ReferenceProcessFailed(f"the reference interpreter stopped before cycle {cycle}")
             self._receive()
+        while self._first < cycle:
+            self._values.popleft()
+            self._first += 1
         return None
 
     def new_columns(self, cycle: int) -> list:
         return self._columns.pop(cycle, [])
 
     def agrees(self, cycle: int, values: tuple[list, list]) -> bool:
-        same = self._digests[cycle] == digest(values)
-        if (cycle + 1) % BATCH == 0 and cycle + 1 > self._acknowledged:
-            self._acknowledged = cycle + 1
-            self._conn.send(("ack", cycle + 1))
-        return same
+        return self._values[0] == values
 
     def values(self, cycle: int) -> tuple[list, list]:
-        """The reference's compared values of `cycle` (not yet acknowledged), fetched from its process."""
-        self._conn.send(("values", cycle))
-        while cycle not in self._values:
-            self._receive()
-        return self._values.pop(cycle)
+        return self._values[0]
 
     def coverage(self) -> Any:
         """The coverage of a run that went through all its cycles (the reference process sends it at its end)."""

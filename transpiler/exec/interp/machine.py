@@ -19,6 +19,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import itertools
+import operator
 from decimal import Decimal, InvalidOperation
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
@@ -146,26 +147,39 @@ class Machine:
     def reader(self, operands: Sequence[tuple[str, int]]) -> Callable[[], list[int | str]]:
         """A function returning the current values of `operands` (as `read` would), compiled once: for traces."""
         st = self.state
-        parts = []
+        # (container, index) of each operand that is an element of one, else the expression that reads it
+        items: list[tuple[str, int] | str] = []
         for kind, addr in operands:
             self.read(kind, addr)                         # validates kind, range and alignment
             if kind in PSEUDO:
-                parts.append({"LA": "((r[1] >> 7) & 1)" if self.semantics["accumulator_model"] == "shared_bit7"
+                items.append({"LA": "((r[1] >> 7) & 1)" if self.semantics["accumulator_model"] == "shared_bit7"
                               else "(1 if r[0] else 0)", "WA": "r[1]", "X": "r[2]", "SA": "r[3]"}[kind])
             elif kind in "MIOTC" or kind == "S":
-                parts.append(f"{kind}[{addr}]")
+                items.append((kind, addr))
             elif kind == "B":
-                parts.append(f"mb[{addr}]")
+                items.append(("mb", addr))
             elif st.native:
-                parts.append(f"mw[{addr >> 1}]" if kind == "W" else f"md[{addr >> 2}]")
+                items.append(("mw", addr >> 1) if kind == "W" else ("md", addr >> 2))
             else:
-                parts.append(f"{'h' if kind == 'W' else 'i'}(mem, {addr})[0]")
-        source = "def _reader():\n    r = get()\n    return [" + ", ".join(parts) + "]\n"
+                items.append(f"{'h' if kind == 'W' else 'i'}(mem, {addr})[0]")
         namespace: dict[str, Any] = {"get": self._get, "M": st.M, "I": st.I, "O": st.O, "T": st.T, "C": st.C,
                                      "S": st.S, "mb": st.mb, "mem": st.mem, "h": st.st_h.unpack_from,
                                      "i": st.st_i.unpack_from}
         if st.native:
             namespace.update(mw=st.mw, md=st.md)
+        # A run of elements of one container is read by one itemgetter (in C) instead of one subscript each.
+        parts = []
+        for _, run in itertools.groupby(items, key=lambda item: item[0] if isinstance(item, tuple) else None):
+            run = list(run)
+            if not isinstance(run[0], tuple):
+                parts += run
+            elif len(run) == 1:
+                parts.append(f"{run[0][0]}[{run[0][1]}]")
+            else:
+                getter = f"g{len(namespace)}"
+                namespace[getter] = operator.itemgetter(*(index for _, index in run))
+                parts.append(f"*{getter}({run[0][0]})")
+        source = "def _reader():\n    r = get()\n    return [" + ", ".join(parts) + "]\n"
         exec(compile(source, "<hh2iec-reader>", "exec"), namespace)  # noqa: S102 - generated from validated operands
         return namespace["_reader"]
 
