@@ -59,8 +59,12 @@ def _coverage(program, names, scenarios):
 
 def test_guided_stimulus_is_deterministic_within_budget_and_enters_every_case_entry(sample):
     program, names, seeds = sample
-    # without the scenarios that give every M function, so that the search has CASE entries to find
-    short = [s for s in seeds if s.cycles <= 1000 and s.name not in ("m_functions_all", "restart_with_m_strobe_held")]
+    # only scenarios without the rarer M functions (all but M3, M5, M8, M9), so that the search has CASE entries
+    # of the M-function decoder to find
+    common = {3, 5, 8, 9}
+    short = [s for s in seeds if s.cycles <= 1000 and s.name != "restart_with_m_strobe_held"
+             and all(e.nc is None or e.nc.kind != "m_function" or e.nc.as_dict()["m_function"] in common
+                     for e in s.events)]
     # 2000 generated cycles, as `equiv` draws by default (seed 1)
     first = generate(program, names, 2000, 1, short, machine_parameters=SAMPLE / "MP_data.mp")
     again = generate(program, names, 2000, 1, short, machine_parameters=SAMPLE / "MP_data.mp")
