@@ -30,6 +30,7 @@ from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
+from transpiler.verify import pipeline
 from transpiler.verify.cosim import StSide, cosimulate
 from transpiler.verify.scenario import NameTable, Scenario
 
@@ -273,6 +274,7 @@ class Judge:
     side_factory: Callable[[str], Callable[[], StSide]]
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
+    pipelined: bool = False             # the reference in a process of its own (judging one mutant at a time)
 
     def __call__(self, mutant: Mutant) -> Verdict:
         start = time.perf_counter()
@@ -287,7 +289,7 @@ class Judge:
         for scenario in self.scenarios:
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
-                                    base_mp=self.base_mp)
+                                    base_mp=self.base_mp, pipelined=self.pipelined)
             except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
                 first_error = first_error or f"{scenario.name}: {_message(exc)}"
                 continue
@@ -335,8 +337,10 @@ def _worker(judge: Judge, mutants: list[Mutant], tasks, results) -> None:
 def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
     """Verdicts as they come in; with jobs > 1 the judge is shared with forked workers (only results are pickled)."""
     if jobs <= 1 or len(mutants) <= 1:
+        # One mutant at a time leaves a CPU for the reference interpreter of each run.
+        one_at_a_time = dataclasses.replace(judge, pipelined=pipeline.worthwhile())
         for mutant in mutants:
-            yield judge(mutant)
+            yield one_at_a_time(mutant)
         return
     context = multiprocessing.get_context("fork")
     tasks, results = context.Queue(), context.Queue()
