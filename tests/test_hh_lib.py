@@ -16,7 +16,7 @@ from tests.test_interp import cycles, machine
 from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou, ProgramInstance, Task, VarSection
 from transpiler.backends.plcopen.writer import extract_st_bodies
 from transpiler.backends.st import hh_lib
-from transpiler.backends.st.arith import gate_value
+from transpiler.backends.st.arith import gate_value, shift_value
 from transpiler.backends.st.check import check_blark, find_iec2c
 from transpiler.backends.st.library import helper_pous
 from transpiler.backends.st.writer import extract_pou_bodies, render_st
@@ -345,3 +345,11 @@ def test_constant_word_gates_fold_to_what_the_helpers_give(builtin, a: int, v: i
     """The back end folds a gate of two constants (gate_value); the helper must give the same on every input."""
     for name, kind in (("HH_WAND", "A"), ("HH_WOR", "O"), ("HH_WXOR", "X")):
         assert gate_value(kind, a, v, width) == _call(builtin, name, (a, v, width)), (name, a, v, width)
+
+
+@given(a=st.integers(MIN, 2 ** 31 - 1), count=st.integers(0, 31))
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_constant_shifts_fold_to_what_the_helpers_give(builtin, a: int, count: int) -> None:
+    """The back end folds a shift or bit set/clear of two constants (shift_value); the helpers must agree."""
+    for name in ("HH_SHL", "HH_SHR", "HH_BSET", "HH_BCLR"):
+        assert shift_value(name, a, count) == _call(builtin, name, (a, count)), (name, a, count)

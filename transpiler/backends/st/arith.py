@@ -141,6 +141,13 @@ def gate_value(kind: str, a: int, b: int, width: int) -> int:
     return wrap32(value)
 
 
+def shift_value(fn: str, a: int, count: int) -> int:
+    """What HH_SHL, HH_SHR (arithmetic), HH_BSET and HH_BCLR give for constant arguments, `count` in 0..31."""
+    value = {"HH_SHL": lambda: a << count, "HH_SHR": lambda: a >> count,
+             "HH_BSET": lambda: a | (1 << count), "HH_BCLR": lambda: a & ~(1 << count)}[fn]()
+    return wrap32(value)
+
+
 def wrap32(v: int) -> int:
     v &= 0xFFFFFFFF
     return v - 2 ** 32 if v >= 2 ** 31 else v

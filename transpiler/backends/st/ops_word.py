@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from transpiler.ir import Op, Operand
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st.arith import shift_value
 from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.routine import ExecutorPart
 
@@ -79,10 +80,18 @@ class WordOpsMixin(ExecutorPart):
             return E.int_const(v.const % 32)
         return E.to_dint(v)
 
-    def op_SHL(self, op): self.s.set("WA", self._fn("HH_SHL", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)]))
-    def op_SHR(self, op): self.s.set("WA", self._fn("HH_SHR", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)]))
-    def op_BS(self, op): self.s.set("WA", self._fn("HH_BSET", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)]))
-    def op_BC(self, op): self.s.set("WA", self._fn("HH_BCLR", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)]))
+    def _shift(self, op: Op, fn: str) -> None:
+        """WA shifted, or one bit of it set or cleared, by the helper `fn`; folded where both are constants."""
+        wa, count = E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)
+        if wa.const is not None and count.const is not None:
+            self.s.set("WA", E.int_const(shift_value(fn, wa.const, count.const)))
+        else:
+            self.s.set("WA", self._fn(fn, [wa, count]))
+
+    def op_SHL(self, op): self._shift(op, "HH_SHL")
+    def op_SHR(self, op): self._shift(op, "HH_SHR")
+    def op_BS(self, op): self._shift(op, "HH_BSET")
+    def op_BC(self, op): self._shift(op, "HH_BCLR")
 
     def op_BT(self, op: Op) -> None:
         self.s.set("LA", self._fn("HH_BTEST", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)], "BOOL", 0, 1))
