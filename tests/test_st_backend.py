@@ -234,3 +234,21 @@ def test_empty_case_table_translates_to_valid_st_that_calls_nothing(tmp_path):
     run = cosimulate(result.program, builtin_side_factory(out.st_text), io_map_of(out.result),
                      load_scenario(tmp_path / "scenario.yaml", names), names)
     assert run.equivalent, (run.divergence, run.error)
+
+
+def test_an_error_marker_overwritten_before_any_read_is_not_stored(tmp_path):
+    # Catches: the overflow marker of the first multiplication still stored although the second one overwrites
+    # it before anything reads it (a dead store), or the last one dropped too (M4200 is compared after the cycle).
+    from transpiler import api
+    from transpiler.verify.cosim import builtin_side_factory, cosimulate
+    from transpiler.verify.equiv import random_scenario
+    from transpiler.verify.simulate import project_names
+    (tmp_path / "main.src").write_text("L W10\nx K4\n= W0\nL W12\nx K6\n= W2\nL M4200\n= M1\nL W14\nx K8\n= W4\nEM\n")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    out = transpile_program(project.program, Diagnostics(), {}, {"st"})
+    stores = [line.strip() for line in out.st_text.splitlines() if line.strip().startswith("M4200 :=")]
+    assert len(stores) == 2, stores            # the one read by M1, and the last one
+    names = project_names(project.program)
+    scenario = random_scenario(project.program, names, 200, seed=4)
+    run = cosimulate(project.program, builtin_side_factory(out.st_text), io_map_of(out.result), scenario, names)
+    assert run.equivalent, (run.divergence, run.error)

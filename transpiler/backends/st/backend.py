@@ -391,8 +391,13 @@ class StBackend:
             comment += "\n" + "\n".join(comments)
         pou = Pou(pou_name, "PROGRAM" if is_main else "FUNCTION_BLOCK", tuple(sections), "",
                   comment=comment, source_map=(SourceRange(file.path, first, last),))
-        registers = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
-        statements = simplify.simplify(statements, registers)
+        # The error markers of x, / and MOD and of module calls (M4200-M4203 on the iTNC) are written by every such
+        # instruction, so a store the next one overwrites before anything reads it is as dead as a register store.
+        itf = self.semantics.profile.interface
+        markers = (self.names.get(f"M{m}") for m in (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err))
+        overwritten = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
+        overwritten |= frozenset(n for n in markers if n is not None)
+        statements = simplify.simplify(statements, overwritten)
         return passes.propagate_temporaries(printer.with_statements(pou, statements))
 
     def _bit_accessor_pou(self, kind: str) -> Pou:

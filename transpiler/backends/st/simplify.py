@@ -1,7 +1,8 @@
 """Statement-level clean-up of a POU's statement tree, before the copy propagation of passes.py:
 
-- a store of an accumulator register (HH_LA, HH_WA, ...) that a later store of the same register overwrites
-  before anything can read it is dropped;
+- a store of an accumulator register (HH_LA, HH_WA, ...) or of an error marker of arithmetic and module calls
+  (the caller passes both as `registers`) that a later store of the same variable overwrites before anything
+  can read it is dropped;
 - `IF c THEN x := TRUE; ELSE x := FALSE; END_IF;` becomes `x := c;` (and the swapped form `x := NOT c;`);
 - an IF without statements in either branch leaves only its comments;
 - consecutive IFs on the same condition become one where the first cannot change the condition (its body only
