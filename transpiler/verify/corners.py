@@ -121,10 +121,11 @@ def harvest(program: Program, names: NameTable) -> Corners:
     foreign = sorted((r for r in set(used) - set(written) if drivable(r)), key=lambda r: (r.kind, r.addr))
     # Only interface words: a B/W/D the program reads but never writes outside the NC interface is memory the
     # program expects another module to fill, and is set through `initial` like the remanent words.
-    foreign_words = tuple((name(r), r.kind) for r in foreign if r.kind in _WIDTH_BITS
-                          and profile.is_interface(r.kind, r.addr, _WIDTH_BITS[r.kind] // 8))
+    foreign_byte_memory = [r for r in foreign if r.kind in _WIDTH_BITS]
+    interface = {r for r in foreign_byte_memory if profile.is_interface(r.kind, r.addr, _WIDTH_BITS[r.kind] // 8)}
+    foreign_words = tuple((name(r), r.kind) for r in foreign_byte_memory if r in interface)
     foreign_markers = tuple(name(r) for r in foreign if r.kind == "M")
-    filled_elsewhere = {r for r in foreign if r.kind in _WIDTH_BITS and (name(r), r.kind) not in foreign_words}
+    filled_elsewhere = {r for r in foreign_byte_memory if r not in interface}
     remanent = sorted((r for r in set(written) | filled_elsewhere if drivable(r)), key=lambda r: (r.kind, r.addr))
     return Corners(
         constants=tuple(sorted(constants)),

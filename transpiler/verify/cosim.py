@@ -95,6 +95,7 @@ class Comparison:
     # (operand, reason) of operands the original writes that are deliberately not compared; none today: an operand
     # the translation lacks is `missing`, never excluded.
     excluded: tuple[tuple[str, str], ...] = ()
+    sweep: tuple[OperandRef, ...] = ()      # compared once after the last cycle (sweep_refs)
 
 
 def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
@@ -117,7 +118,7 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
     missing = tuple(MissingOperand(str(r), names.display_name(r), tuple(writers.get(r, ())))
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
-    return Comparison(tuple(cols), inputs, missing)
+    return Comparison(tuple(cols), inputs, missing, sweep=sweep_refs(program, iomap, (ref for _, ref in cols)))
 
 
 def sweep_refs(program: Program, iomap: IoMap, static: Iterable[OperandRef]) -> tuple[OperandRef, ...]:
@@ -226,9 +227,9 @@ class _ReferenceHalf:
     stays compared after X has moved on, as a static column would."""
 
     def __init__(self, machine: Machine, stimulus: Stimulus, scenario: Scenario, comparison: Comparison,
-                 iomap: IoMap, names: NameTable, sweep: tuple[OperandRef, ...] = ()):
+                 iomap: IoMap, names: NameTable):
         self.machine = machine
-        self.sweep = sweep
+        self.sweep = comparison.sweep
         self.stimulus = stimulus
         self.scenario = scenario
         self.iomap = iomap
@@ -458,8 +459,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         result.error_side = "scenario"
         return result
     start = time.perf_counter()
-    sweep = sweep_refs(program, iomap, (ref for _, ref in comparison.columns))
-    half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names, sweep)
+    sweep = comparison.sweep
+    half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
     pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
     reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
     try:

@@ -12,7 +12,6 @@ nothing more from it)."""
 from __future__ import annotations
 
 import collections
-import dataclasses
 import marshal
 import multiprocessing
 import os
@@ -47,41 +46,33 @@ def worthwhile() -> bool:
     return cpus >= 2 and fork_available()
 
 
-@dataclasses.dataclass
-class _Batch:
-    """What one message of the reference process says about its cycles `first` .. `first + len(values) - 1`."""
-
-    first: int
-    values: list                    # per cycle: (static column values, indexed column values)
-    columns: list                   # (cycle, [new indexed column, ...]) in cycle order
-    missing: list                   # (cycle, operand the translation has no place for)
-    failures: list                  # expectation failures (each names its cycle)
-
-
 def _serve(conn, half: ReferenceHalf, total: int) -> None:
     """The reference process: run every cycle and send what it compares, batch by batch, then the run's end."""
     end: tuple[int, str] | None = None
     try:
         cycle = 0
         while cycle < total and end is None:
-            batch = _Batch(cycle, [], [], [], [])
-            while cycle < min(batch.first + BATCH, total):
+            values: list = []           # per cycle: (static column values, indexed column values)
+            columns: list = []          # (cycle, [new indexed column, ...]) in cycle order
+            missing: list = []          # (cycle, operand the translation has no place for)
+            failures: list = []         # expectation failures (each names its cycle)
+            last = min(cycle + BATCH, total)
+            while cycle < last:
                 fault = half.step(cycle)
                 if fault is not None:
                     end = (cycle, fault)
                     break
-                batch.values.append(half.values())
+                values.append(half.values())
                 new_columns, new_missing, new_failures = half.take_news()
                 if new_columns:
-                    batch.columns.append((cycle, new_columns))
-                batch.missing += [(cycle, m) for m in new_missing]
-                batch.failures += new_failures
+                    columns.append((cycle, new_columns))
+                missing += [(cycle, m) for m in new_missing]
+                failures += new_failures
                 cycle += 1
             # The values (ints and texts) travel as marshal data, which is quicker both ways than pickle; the
-            # rarer findings, which are objects, are pickled.
-            news = (batch.columns, batch.missing, batch.failures)
-            conn.send_bytes(marshal.dumps(("batch", batch.first, batch.values,
-                                           pickle.dumps(news) if any(news) else None)))
+            # rarer findings, which are objects, are pickled. Batches come in cycle order.
+            news = (columns, missing, failures)
+            conn.send_bytes(marshal.dumps(("batch", values, pickle.dumps(news) if any(news) else None)))
         final = (half.coverage(), half.final_values()) if end is None else (None, [])
         conn.send_bytes(marshal.dumps(("end", pickle.dumps((end, final)))))
     except (BrokenPipeError, EOFError):
@@ -119,7 +110,7 @@ class PipelinedReference:
         except EOFError:
             raise ReferenceProcessFailed("the reference interpreter's process ended without an answer") from None
         if kind == "batch":
-            _, values, news = rest
+            values, news = rest
             self._values.extend(values)
             if news is not None:
                 columns, missing, failures = pickle.loads(news)
