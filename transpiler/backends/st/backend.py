@@ -272,8 +272,13 @@ class StBackend:
         entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)
         file = program.files[key[0]]
         body = routine_body(program.files, entry)
-        emitter = Emitter()
         temps: list[tuple[str, str]] = []
+
+        def scratch(name: str) -> bool:
+            """Registers and this routine's temporaries: assigning one writes no operand."""
+            return name in self.layout.register_vars or any(name == t.upper() for t, _ in temps)
+
+        emitter = Emitter(scratch)
         callees: set[tuple[int, int]] = set()
         pou_name = self.main_pou if is_main else self.pou_names[key]
 
@@ -339,7 +344,7 @@ class StBackend:
         except NotStructured as exc:
             structured = False
             self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
-            emitter = Emitter()
+            emitter = Emitter(scratch)
             temps.clear()
             accessors.count.clear()
             callees.clear()

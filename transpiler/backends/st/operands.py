@@ -53,12 +53,18 @@ class OperandMixin(ExecutorPart):
         that value outside the symbolic state). So the call changes nothing that is still needed."""
         if not o.indexed:
             return self.ctx.layout.bit_lvalue(o, offset)
-        index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        xi = self._xi(o)
+        index = self.ctx.layout.bit_index(o, xi, offset)
         held = self._held_reads()
-        live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
-        inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live))
-        self.drop([key for kind, key in list(self._dependents(inst.upper())) if kind == "reg"])
-        self.ctx.out.add(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(False)))))
+        key = _access_key(index, xi, o.addr + offset)
+        inst = self.ctx.out.held_access(o.kind, key)
+        if inst is None:
+            live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
+            inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live),
+                                         self.ctx.out.access_rank(o.kind, key))
+            self.drop([kind_key[1] for kind_key in list(self._dependents(inst.upper())) if kind_key[0] == "reg"])
+            self.ctx.out.add_access(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(False)))),
+                                    o.kind, key, index.deps, write=False)
         held.add(inst)
         return E.Expr(f"{inst}.Q", "BOOL", frozenset([inst.upper()]), 0, 1)
 
@@ -79,11 +85,15 @@ class OperandMixin(ExecutorPart):
         keep = keep | {"X"}
         # Any operand of this space may change: values in flight that read one of them are saved first.
         deferred = self.prepare_write(f"#{o.kind}", keep)
-        index = self.ctx.layout.bit_index(o, self._xi(o), offset)
+        xi = self._xi(o)
+        index = self.ctx.layout.bit_index(o, xi, offset)
+        key = _access_key(index, xi, o.addr + offset)
         live = self.ctx.live_after(self.index)
-        inst = self.ctx.bit_accessor(o.kind, lambda name: self.saves_nothing(name.upper(), live))
+        inst = self.ctx.bit_accessor(o.kind, lambda name: self.saves_nothing(name.upper(), live),
+                                     self.ctx.out.access_rank(o.kind, key))
         deferred += self.prepare_write(inst.upper(), keep)
-        self.ctx.out.add(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(True)), ("VALUE", value()))))
+        self.ctx.out.add_access(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(True)), ("VALUE", value()))),
+                                o.kind, key, index.deps, write=True)
         self.drop(deferred)
         return None
 
@@ -121,3 +131,10 @@ class OperandMixin(ExecutorPart):
             lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
             rv = lambda k=k: layout.write_value(o, self._xi(o), value())[k][1]
             self.store(lv, rv, frozenset(["WA", "X", "LA", "SA"]))
+
+
+def _access_key(index: Expr, x: Expr | None, base: int) -> tuple[int, str]:
+    """The address of an indexed bit operand as the accessor cache compares it (routine.AccessKey)."""
+    if index.const is not None:
+        return (index.const, "")
+    return (base, x.text)

@@ -38,11 +38,21 @@ class Frame:
 class Emitter:
     """Collects the statements of a routine body (stmt.py), with the source comments waiting for the next one.
 
-    `block` is the statement list being filled: `nested` swaps in the list of a compound statement's branch."""
+    `block` is the statement list being filled: `nested` swaps in the list of a compound statement's branch.
 
-    def __init__(self) -> None:
+    It also knows which accessor instances hold the value of an indexed operand right now (`held_access`): an
+    accessor's output Q keeps the operand's value until something could change it, so a second read of the same
+    address in straight-line code reuses Q instead of calling the accessor again. Any statement that could write
+    the operand space or the index ends that knowledge: every statement but an assignment of a scratch variable
+    (`scratch`: registers and temporaries, which hold no operand; it ends only what reads that variable) and the
+    accessor calls it is told of."""
+
+    def __init__(self, scratch: Callable[[str], bool] = lambda name: False) -> None:
         self.block: list[S.Stmt] = []
         self.pending_comments: list[str] = []
+        self.scratch = scratch
+        # accessor instance -> (operand kind, address key, variables the address reads)
+        self.access_values: dict[str, tuple[str, AccessKey, frozenset[str]]] = {}
 
     def comment(self, text: str) -> None:
         self.pending_comments.append(text)
@@ -52,24 +62,72 @@ class Emitter:
         self.pending_comments = []
 
     def add(self, stmt: S.Stmt) -> None:
+        self._forget_changed(stmt)
         self.flush_comments()
         self.block.append(stmt)
+
+    def add_access(self, call: S.Call, kind: str, key: AccessKey, reads: frozenset[str], write: bool) -> None:
+        """An accessor call reading (or writing) the operand of `kind` at `key`; afterwards its Q holds that
+        operand's value. A write makes every other instance's value of an address it may be stale."""
+        self.flush_comments()
+        self.block.append(call)
+        # The call changes the instance's Q and, writing, one operand of `kind`: addresses that read either change.
+        changed = {call.callee.upper()} | ({f"#{kind}"} if write else set())
+        self.access_values = {inst: held for inst, held in self.access_values.items()
+                              if not changed & held[2] and (not write or held[0] != kind or _distinct(held[1], key))}
+        self.access_values.pop(call.callee, None)
+        if not changed & reads:
+            self.access_values[call.callee] = (kind, key, reads)
+
+    def access_rank(self, kind: str, key: AccessKey) -> Callable[[str], int]:
+        """How well an accessor instance suits a call for the operand of `kind` at `key`: best one that holds that
+        operand already (a write makes its value stale anyway), then one that holds nothing, last one whose value
+        a later read could still reuse."""
+        def rank(inst: str) -> int:
+            held = self.access_values.get(inst)
+            return 1 if held is None else 0 if held[:2] == (kind, key) else 2
+        return rank
+
+    def held_access(self, kind: str, key: AccessKey) -> str | None:
+        """An accessor instance whose Q holds the operand of `kind` at `key` now, if any."""
+        return next((inst for inst, held in self.access_values.items() if held[:2] == (kind, key)), None)
+
+    def _forget_changed(self, stmt: S.Stmt) -> None:
+        if not self.access_values or isinstance(stmt, S.Comment):
+            return
+        target = E.base_name(stmt.target) if isinstance(stmt, S.Assign) else None
+        if target is not None and self.scratch(target):
+            self.access_values = {inst: held for inst, held in self.access_values.items() if target not in held[2]}
+        else:
+            self.access_values = {}
 
     @contextlib.contextmanager
     def nested(self, comments_before: bool = True) -> Iterator[list[S.Stmt]]:
         """Statements added inside go to the list yielded (a branch of the compound statement added after it).
 
         Comments waiting when it opens go before the compound statement (`comments_before`) or into the branch;
-        those waiting when it closes end the branch."""
+        those waiting when it closes end the branch. A branch may run after other paths (a loop body after its
+        own end): it starts knowing no accessor values, and after it none is known either."""
         if comments_before:
             self.flush_comments()
         saved, self.block = self.block, []
+        self.access_values = {}
         inner = self.block
         try:
             yield inner
             self.flush_comments()
         finally:
             self.block = saved
+            self.access_values = {}
+
+
+# The address of an indexed operand as (constant part, text of the variable part, '' when none): two keys with the
+# same variable part and different constants never name the same operand.
+AccessKey = tuple[int, str]
+
+
+def _distinct(a: AccessKey, b: AccessKey) -> bool:
+    return a[1] == b[1] and a[0] != b[0]
 
 
 def tag(span: Span) -> str:
@@ -111,13 +169,15 @@ class AccessorPool:
     def _name(kind: str, n: int) -> str:
         return f"HH_{kind}_index" if n == 1 else f"HH_{kind}_index_{n}"
 
-    def pick(self, kind: str, usable: Callable[[str], bool]) -> str:
-        """The first instance of `kind` that `usable` accepts; a new one when none does."""
-        n = 1
-        while n <= self.count.get(kind, 0) and not usable(self._name(kind, n)):
-            n += 1
-        self.count[kind] = max(n, self.count.get(kind, 0))
-        return self._name(kind, n)
+    def pick(self, kind: str, usable: Callable[[str], bool], rank: Callable[[str], int] = lambda name: 0) -> str:
+        """The instance of `kind` that `usable` accepts and `rank` puts first (the first of equal rank); a new one
+        when none is usable."""
+        existing = [self._name(kind, n) for n in range(1, self.count.get(kind, 0) + 1)]
+        candidates = [name for name in existing if usable(name)]
+        if candidates:
+            return min(candidates, key=rank)
+        self.count[kind] = len(existing) + 1
+        return self._name(kind, len(existing) + 1)
 
     def instances(self) -> list[tuple[str, str]]:
         """(kind, instance name) of every instance handed out, in declaration order."""
@@ -131,7 +191,7 @@ class RoutineContext:
                  register: Callable[[str], str], helper: Callable[[str], None], temp: Callable[[str], str],
                  kfield: Callable[[Operand], str], stack_names: Callable[[], tuple[str, str]],
                  module_call: Callable[[int], str], semantics,
-                 bit_accessor: Callable[[str, Callable[[str], bool]], str], jobs=None,
+                 bit_accessor: Callable[..., str], jobs=None,
                  instance: Callable[[str], str] | None = None):
         self.layout = layout
         self.out = emitter
