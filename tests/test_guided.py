@@ -87,3 +87,19 @@ def test_generate_without_scenarios_spends_the_budget_on_corner_random_runs(samp
     out = generate(program, names, 300, 1, machine_parameters=SAMPLE / "MP_data.mp")
     assert out and sum(s.cycles for s in out) <= 300
     assert any(e.nc is not None for s in out for e in s.events)
+
+
+def test_compare_pairs_let_the_search_put_a_compared_word_next_to_its_constant(tmp_path):
+    # `L W10 > K100` clamps W10: only 101 tells `> 100` from `> 101`, and no branch or CASE entry is new there. The
+    # harvest pairs the word with the constant (either order of load and compare; not an indexed word), the value
+    # profile makes 99/100/101 new features, and the search keeps a run with one of them.
+    (tmp_path / "main.src").write_text(
+        "L     W10\n>     K100\nJPF   Ok\nL     K100\n=     W10\nLBL Ok\nL     K7\n<     W12\n=     O1\n"
+        "L     K0\n=     X\nL     W20[X]\n==    K5\n=     O2\nEM\n")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    names = project_names(project.program)
+    corners = harvest(project.program, names)
+    assert set(corners.compare_pairs) == {("W10", "W", 100), ("W12", "W", 7)}
+    kept = generate(project.program, names, 200, seed=5)
+    near = {value for s in kept for value in [s.initial.get("W10"), *(e.set.get("W10") for e in s.events if e.set)]}
+    assert near & {99, 101}, [(s.initial, [e.set for e in s.events]) for s in kept]

@@ -42,21 +42,29 @@ class Corners:
     # it only reads outside the NC interface (memory another module fills)
     remanent_words: tuple[tuple[str, str], ...]
     remanent_markers: tuple[str, ...]             # markers the program writes (start values)
+    # (name, kind, constant) of a drivable word the program loads and compares with a constant right away: the
+    # stimulus can put it one below, at and one above the constant (a fuzzer's compare log, found statically)
+    compare_pairs: tuple[tuple[str, str, int], ...] = ()
 
     def word_value(self, rng: random.Random, kind: str) -> int:
         """A value in the range of a `kind` (B/W/D) operand: mostly near a constant, sometimes an edge, sometimes
         a random bit pattern (a status word the program unpacks into bits has no constant to be near: a random
         pattern sets any few of its bits at once with a fair chance)."""
         bits = _WIDTH_BITS.get(kind, 16)
-        low, high = -(1 << (bits - 1)), (1 << (bits - 1)) - 1
         draw = rng.random()
         if draw < 0.7:
             value = rng.choice(self.values)
         elif draw < 0.85:
             value = rng.choice(_EDGES)
         else:
-            value = rng.randint(low, high)
-        return max(low, min(high, value))
+            value = rng.randint(-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
+        return self.clamp(value, kind)
+
+    @staticmethod
+    def clamp(value: int, kind: str) -> int:
+        """`value` limited to the signed range of a `kind` (B/W/D) operand."""
+        bits = _WIDTH_BITS.get(kind, 16)
+        return max(-(1 << (bits - 1)), min((1 << (bits - 1)) - 1, value))
 
     def nc_value(self, rng: random.Random, low: int = 0, high: int = _WORD_MAX) -> int:
         """A corner value for an NC field (M code, tool, pocket, mode, ...) within low..high."""
@@ -127,7 +135,10 @@ def harvest(program: Program, names: NameTable) -> Corners:
     foreign_markers = tuple(name(r) for r in foreign if r.kind == "M")
     filled_elsewhere = {r for r in foreign_byte_memory if r not in interface}
     remanent = sorted((r for r in set(written) | filled_elsewhere if drivable(r)), key=lambda r: (r.kind, r.addr))
+    drivable_words = {name(r): r.kind for r in foreign_byte_memory if r in interface}
+    drivable_words.update((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS)
     return Corners(
+        compare_pairs=_compare_pairs(program, drivable_words, name),
         constants=tuple(sorted(constants)),
         tables=tuple(sorted(tables)),
         values=tuple(sorted(values)),
@@ -136,3 +147,20 @@ def harvest(program: Program, names: NameTable) -> Corners:
         foreign_markers=foreign_markers,
         remanent_words=tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS),
         remanent_markers=tuple(name(r) for r in remanent if r.kind == "M"))
+
+
+def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
+    """Each word compared with a constant by a load and a compare in a row (`L W10` `> K100`, or `L K100` `< W10`),
+    where the stimulus may drive the word."""
+    pairs: set[tuple[str, str, int]] = set()
+    for code in program.files:
+        for prev, op in zip(code.ops, code.ops[1:]):
+            if op.code != "CMP" or prev.code != "WLD" or op.operand is None or prev.operand is None:
+                continue
+            word, const = (prev.operand, op.operand) if op.operand.kind == "K" else (op.operand, prev.operand)
+            if const.kind != "K" or word.kind not in _WIDTH_BITS or word.indexed:
+                continue
+            word_name = name(OperandRef(word.kind, word.addr))
+            if word_name in drivable:
+                pairs.add((word_name, word.kind, const.addr))
+    return tuple(sorted(pairs))

@@ -4,9 +4,10 @@ branches both ways and enter its CASE entries, deterministic for a seed.
 As a fuzzer does, the search keeps a corpus (the user's scenarios, then every generated one that raised
 coverage) and mutates its members: an NC job moved to a corner value (verify/corners.py), an NC job inserted at a
 random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner,
-rare random toggles added. Each candidate runs on the reference interpreter alone (no ST side, with coverage);
-one that reaches a branch outcome or CASE entry not seen before, or a marker or output the program writes in a
-state (0 or 1) not seen before, is kept, cut just after the last cycle that
+rare random toggles added, a word the program compares with a constant put next to that constant. Each candidate runs on the reference interpreter alone (no ST side, with coverage);
+one that reaches a branch outcome or CASE entry not seen before, a marker or output the program writes in a
+state (0 or 1) not seen before, or a word compare whose operands come out equal or one apart in a way not seen
+before (a value profile: a mutated compare or constant differs from the original only there), is kept, cut just after the last cycle that
 brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
 budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
 
@@ -43,7 +44,7 @@ class Probe:
     """One candidate run on the reference interpreter."""
 
     cycles_ok: int                 # cycles that ran without a fault of the original
-    new: frozenset                 # (op id, outcome) pairs not seen before this run
+    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("cmp", ...)
     last_new: int                  # the cycle in which the last of them first appeared (-1: none)
 
 
@@ -73,7 +74,7 @@ class Search:
             return None
         local: set = set()
         new: set = set()
-        last_new, count, ok = -1, 0, 0
+        last_new, count, value_count, ok = -1, 0, 0, 0
         read_toggled = machine.reader([(ref.kind, ref.addr) for ref in self.toggled])
         # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
         # per-cycle check costs little once the common states were seen.
@@ -94,6 +95,14 @@ class Search:
                 fresh = machine.branch_outcomes() - local
                 local |= fresh
                 count = machine.branch_outcome_count
+                fresh -= self.seen
+                if fresh:
+                    new |= fresh
+                    last_new = cycle
+            if machine.value_outcome_count != value_count:
+                fresh = {("cmp", *pair) for pair in machine.value_outcomes()} - local
+                local |= fresh
+                value_count = machine.value_outcome_count
                 fresh -= self.seen
                 if fresh:
                     new |= fresh
@@ -125,6 +134,15 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
     for _ in range(rng.randint(1, 3)):
         choice = rng.random()
         at = rng.randrange(cycles)
+        if corners.compare_pairs and rng.random() < 0.15:
+            # a word the program compares with a constant, put next to it: at power-on or at a random cycle
+            name, kind, constant = rng.choice(corners.compare_pairs)
+            value = corners.clamp(constant + rng.choice((-1, 0, 1)), kind)
+            if rng.random() < 0.5:
+                initial[name] = value
+            else:
+                events.append(Event(cycle=at, set={name: value}))
+            continue
         nc_events = [i for i, e in enumerate(events) if e.nc is not None]
         if choice < 0.3 and nc_events:
             # the same kind of job with a corner value: the scenario's own inputs then drive what that value starts
@@ -209,8 +227,8 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     corners = harvest(program, names)
     toggled = tuple(sorted((ref for ref in program_operands(program)[1] if ref.kind in "MO"),
                            key=lambda ref: (ref.kind, ref.addr)))
-    search = Search(program, names, corners, compile_program(program, coverage=True, exact=False), base_mp,
-                    toggled=toggled)
+    search = Search(program, names, corners, compile_program(program, coverage=True, exact=False, value_profile=True),
+                    base_mp, toggled=toggled)
     limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
     corpus: list[Scenario] = []
     for scenario in seeds:

@@ -69,6 +69,8 @@ class CompiledProgram:
     branch_slots: tuple[tuple[int, int], ...] = ()
     branch_ops: tuple[tuple[int, ...], ...] = ()
     stretch_ops: tuple[tuple[int, ...], ...] = ()
+    # Value-profile slots (compiled with value_profile only): (op id of a word compare, left - right) for -1, 0, 1.
+    value_slots: tuple[tuple[int, int], ...] = ()
 
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
         """Instantiate against a machine: (file functions, get_registers, set_registers)."""
@@ -80,22 +82,27 @@ class CompiledProgram:
         return self.line_ops[lineno - 1] if 0 < lineno <= len(self.line_ops) else -1
 
 
-def compile_program(program: Program, *, exact: bool | None = None, coverage: bool = False) -> CompiledProgram:
+def compile_program(program: Program, *, exact: bool | None = None, coverage: bool = False,
+                    value_profile: bool = False) -> CompiledProgram:
     """Generate and compile the program: `exact` counts every instruction, `coverage` records ops and branches.
     `exact` defaults to `coverage`. Coverage is exact in either variant: with exact=False the ops of a straight-line
     stretch are marked together when it ends and the watchdog budget is pre-counted, and the machine re-runs a cycle
     that overruns or faults with an exact variant that also records coverage (Machine.program_phase), so coverage
-    costs little more than the fast variant."""
+    costs little more than the fast variant.
+
+    `value_profile` (with coverage) also marks each word compare whose operands come out one apart or equal (see
+    value_slots): a stimulus search counts those as features of their own, since a mutated compare or constant
+    differs from the original only there. The exact re-run of a cycle does not mark them."""
     if exact is None:
         exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
     native = (sys.byteorder == "little") == program.semantics.little_endian
-    gen = _Generator(program, exact=exact, coverage=coverage, native=native)
+    gen = _Generator(program, exact=exact, coverage=coverage, native=native, value_profile=value_profile and coverage)
     source = gen.generate()
     code = compile(source, GENERATED_FILENAME, "exec")
     branch_ops = tuple(gen.branch_ops.get(opid, ()) for opid, _ in gen.branch_slots)
     return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage,
-                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops))
+                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops), tuple(gen.value_slots))
 
 
 def branch_slots(program: Program) -> list[tuple[int, int]]:
@@ -110,6 +117,19 @@ def branch_slots(program: Program) -> list[tuple[int, int]]:
                 slots += [(opid, 1), (opid, 0)]
             elif op.code == "CASE":
                 slots += [(opid, entry) for entry in range(len(op.case_targets))] + [(opid, -1)]
+            opid += 1
+    return slots
+
+
+def value_slots(program: Program) -> list[tuple[int, int]]:
+    """(op id, left - right) for -1, 0 and 1 of every word compare, in op order: three consecutive slots each, so
+    that the generated code finds the slot of a difference d by adding d + 1."""
+    slots: list[tuple[int, int]] = []
+    opid = 0
+    for code in program.files:
+        for op in code.ops:
+            if op.code == "CMP":
+                slots += [(opid, -1), (opid, 0), (opid, 1)]
             opid += 1
     return slots
 
@@ -135,7 +155,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
     """Generates the source: output, files, blocks and dispatch here; the code of each op in the mixins
     (gen_access: operands, loads, stores, bit logic; gen_word; gen_flow; gen_stack: data stack, strings)."""
 
-    def __init__(self, program: Program, *, exact: bool, coverage: bool, native: bool):
+    def __init__(self, program: Program, *, exact: bool, coverage: bool, native: bool, value_profile: bool = False):
         self.program = program
         self.sem: Semantics = program.semantics
         self.itf = self.sem.profile.interface
@@ -169,6 +189,8 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.op_index.extend((f, i) for i in range(len(code.ops)))
         self.branch_slots = branch_slots(program)
         self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
+        self.value_slots = value_slots(program) if value_profile else []
+        self.value_slot = {key: slot for slot, key in enumerate(self.value_slots)}
         self.branch_ops: dict[int, tuple[int, ...]] = {}    # op id of a conditional exit -> its stretch's op ids
         self.stretch_ops: list[tuple[int, ...]] = []
 
@@ -198,7 +220,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
                    "sat", "overflow", "underflow", "module", "subm", "rply", "can", "scat", "six", "srx",
-                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "ixw")
+                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "vp", "ixw")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
         self.out(1, "LA = 0; WA = 0; X = 0; SA = ''; n = 0; d = 0; _em = -1")

@@ -21,15 +21,19 @@ class CoverageMarks:
         self.ops = [0] * self.op_count
         self.branches = [0] * len(self.branch_slots)
         self.stretches = [0] * len(self.stretch_ops)
+        self.value_slots = compiled.value_slots
+        self.values = [0] * len(self.value_slots)
 
-    def arrays_for(self, compiled: CompiledProgram) -> tuple[list[int], list[int], list[int]]:
-        """The (ops, branches, stretches) arrays `compiled` writes into; it must be a variant of the same program,
-        and its stretches (if any) the ones these marks were made for."""
+    def arrays_for(self, compiled: CompiledProgram) -> tuple[list[int], list[int], list[int], list[int]]:
+        """The (ops, branches, stretches, values) arrays `compiled` writes into; it must be a variant of the same
+        program, and its stretches and value slots (if any) the ones these marks were made for."""
         if len(compiled.op_index) != self.op_count or compiled.branch_slots != self.branch_slots:
             raise ValueError("coverage marks of another program")
         if compiled.stretch_ops and compiled.stretch_ops != self.stretch_ops:
             raise ValueError("coverage marks made for the stretches of another variant")
-        return self.ops, self.branches, self.stretches if compiled.stretch_ops else []
+        if compiled.value_slots and compiled.value_slots != self.value_slots:
+            raise ValueError("coverage marks made for the value profile of another variant")
+        return self.ops, self.branches, self.stretches if compiled.stretch_ops else [], self.values
 
     def executed(self) -> set[int]:
         """Op ids marked as executed, by their own mark, their stretch's or a branch mark of their stretch's exit."""
@@ -49,3 +53,10 @@ class CoverageMarks:
     def branch_outcome_count(self) -> int:
         """How many distinct (op id, outcome) pairs are marked (it only grows)."""
         return len(self.branches) - self.branches.count(0)
+
+    def value_outcomes(self) -> frozenset[tuple[int, int]]:
+        """The distinct (op id, left - right) pairs of the value profile marked so far."""
+        return frozenset(slot for slot, mark in zip(self.value_slots, self.values) if mark)
+
+    def value_outcome_count(self) -> int:
+        return len(self.values) - self.values.count(0)

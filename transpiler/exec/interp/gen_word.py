@@ -60,11 +60,16 @@ class WordCode:
         rel = REL[op.rel]
         if self.sem["compare_signedness"] == "unsigned":
             m = (1 << n) - 1
-            right = self.value(o, "mask") if n < 32 else f"({self.value(o)} & {m})"
-            expr = f"(WA & {m}) {rel} {right}"
+            left, right = f"(WA & {m})", self.value(o, "mask") if n < 32 else f"({self.value(o)} & {m})"
         else:
-            expr = f"{sext_expr('WA', n)} {rel} {self.value(o)}"
-        self.set_la(ind, expr, opid)
+            left, right = sext_expr('WA', n), self.value(o)
+        if self.value_slots:
+            # value profile: mark left - right when it is -1, 0 or 1 (slots opid/-1, 0, 1 are consecutive); each
+            # operand is read once, as without the profile (an indexed read may fault)
+            self.out(ind, f"_cl = {left}; _cr = {right}", opid)
+            self.out(ind, f"if -1 <= _cl - _cr <= 1: _vp[_cl - _cr + {self.value_slot[opid, 0]}] = 1", opid)
+            left, right = "_cl", "_cr"
+        self.set_la(ind, f"{left} {rel} {right}", opid)
 
     def _op_SHL(self, op: Op, opid: int, ind: int, *_: object) -> None:
         if self.sem["shift_semantics"] == "fault":

@@ -436,6 +436,17 @@ class Machine:
         return frozenset() if marks is None else marks.branch_outcomes()
 
     @property
+    def value_outcome_count(self) -> int:
+        """How many distinct (compare op, left - right) pairs of the value profile are marked (it only grows; 0
+        unless the program was compiled with value_profile)."""
+        marks = self.runtime.marks
+        return 0 if marks is None else marks.value_outcome_count()
+
+    def value_outcomes(self) -> frozenset[tuple[int, int]]:
+        marks = self.runtime.marks
+        return frozenset() if marks is None else marks.value_outcomes()
+
+    @property
     def coverage(self) -> Coverage:
         marks = self.runtime.marks
         if not self.coverage_enabled or marks is None:
