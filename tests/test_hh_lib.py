@@ -16,7 +16,7 @@ from tests.test_interp import cycles, machine
 from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou, ProgramInstance, Task, VarSection
 from transpiler.backends.plcopen.writer import extract_st_bodies
 from transpiler.backends.st import hh_lib
-from transpiler.backends.st.arith import gate_value, shift_value
+from transpiler.backends.st.arith import gate_value, mul_value, shift_value
 from transpiler.backends.st.check import check_blark, find_iec2c
 from transpiler.backends.st.library import helper_pous
 from transpiler.backends.st.writer import extract_pou_bodies, render_st
@@ -353,3 +353,14 @@ def test_constant_shifts_fold_to_what_the_helpers_give(builtin, a: int, count: i
     """The back end folds a shift or bit set/clear of two constants (shift_value); the helpers must agree."""
     for name in ("HH_SHL", "HH_SHR", "HH_BSET", "HH_BCLR"):
         assert shift_value(name, a, count) == _call(builtin, name, (a, count)), (name, a, count)
+
+
+@given(a=st.one_of(st.integers(MIN, 2 ** 31 - 1), st.integers(-70000, 70000)),
+       b=st.one_of(st.integers(MIN, 2 ** 31 - 1), st.integers(-70000, 70000)), count=st.integers(-40, 40))
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_constant_products_and_bit_tests_fold_to_what_the_helpers_give(builtin, a: int, b: int, count: int) -> None:
+    """The back end folds MUL of two constants (mul_value) and BT of two constants (bit count mod 32, as the
+    helper takes it); the helpers must agree."""
+    overflow, low = mul_value(a, b)
+    assert (overflow, low) == (_call(builtin, "HH_MULOVF", (a, b)), _call(builtin, "HH_MUL", (a, b))), (a, b)
+    assert bool(a >> (count % 32) & 1) == _call(builtin, "HH_BTEST", (a, count)), (a, count)

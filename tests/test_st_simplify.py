@@ -95,3 +95,21 @@ def test_ifs_stay_apart_where_the_first_changes_the_condition_or_calls():
                   S.If(_b("m4"), (S.Assign("cw", E.bool_const(True)),))):
         block = [first, S.If(cond, (S.Assign("ccw", E.bool_const(False)),))]
         assert simplify(block, REGS) == block
+
+
+def test_store_overwritten_in_both_branches_of_a_later_if_is_dropped():
+    # A division by a run-time divisor sets its error marker on both paths of the zero check: the store before it
+    # is dead. Catches: one branch that does not overwrite, or reads first, or a condition that reads the store.
+    def check(cond: E.Expr, then: tuple, orelse: tuple) -> list[S.Stmt]:
+        block = [S.Assign("HH_LA", E.bool_const(False)), S.If(cond, then, orelse)]
+        return simplify(block, REGS)
+
+    nonzero = E.binop("<>", _d("d"), E.int_const(0), "BOOL", E.PREC_EQ)
+    both = check(nonzero, (S.Assign("HH_WA", _d("q")), S.Assign("HH_LA", E.bool_const(False))),
+                 (S.Assign("HH_LA", E.bool_const(True)),))
+    assert [type(s) for s in both] == [S.If]
+    for then, orelse, cond in (
+            ((S.Assign("HH_WA", _d("q")),), (S.Assign("HH_LA", E.bool_const(True)),), nonzero),
+            ((S.Assign("W1", _b("HH_LA")), S.Assign("HH_LA", _b("x"))), (S.Assign("HH_LA", _b("y")),), nonzero),
+            ((S.Assign("HH_LA", _b("x")),), (S.Assign("HH_LA", _b("y")),), _b("HH_LA"))):
+        assert len(check(cond, then, orelse)) == 2, (then, orelse, cond)

@@ -36,6 +36,8 @@ SEARCH_MIN = 20_000
 SEARCH_MAX = 120_000
 STALE_LIMIT = 400           # candidates in a row without anything new: the search stops
 FILLER_ATTEMPTS = 8
+FILLER_KINDS = 4            # healthy or not, clean or dirty memory at power-on
+FILLER_MIN = 200            # shortest filler run when the rest of the budget is split
 CHILD_CYCLES = 1000         # longest candidate run
 
 
@@ -187,10 +189,12 @@ def _stem(name: str) -> str:
 
 
 def corner_random(program: Program, corners: Corners, names: NameTable, cycles: int, rng: random.Random, name: str,
-                  machine_parameters: Path | None, healthy: bool) -> Scenario:
+                  machine_parameters: Path | None, healthy: bool, dirty: bool = False) -> Scenario:
     """`cycles` cycles of corner-random stimulus: every input toggling (from all 1, a healthy machine with its
     normally-closed contacts made, or all 0), NC jobs with corner values every 20-200 cycles, and a foreign word or
-    marker set to a corner value with each job."""
+    marker set to a corner value with each job. `dirty`: the memory the program writes starts as remanent memory
+    left by an earlier run would (each such marker 0 or 1, some words at corners), so that a store that only ever
+    writes the power-on value still shows whether it happens."""
     events: list[Event] = []
     cycle = rng.randrange(2, 20)
     while cycle < cycles:
@@ -202,6 +206,10 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
             events.append(Event(cycle=cycle, set={rng.choice(corners.foreign_markers): rng.randrange(2)}))
         cycle += rng.randrange(20, 200)
     initial: dict[str, Any] = {n: 1 for n in corners.inputs} if healthy else {}
+    if dirty:
+        initial.update((marker, rng.randrange(2)) for marker in corners.remanent_markers)
+        initial.update((word, corners.word_value(rng, kind)) for word, kind in corners.remanent_words
+                       if rng.random() < 0.3)
     inputs = list(corners.inputs)
     scenario = Scenario(name=name, cycles=cycles, profile=program.semantics.profile.name,
                         machine_parameters=machine_parameters, initial=initial, events=events,
@@ -264,8 +272,12 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         spent += length
     attempt = 0
     while spent < budget and attempt < FILLER_ATTEMPTS:
-        filler = corner_random(program, corners, names, budget - spent, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
-                               machine_parameters, healthy=attempt % 2 == 0)
+        # healthy and not, from clean and from dirty memory: the four kinds share what is left of the budget (a
+        # share too short to matter goes to the one running now)
+        share = (budget - spent) // max(1, FILLER_KINDS - attempt)
+        cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
+        filler = corner_random(program, corners, names, cycles, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
+                               machine_parameters, healthy=attempt % 2 == 0, dirty=attempt % 4 >= 2)
         attempt += 1
         probe = search.probe(filler)
         if probe is None or probe.cycles_ok == 0:

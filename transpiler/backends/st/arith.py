@@ -57,9 +57,17 @@ class ArithmeticMixin(ExecutorPart):
             if a.const is not None and b.const is not None:
                 return E.int_const(a.const * b.const)
             return E.binop("*", a, b, "DINT", E.PREC_MUL, min(products), max(products))
+        keep_left = self.ctx.semantics["mul_overflow_result"] == "unchanged"
+        if a.const is not None and b.const is not None:
+            overflow, low = mul_value(a.const, b.const)
+            self._flag(flag, E.bool_const(overflow))
+            return E.int_const(a.const if overflow and keep_left else low)
         a = self._stable(a)
         b = self._stable(b)
         self._flag(flag, self._fn("HH_MULOVF", [a, b], "BOOL", 0, 1))
+        if keep_left:
+            # the switch that keeps the accumulator on overflow: the left operand where the product does not fit
+            return E.call("SEL", [self._fn("HH_MULOVF", [a, b], "BOOL", 0, 1), self._fn("HH_MUL", [a, b]), a], "DINT")
         return self._fn("HH_MUL", [a, b])
 
     def _divmod(self, a: Expr, b: Expr, mod: bool) -> Expr:
@@ -139,6 +147,13 @@ def gate_value(kind: str, a: int, b: int, width: int) -> int:
     a, u = a & 0xFFFFFFFF, b & mask
     value = {"A": (a & ~mask) | (a & u), "O": a | u, "X": a ^ u}[kind]
     return wrap32(value)
+
+
+def mul_value(a: int, b: int) -> tuple[bool, int]:
+    """What HH_MULOVF and HH_MUL give for constant arguments: whether the product leaves the DINT range, and its
+    low 32 bits."""
+    product = a * b
+    return not E.INT32[0] <= product <= E.INT32[1], wrap32(product)
 
 
 def shift_value(fn: str, a: int, count: int) -> int:

@@ -94,7 +94,11 @@ class WordOpsMixin(ExecutorPart):
     def op_BC(self, op): self._shift(op, "HH_BCLR")
 
     def op_BT(self, op: Op) -> None:
-        self.s.set("LA", self._fn("HH_BTEST", [E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)], "BOOL", 0, 1))
+        wa, count = E.to_dint(self.s.reg("WA")), self._shift_count(op.operand)
+        if wa.const is not None and count.const is not None:
+            self.s.set("LA", E.bool_const(bool(wa.const >> (count.const % 32) & 1)))
+        else:
+            self.s.set("LA", self._fn("HH_BTEST", [wa, count], "BOOL", 0, 1))
 
     def op_INCW(self, op): self.s.set("WA", self._add(self.s.reg("WA"), E.int_const(1)))
     def op_DECW(self, op): self.s.set("WA", self._add(self.s.reg("WA"), E.int_const(1), sub=True))

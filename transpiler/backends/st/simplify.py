@@ -1,8 +1,8 @@
 """Statement-level clean-up of a POU's statement tree, before the copy propagation of passes.py:
 
 - a store of an accumulator register (HH_LA, HH_WA, ...) or of an error marker of arithmetic and module calls
-  (the caller passes both as `registers`) that a later store of the same variable overwrites before anything
-  can read it is dropped;
+  (the caller passes both as `registers`) that later stores of the same variable overwrite on every path before
+  anything can read it is dropped;
 - `IF c THEN x := TRUE; ELSE x := FALSE; END_IF;` becomes `x := c;` (and the swapped form `x := NOT c;`);
 - an IF without statements in either branch leaves only its comments;
 - consecutive IFs on the same condition become one where the first cannot change the condition (its body only
@@ -125,16 +125,22 @@ def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
     return None
 
 
+def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
+    """Every path through `block` stores `reg` again before anything could read it: a store, or an IF/ELSE whose
+    condition does not read it and whose two branches each overwrite it (a division's zero check sets its error
+    marker on both)."""
+    for stmt in block:
+        if (isinstance(stmt, S.If) and stmt.orelse and reg not in set(stmt.cond.deps) | _names(stmt.cond.text)
+                and _overwritten(stmt.then, reg, registers) and _overwritten(stmt.orelse, reg, registers)):
+            return True
+        if reg in _reads(stmt) or _leaves_or_calls(stmt):
+            return False
+        if _register_store(stmt, registers) == reg:
+            return True
+    return False
+
+
 def _without_dead_stores(block: Block, registers: frozenset[str]) -> Block:
-    dead: set[int] = set()
-    for i, stmt in enumerate(block):
-        reg = _register_store(stmt, registers)
-        if reg is None:
-            continue
-        for later in block[i + 1:]:
-            if reg in _reads(later) or _leaves_or_calls(later):
-                break
-            if _register_store(later, registers) == reg:
-                dead.add(i)
-                break
+    dead = {i for i, stmt in enumerate(block)
+            if (reg := _register_store(stmt, registers)) is not None and _overwritten(block[i + 1:], reg, registers)}
     return tuple(s for i, s in enumerate(block) if i not in dead)
