@@ -98,7 +98,7 @@ def test_unmodified_translation_is_equivalent(project, backend):
 @pytest.mark.parametrize("pattern, replacement, operand, original, translated", [
     (r"IDX := 200 \+", "IDX := 201 +", "M204", 1, 0),            # = M200[X]: wrong bit address
     (r"HH_MEM\[100 \+ ", "HH_MEM[102 + ", "B104", 77, 0),         # = W100[X]: low byte to the wrong address
-    (r"HH_BYTEOF\(-5, 0\)", "HH_BYTEOF(-6, 0)", "B304", -5, -6),  # = D300[X]: wrong value at the right address
+    (r"(HH_MEM\[300 \+ [^\]]*\] := )251;", r"\g<1>250;", "B304", -5, -6),  # = D300[X]: wrong value, right address
     (r"IDX := 400 \+ (\w+), WRITE := TRUE", r"IDX := 401 + \1, WRITE := TRUE", "M404", 1, 0),   # S M400[X]
     (r"HH_S\[2 \+ ", "HH_S[3 + ", "S6", "AB", ""),                # = S2[X]
     (r"IDX := 600 \+", "IDX := 601 +", "M604", 1, 0),            # B= M600[X]: bit 0 of K5 to the wrong bit

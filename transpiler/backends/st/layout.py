@@ -325,6 +325,10 @@ class Layout:
 
     def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         arr = self.mem_array
+        if value.const is not None:
+            # a constant's bytes are constants: byte k (0 = lowest) of its two's complement
+            return [(f"{arr}[{self._byte_index(op, x, k)}]", _byte_const(value.const >> (8 * k) & 0xFF))
+                    for k in range(BYTES[op.kind])]
         if op.kind == "B":
             return [(f"{arr}[{self._byte_index(op, x, 0)}]", E.Expr(f"{value.typ}_TO_BYTE({value.text})", "BYTE", value.deps, 0, 255))]
         self.helper("HH_BYTEOF")
@@ -340,6 +344,10 @@ class Layout:
             text = f"{self.string_array}[{op.addr}]"
             return E.Expr(text, "STRING", frozenset([self.string_array.upper()]), var=text)
         return E.var(self._string_var[op.addr], "STRING")
+
+
+def _byte_const(value: int) -> E.Expr:
+    return E.Expr(str(value), "BYTE", frozenset(), value, value, E.PREC_ATOM, const=value)
 
 
 def _index(base: int, x: E.Expr | None, scale: int, semantics) -> E.Expr:
