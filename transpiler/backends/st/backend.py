@@ -504,6 +504,12 @@ class StBackend:
         out = []
         for name, (elem, lo, hi) in sorted(layout.types.items()):
             out.append(DataType(name, "array", elem, (ArrayDim(lo, hi),)))
+        for group in layout.marker_groups:
+            fields = layout.struct_fields.get(group.type_name)
+            if fields:
+                out.append(DataType(group.type_name, "struct", fields=tuple(
+                    IecVar(member, "BOOL", comment=comment) for member, comment in fields),
+                    comment=f"the markers {group.name}_*: one member per symbol"))
         return out + self.types
 
     def _job_queue(self) -> str:
