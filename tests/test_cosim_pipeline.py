@@ -66,8 +66,8 @@ def test_equivalent_run_gives_the_same_result_and_coverage(sample):
 def test_divergence_is_found_at_the_same_cycle_and_operand(sample):
     """A translation that ignores the door for the flood pump: found at the same cycle and operand."""
     program, out, iomap, names = sample
-    broken, count = re.subn(r"O_coolant_flood := ML_sel_flood AND MG_control_ok AND I_door_closed;",
-                            "O_coolant_flood := ML_sel_flood AND MG_control_ok OR I_door_closed;", out.st_text)
+    broken, count = re.subn(r"O_coolant_flood := ML_sel\.flood AND MG_control_ok AND I_door_closed;",
+                            "O_coolant_flood := ML_sel.flood AND MG_control_ok OR I_door_closed;", out.st_text)
     assert count == 1, "the mutation site moved: update the test"
     scenario = random_scenario(program, names, 3000, seed=2, machine_parameters=SAMPLE / "MP_data.mp")
     lockstep, piped = _both(program, builtin_side_factory(broken), iomap, scenario, names)

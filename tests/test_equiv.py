@@ -64,8 +64,8 @@ def test_vector_is_equivalent(vector, tmp_path):
 
 def _break(st: str) -> str:
     """A deliberately wrong translation: the coolant flood pump ignores the door (AND -> OR)."""
-    broken, count = re.subn(r"O_coolant_flood := ML_sel_flood AND MG_control_ok AND I_door_closed;",
-                            "O_coolant_flood := ML_sel_flood AND MG_control_ok OR I_door_closed;", st)
+    broken, count = re.subn(r"O_coolant_flood := ML_sel\.flood AND MG_control_ok AND I_door_closed;",
+                            "O_coolant_flood := ML_sel.flood AND MG_control_ok OR I_door_closed;", st)
     assert count == 1, "the mutation site moved: update the test"
     return broken
 

@@ -64,7 +64,7 @@ def test_sample_clamp_axis_has_inputs_and_outputs_and_no_emulated_stack():
     assert "VAR_INPUT\n    inpos : BOOL;" in head and "clamped_fb : BOOL;" in head
     assert "VAR_OUTPUT\n    clamp_cmd : BOOL;" in head and "release : BOOL;" in head
     assert "Clamp_axis_1(inpos := ML_inpos_X, clamp_start := TS_clamp_X" in st
-    assert "MG_axis_release_X := Clamp_axis_1.release;" in st
+    assert "MG_axis.release_X := Clamp_axis_1.release;" in st
     assert "HH_SP" not in st and "HH_STACK" not in st
     assert result.dynamic_stack == ()
 

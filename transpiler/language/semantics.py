@@ -16,6 +16,8 @@ class Assumption:
     alternatives: tuple[Any, ...]
     topic: str
     vectors: tuple[str, ...] = ()
+    # A choice of how the ST is written, not of what the control does: nothing to confirm on the machine.
+    layout_only: bool = False
 
 
 # The one place where every ASSUMPTION lives. `key` is the config key (`-S key=value`,
@@ -69,6 +71,8 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
                "may start (the project sets it with DEFINE NUMBERMP4111 = n in its configuration)"),
     Assumption("A-61", "define_case", "insensitive", ("sensitive",), "case of DEFINE names (E-PP-CASE on a differing "
                "spelling)"),
+    Assumption("A-62", "marker_structs", True, (False,), "markers sharing a symbol prefix (ML_ax_*) as one STRUCT "
+               "(how the ST is written, not what the control does)", layout_only=True),
 )
 
 ASSUMPTION_BY_KEY: dict[str, Assumption] = {a.key: a for a in ASSUMPTIONS}

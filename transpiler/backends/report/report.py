@@ -15,6 +15,7 @@ from transpiler.backends.st.backend import StResult
 from transpiler.backends.st.liveness import use_def
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
+from transpiler.language.semantics import ASSUMPTION_BY_KEY
 
 
 def configuration_text(program: Program) -> str:
@@ -91,6 +92,29 @@ def _library_files(result: StResult) -> list[str]:
             "the helpers in one place on the target instead (docs/hh_lib.md).")]
 
 
+def _names(program: Program, result: StResult) -> list[str]:
+    """The sections on names: the symbols renamed, and the marker STRUCTs."""
+    lines = ["", "## Renamed symbols", ""]
+    lines += [f"- `{r.original}` -> `{r.iec}` ({r.reason})" for r in result.names.renames] or ["none"]
+    return lines + ["", "## Marker structs", ""] + _marker_structs(program, result)
+
+
+def _marker_structs(program: Program, result: StResult) -> list[str]:
+    """The STRUCTs the markers of one symbol prefix became, and each prefix kept as separate variables, with why."""
+    if not program.semantics["marker_structs"]:
+        return ["none: every marker is a variable of its own (marker_structs = false, A-62)"]
+    layout = result.layout
+    lines = []
+    if layout.marker_groups:
+        lines += ["Markers whose symbols share a prefix are the members of one STRUCT (A-62); io_map.csv names each "
+                  "member (`ML_ax.inpos`):", ""]
+        lines += [f"- `{g.name} : {g.type_name}`: {len(g.members)} markers, {g.addresses()}" for g in layout.marker_groups]
+    if layout.group_refusals:
+        lines += ([""] if lines else []) + ["Prefixes kept as separate variables:", ""]
+        lines += [f"- `{r.prefix}_*`: {r.reason}" for r in layout.group_refusals]
+    return lines or ["none: no symbol prefix is shared by enough markers"]
+
+
 def _not_translated(result: StResult) -> list[str]:
     return [f"- {span}: {text}" for span, text in result.untranslated]
 
@@ -165,8 +189,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += _target_limits(program) or ["none"]
     lines += ["", "## Auto-assigned operands", ""]
     lines += [f"- `{s.name}` -> {s.operand_text}" for s in program.auto_assigned] or ["none"]
-    lines += ["", "## Renamed symbols", ""]
-    lines += [f"- `{r.original}` -> `{r.iec}` ({r.reason})" for r in result.names.renames] or ["none"]
+    lines += _names(program, result)
     lines += ["", "## Not translated", ""]
     lines += _not_translated(result) or ["nothing"]
     lines += ["", "## Inactive conditional regions", ""]
@@ -210,7 +233,8 @@ def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list
     if result.preset_vars and not mp_file:
         steps.append("- Give the machine-parameter file (--mp): without one every timer and counter preset is 0.")
     confirm = sorted({aid for feature, ids in _CONFIRM_BY_USE if used[feature] for aid in ids})
-    changed = [aid for aid, _, _, is_default in program.semantics.describe() if not is_default]
+    changed = [aid for aid, key, _, is_default in program.semantics.describe()
+               if not is_default and not ASSUMPTION_BY_KEY[key].layout_only]
     if confirm or changed:
         ids = ", ".join(sorted(set(confirm) | set(changed)))
         steps.append(f"- Confirm on the machine the assumptions this program depends on: {ids} (section Assumptions "

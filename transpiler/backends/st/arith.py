@@ -102,7 +102,7 @@ class ArithmeticMixin(ExecutorPart):
             self.ctx.out.add(S.Assign(result_var, a))
         wa = E.var(result_var, "DINT")
         marker = self.ctx.layout.bit_lvalue(Operand("M", flag))
-        self.prepare_write(E.base_name(marker.text))
+        self.prepare_write(E.written_name(marker))
         self.ctx.helper(fn)
         nonzero = E.binop("<>", b, E.int_const(0), "BOOL", E.PREC_EQ, 0, 1)
         self.ctx.out.add(S.If(nonzero, (S.Assign(result_var, E.call(fn, [wa, b], "DINT")),

@@ -32,7 +32,8 @@ GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "O
                 "memory": "Byte memory: bytes, words, double words", "string": "Strings",
                 "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
                 "register": "Accumulators, index register, data stack", "jobs": jobs.GLOBALS_TITLE})
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+# A name in a POU body; the part after a dot (`ML_ax.inpos`, `inst.Q`) is a member, no global.
+_IDENT = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*")
 _COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
 
 
@@ -503,6 +504,12 @@ class StBackend:
         out = []
         for name, (elem, lo, hi) in sorted(layout.types.items()):
             out.append(DataType(name, "array", elem, (ArrayDim(lo, hi),)))
+        for group in layout.marker_groups:
+            fields = layout.struct_fields.get(group.type_name)
+            if fields:
+                out.append(DataType(group.type_name, "struct", fields=tuple(
+                    IecVar(member, "BOOL", comment=comment) for member, comment in fields),
+                    comment=f"the markers {group.name}_*: one member per symbol"))
         return out + self.types
 
     def _job_queue(self) -> str:

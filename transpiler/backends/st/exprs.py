@@ -53,6 +53,14 @@ def base_name(text: str) -> str:
     return text.split("[", 1)[0].split(".", 1)[0].upper()
 
 
+def written_name(lvalue: Expr) -> str:
+    """The name a store to `lvalue` changes, as the deps of the values that read it name it: the lvalue's own text
+    where its deps hold that (a variable, or a member of a marker STRUCT, which is a variable of its own), else the
+    variable it belongs to (an array element, an FB instance's output)."""
+    own = lvalue.text.upper()
+    return own if own in lvalue.deps else base_name(lvalue.text)
+
+
 def int_const(value: int, typ: str = "DINT") -> Expr:
     text = str(value) if value >= 0 else f"{typ}#{value}" if typ != "DINT" else str(value)
     prec = PREC_ATOM if value >= 0 else PREC_UNARY

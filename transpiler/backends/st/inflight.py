@@ -84,7 +84,7 @@ class InFlightMixin(ExecutorPart):
     def store(self, target: Callable[[], Expr], value: Callable[[], Expr], keep: frozenset[str]) -> Expr:
         """Emit `target := value`; both are built after in-flight values that read the target were saved."""
         t = target()
-        deferred = self.prepare_write(E.base_name(t.text), keep)
+        deferred = self.prepare_write(E.written_name(t), keep)
         t = target()
         v = value()
         self.ctx.out.add(S.Assign(t.text, v))

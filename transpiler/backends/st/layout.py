@@ -9,6 +9,7 @@ from types import MappingProxyType
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st.marker_groups import MarkerGroup, Refusal, SymbolicOperand, nonvolatile_ranges, plan_groups
 from transpiler.backends.st.names import NameTable
 
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
@@ -62,6 +63,12 @@ class Layout:
         self.string_array: str | None = None
         self._string_var: dict[int, str] = {}
         self.types: dict[str, tuple[str, int, int]] = {}   # type name -> (element type, lo, hi)
+        # Marker structs (marker_groups.py): the groups, the prefixes refused, each member's group and name, and
+        # the fields of each STRUCT type as its members are declared.
+        self.marker_groups: tuple[MarkerGroup, ...] = ()
+        self.group_refusals: tuple[Refusal, ...] = ()
+        self._member: dict[int, tuple[MarkerGroup, str]] = {}
+        self.struct_fields: dict[str, list[tuple[str, str]]] = {}   # type name -> (member, comment)
         self._symbols_by_operand = self._symbol_index()
         self._plan()
 
@@ -131,6 +138,8 @@ class Layout:
     def _plan(self) -> None:
         bits, bit_indexed, mem, mem_indexed, strings, string_indexed, timers, counters = self._accesses()
         self.timers, self.counters = timers, counters
+        if self.program.semantics["marker_structs"]:
+            self._plan_marker_groups(bits, mem, strings)
         for kind in "IOMTC":
             if kind in bit_indexed:
                 # Indexed access reaches named operands through an accessor FB (a CASE over the named
@@ -156,6 +165,39 @@ class Layout:
         else:
             for addr in sorted(strings):
                 self.declare_string(addr)
+
+    def _plan_marker_groups(self, bits: dict[str, set[int]], mem: set[tuple[str, int]], strings: set[int]) -> None:
+        """The marker structs, decided before any operand is named: the group and type names are taken first, so
+        that a later name that wants one of them is the one renamed (and reported)."""
+        roles = {"I": "an input", "O": "an output", "T": "a timer operand", "C": "a counter operand",
+                 "B": "a byte", "W": "a word", "D": "a double word", "S": "a string"}
+        used = [(kind, addr) for kind in sorted(bits) for addr in sorted(bits[kind])]
+        used += sorted(mem) + [("S", addr) for addr in sorted(strings)]
+        retained = nonvolatile_ranges(str(self.program.semantics["nonvolatile"]), "M")
+        operands = []
+        for kind, addr in used:
+            syms = self._symbols_by_operand.get((kind, addr))
+            if not syms:
+                continue
+            role = roles.get(kind)
+            if kind == "M" and self._is_nc(kind, addr, syms):
+                role = "a marker of the NC interface"
+            operands.append(SymbolicOperand(kind, addr, syms[0].name, role,
+                                            kind == "M" and any(lo <= addr <= hi for lo, hi in retained)))
+        symbols = {s.name.upper() for s in self.program.symbols.values()}
+
+        def name_in_use(name: str) -> str | None:
+            if self.names.taken(name):
+                return "the name of a POU or variable"
+            return "a symbol of the program" if name.upper() in symbols else None
+
+        groups, refusals = plan_groups(operands, name_in_use)
+        for group in groups:
+            self.names.name(f"marker_group:{group.name}", group.name)
+            self.names.name(f"type:marker_group:{group.name}", group.type_name)
+            for addr, member in group.members:
+                self._member[addr] = (group, member)
+        self.marker_groups, self.group_refusals = tuple(groups), tuple(refusals)
 
     def declare_string(self, addr: int) -> str:
         """The variable of string S<addr> in a program without indexed string access, declared (with its row in
@@ -202,6 +244,8 @@ class Layout:
         key = (kind, addr)
         if key in self._bit_var:
             return self._bit_var[key]
+        if kind == "M" and addr in self._member:
+            return self._declare_member(addr)
         syms = self._symbols_by_operand.get(key, [])
         wanted = syms[0].name if syms else f"{kind}{addr}"
         name = self.names.name(f"{kind}{addr}", wanted)
@@ -217,6 +261,18 @@ class Layout:
         self._add_global(GlobalVar(name, "BOOL", group, address=address, comment=self._comment(kind, addr)))
         self._row(kind, addr, name, "BOOL")
         return name
+
+    def _declare_member(self, addr: int) -> str:
+        """A marker of a marker struct: its member path; the struct's global comes with its first member."""
+        group, member = self._member[addr]
+        path = group.path(member)
+        self._bit_var[("M", addr)] = path
+        if group.name not in self.globals:
+            self._add_global(GlobalVar(group.name, group.type_name, "marker",
+                                       comment=f"the markers {group.name}_* ({group.addresses()})"))
+        self.struct_fields.setdefault(group.type_name, []).append((member, self._comment("M", addr)))
+        self._row("M", addr, path, "BOOL")
+        return path
 
     def _declare_mem(self, kind: str, addr: int) -> str:
         key = (kind, addr)

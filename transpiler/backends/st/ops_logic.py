@@ -57,7 +57,7 @@ class LogicOpsMixin(ExecutorPart):
             if la.bool_const == when:
                 self.bit_store(op.operand, lambda: E.bool_const(value), frozenset(["X"]))
             return
-        deferred = self.prepare_write(E.base_name(target.text), frozenset(["LA", "X"]))
+        deferred = self.prepare_write(E.written_name(target), frozenset(["LA", "X"]))
         target = self.bit(op.operand)
         la = self.s.reg("LA")
         cond = la if when else E.b_not(la)

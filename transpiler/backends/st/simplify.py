@@ -25,6 +25,7 @@ from transpiler.backends.st import exprs as E
 from transpiler.backends.st import stmt as S
 
 Block = tuple[S.Stmt, ...]
+_NAME = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*")
 
 
 def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]:
@@ -56,7 +57,7 @@ def _same_condition(first: S.If, second: S.If) -> bool:
         return False
     if not all(isinstance(s, (S.Assign, S.Comment)) for s in first.then):
         return False
-    written = {E.base_name(s.target) for s in first.then if isinstance(s, S.Assign)}
+    written = {s.target.split("[", 1)[0].upper() for s in first.then if isinstance(s, S.Assign)}
     return not written & {d.upper() for d in first.cond.deps} and not written & _names(first.cond.text)
 
 
@@ -87,7 +88,13 @@ def _flag_from_condition(stmt: S.If) -> S.Stmt:
 
 
 def _names(text: str) -> set[str]:
-    return {m.group(0).upper() for m in re.finditer(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*", text)}
+    """The variables `text` names: each name, and each member path (`ML_ax.inpos`, a marker STRUCT's member, is a
+    variable of its own) with its head."""
+    found = set()
+    for m in _NAME.finditer(text):
+        path = m.group(0).upper()
+        found |= {path, path.split(".", 1)[0]}
+    return found
 
 
 def _reads(stmt: S.Stmt) -> set[str]:

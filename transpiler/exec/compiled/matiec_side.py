@@ -33,21 +33,34 @@ def _cache_dir() -> Path:
     return Path(base) / "matiec"
 
 
-def _variables(project: IecProject) -> list[tuple[str, str, str]]:
-    """(C name, element type, 'scalar'|'array'|'string') of every configuration global the harness can reach."""
+def _variables(project: IecProject) -> list[tuple[str, str, str, str]]:
+    """(path, element type, 'scalar'|'array'|'string'|'string_array', C pointer) of every configuration global the
+    harness can reach, and of every scalar or string member of a STRUCT global (path `VAR.MEMBER`, upper case as
+    matiec names it); the pointer is C code that points at the value (the array, the string)."""
     arrays = {t.name.upper(): t for t in project.types if t.kind == "array"}
+    structs = {t.name.upper(): t for t in project.types if t.kind == "struct"}
     out = []
+
+    def add(path: str, typ: str, pointer: str) -> None:
+        if typ in SCALARS:
+            out.append((path, typ, "scalar", pointer))
+        elif typ == "STRING":
+            out.append((path, "STRING", "string", pointer))
+        elif typ in arrays and (arrays[typ].base or "").upper() in SCALARS:
+            out.append((path, arrays[typ].base.upper(), "array", pointer))
+        elif typ in arrays and (arrays[typ].base or "").upper() == "STRING":
+            out.append((path, "STRING", "string_array", pointer))
+
     for section in project.configuration.globals:
         for v in section.vars:
-            typ = v.type.upper()
-            if typ in SCALARS:
-                out.append((v.name.upper(), typ, "scalar"))
-            elif typ == "STRING":
-                out.append((v.name.upper(), "STRING", "string"))
-            elif typ in arrays and (arrays[typ].base or "").upper() in SCALARS:
-                out.append((v.name.upper(), arrays[typ].base.upper(), "array"))
-            elif typ in arrays and (arrays[typ].base or "").upper() == "STRING":
-                out.append((v.name.upper(), "STRING", "string_array"))
+            name, typ = v.name.upper(), v.type.upper()
+            if typ in structs:
+                for field in structs[typ].fields:
+                    member = field.name.upper()
+                    if field.type.upper() in SCALARS or field.type.upper() == "STRING":
+                        add(f"{name}.{member}", field.type.upper(), f"(&__GET_GLOBAL_{name}()->{member})")
+            else:
+                add(name, typ, f"__GET_GLOBAL_{name}()")
     return out
 
 
@@ -78,19 +91,19 @@ def harness_source(project: IecProject) -> str:
     put = ["void hh_set(int id, int index, long long value) {", "    switch (id) {"]
     sget = ["int hh_get_str(int id, int index, char *out) {", "    IEC_STRING *s = 0;", "    switch (id) {"]
     sput = ["void hh_set_str(int id, int index, const char *text) {", "    IEC_STRING *s = 0;", "    switch (id) {"]
-    for n, (name, typ, shape) in enumerate(variables):
+    for n, (_, typ, shape, pointer) in enumerate(variables):
         if shape == "scalar":
-            get.append(f"    case {n}: return (long long)*__GET_GLOBAL_{name}();")
-            put.append(f"    case {n}: *__GET_GLOBAL_{name}() = ({typ})value; break;")
+            get.append(f"    case {n}: return (long long)*{pointer};")
+            put.append(f"    case {n}: *{pointer} = ({typ})value; break;")
         elif shape == "array":
-            get.append(f"    case {n}: return (long long)__GET_GLOBAL_{name}()->table[index];")
-            put.append(f"    case {n}: __GET_GLOBAL_{name}()->table[index] = ({typ})value; break;")
+            get.append(f"    case {n}: return (long long){pointer}->table[index];")
+            put.append(f"    case {n}: {pointer}->table[index] = ({typ})value; break;")
         elif shape == "string":
-            sget.append(f"    case {n}: s = __GET_GLOBAL_{name}(); break;")
-            sput.append(f"    case {n}: s = __GET_GLOBAL_{name}(); break;")
+            sget.append(f"    case {n}: s = {pointer}; break;")
+            sput.append(f"    case {n}: s = {pointer}; break;")
         else:
-            sget.append(f"    case {n}: s = &__GET_GLOBAL_{name}()->table[index]; break;")
-            sput.append(f"    case {n}: s = &__GET_GLOBAL_{name}()->table[index]; break;")
+            sget.append(f"    case {n}: s = &{pointer}->table[index]; break;")
+            sput.append(f"    case {n}: s = &{pointer}->table[index]; break;")
     get += ["    }", "    return 0;", "}", ""]
     put += ["    }", "}", ""]
     sget += ["    }", "    if (!s) return -1;", "    memcpy(out, s->body, s->len);", "    out[s->len] = 0;",
@@ -222,7 +235,7 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
     lib.hh_run_guarded.restype = ctypes.c_int
     loops = loop_sites(st_text)
     variables = _variables(project)
-    ids = {name: (n, typ, shape) for n, (name, typ, shape) in enumerate(variables)}
+    ids = {path: (n, typ, shape) for n, (path, typ, shape, _) in enumerate(variables)}
     buffer = ctypes.create_string_buffer(512)
 
     located: dict[str, tuple[int, int, str, str]] = {}
@@ -234,7 +247,7 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
         return found
 
     def _locate(path: str) -> tuple[int, int, str, str]:
-        m = re.fullmatch(r"(\w+)(?:\[(-?\d+)\])?", path.strip())
+        m = re.fullmatch(r"(\w+(?:\.\w+)?)(?:\[(-?\d+)\])?", path.strip())
         if m is None or m.group(1).upper() not in ids:
             raise KeyError(path)
         n, typ, shape = ids[m.group(1).upper()]
