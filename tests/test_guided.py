@@ -95,11 +95,13 @@ def test_compare_pairs_let_the_search_put_a_compared_word_next_to_its_constant(t
     # profile makes 99/100/101 new features, and the search keeps a run with one of them.
     (tmp_path / "main.src").write_text(
         "L     W10\n>     K100\nJPF   Ok\nL     K100\n=     W10\nLBL Ok\nL     K7\n<     W12\n=     O1\n"
-        "L     K0\n=     X\nL     W20[X]\n==    K5\n=     O2\nEM\n")
+        "L     K0\n=     X\nL     W20[X]\n==    K5\n=     O2\n"
+        "L     W32\n=     W8\nL     W8\n<     K10\n=     O3\nEM\n")
     project = api.load_project(api.project_options(tmp_path / "main.src"))
     names = project_names(project.program)
     corners = harvest(project.program, names)
-    assert set(corners.compare_pairs) == {("W10", "W", 100), ("W12", "W", 7)}
+    # W32 through its copy W8: the program compares the copy
+    assert set(corners.compare_pairs) == {("W10", "W", 100), ("W12", "W", 7), ("W8", "W", 10), ("W32", "W", 10)}
     kept = generate(project.program, names, 200, seed=5)
     near = {value for s in kept for value in [s.initial.get("W10"), *(e.set.get("W10") for e in s.events if e.set)]}
     assert near & {99, 101}, [(s.initial, [e.set for e in s.events]) for s in kept]

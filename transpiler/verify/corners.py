@@ -149,18 +149,41 @@ def harvest(program: Program, names: NameTable) -> Corners:
         remanent_markers=tuple(name(r) for r in remanent if r.kind == "M"))
 
 
+_COPY_DEPTH = 3             # copies followed back from a compared word (`L W32` `= W8` ... `L W8` `< K10`)
+
+
 def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
     """Each word compared with a constant by a load and a compare in a row (`L W10` `> K100`, or `L K100` `< W10`),
-    where the stimulus may drive the word."""
-    pairs: set[tuple[str, str, int]] = set()
+    and each word it is copied from (a load and a store in a row, a few copies back), where the stimulus may drive
+    that word: the program often works on a copy of the word the machine supplies."""
+    compared: set[tuple[OperandRef, int]] = set()
+    sources: dict[OperandRef, set[OperandRef]] = {}
     for code in program.files:
         for prev, op in zip(code.ops, code.ops[1:]):
-            if op.code != "CMP" or prev.code != "WLD" or op.operand is None or prev.operand is None:
+            if prev.code != "WLD" or op.operand is None or prev.operand is None:
+                continue
+            if op.code == "WST" and _plain_word(prev.operand) and _plain_word(op.operand):
+                sources.setdefault(_ref(op.operand), set()).add(_ref(prev.operand))
+            if op.code != "CMP":
                 continue
             word, const = (prev.operand, op.operand) if op.operand.kind == "K" else (op.operand, prev.operand)
-            if const.kind != "K" or word.kind not in _WIDTH_BITS or word.indexed:
-                continue
-            word_name = name(OperandRef(word.kind, word.addr))
-            if word_name in drivable:
-                pairs.add((word_name, word.kind, const.addr))
+            if const.kind == "K" and _plain_word(word):
+                compared.add((_ref(word), const.addr))
+    pairs: set[tuple[str, str, int]] = set()
+    for word, const in compared:
+        reached, frontier = {word}, {word}
+        for _ in range(_COPY_DEPTH):
+            frontier = {src for w in frontier for src in sources.get(w, ())} - reached
+            reached |= frontier
+        for ref in reached:
+            if name(ref) in drivable:
+                pairs.add((name(ref), ref.kind, const))
     return tuple(sorted(pairs))
+
+
+def _plain_word(operand) -> bool:
+    return operand.kind in _WIDTH_BITS and not operand.indexed
+
+
+def _ref(operand) -> OperandRef:
+    return OperandRef(operand.kind, operand.addr)

@@ -4,7 +4,8 @@ branches both ways and enter its CASE entries, deterministic for a seed.
 As a fuzzer does, the search keeps a corpus (the user's scenarios, then every generated one that raised
 coverage) and mutates its members: an NC job moved to a corner value (verify/corners.py), an NC job inserted at a
 random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner,
-rare random toggles added, a word the program compares with a constant put next to that constant. Each candidate runs on the reference interpreter alone (no ST side, with coverage);
+rare random toggles added, a word the program compares with a constant put next to that constant, a word's start
+value moved arithmetically (doubled, halved, plus or minus one). Each candidate runs on the reference interpreter alone (no ST side, with coverage);
 one that reaches a branch outcome or CASE entry not seen before, a marker or output the program writes in a
 state (0 or 1) not seen before, or a word compare whose operands come out equal or one apart in a way not seen
 before (a value profile: a mutated compare or constant differs from the original only there), is kept, cut just after the last cycle that
@@ -136,6 +137,15 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
     for _ in range(rng.randint(1, 3)):
         choice = rng.random()
         at = rng.randrange(cycles)
+        numeric = [n for n, v in initial.items() if isinstance(v, int) and names.resolve(n).kind in "BWD"]
+        if numeric and rng.random() < 0.1:
+            # a word's start value moved arithmetically, as fuzzers do: a loop that halves or counts reaches a
+            # compare's constant only from a multiple or a neighbour of it
+            word = rng.choice(numeric)
+            v = initial[word]
+            initial[word] = corners.clamp(rng.choice((2 * v, 2 * v + 1, v // 2, v + 1, v - 1, -v)),
+                                          names.resolve(word).kind)
+            continue
         if corners.compare_pairs and rng.random() < 0.15:
             # a word the program compares with a constant, put next to it: at power-on or at a random cycle
             name, kind, constant = rng.choice(corners.compare_pairs)
