@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from types import MappingProxyType
+
+from transpiler.backends.st.dialect import GVL_NAMES
 
 INT32 = (-(2 ** 31), 2 ** 31 - 1)
 RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)})
@@ -49,8 +52,26 @@ def var(name: str, typ: str, deps_name: str | None = None) -> Expr:
 
 
 def base_name(text: str) -> str:
-    """The variable an lvalue text belongs to (array element `A[3]` -> `A`)."""
-    return text.split("[", 1)[0].split(".", 1)[0].upper()
+    """The variable an lvalue text belongs to (array element `A[3]` -> `A`, `GVL_Words.A[3]` -> `A`)."""
+    return unqualified(text).split("[", 1)[0].split(".", 1)[0].upper()
+
+
+# A global's reference on a qualified_only target: its list's name, a dot, the variable (dialect.py). Otherwise
+# only an FB instance is followed by a dot and a name, and none is named like a list: so this is a qualifier.
+_QUALIFIED = re.compile(r"(?<![A-Za-z0-9_.])(?:" + "|".join(sorted(map(re.escape, GVL_NAMES), key=len, reverse=True))
+                        + r")\.(?=[A-Za-z_])")
+_NAME = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*")
+
+
+def unqualified(text: str) -> str:
+    """`text` without the list qualifier of a global reference (`GVL_IO.I5` -> `I5`)."""
+    match = _QUALIFIED.match(text)
+    return text[match.end():] if match else text
+
+
+def names_in(text: str) -> set[str]:
+    """The variables expression or lvalue text names (upper case): no member names, no list qualifiers."""
+    return {m.group(0).upper() for m in _NAME.finditer(_QUALIFIED.sub("", text))}
 
 
 def int_const(value: int, typ: str = "DINT") -> Expr:
@@ -114,7 +135,8 @@ def unwiden(e: Expr) -> Expr | None:
         prefix = f"{typ}_TO_DINT("
         if e.text.startswith(prefix) and e.text.endswith(")") and _balanced(e.text[len(prefix):-1]):
             inner = e.text[len(prefix):-1]
-            return Expr(inner, typ, e.deps, e.lo, e.hi, PREC_ATOM if inner.isidentifier() or inner.endswith(")") else PREC_OR)
+            atom = unqualified(inner).isidentifier() or inner.endswith(")")
+            return Expr(inner, typ, e.deps, e.lo, e.hi, PREC_ATOM if atom else PREC_OR)
     return None
 
 

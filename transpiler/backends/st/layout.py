@@ -9,8 +9,15 @@ from types import MappingProxyType
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
 from transpiler.backends.st import exprs as E
+from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
 from transpiler.backends.st.names import NameTable
 
+# The groups of globals, titled as their sections of the configuration (a GVL target makes lists of them).
+GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
+                "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
+                "memory": "Byte memory: bytes, words, double words", "string": "Strings",
+                "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
+                "register": "Accumulators, index register, data stack", "jobs": "Submit-job queue"})
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
@@ -21,7 +28,7 @@ STRING_ARRAY_TYPE = "T_HH_STRINGS"
 class GlobalVar:
     name: str
     type: str
-    group: str                      # 'io_in', 'io_out', 'nc', 'marker', 'memory', 'string', 'timer', 'register', 'mp', 'stack'
+    group: str                      # a key of GROUP_TITLES
     address: str | None = None
     initial: str | None = None
     comment: str | None = None
@@ -43,10 +50,12 @@ class OperandVar:
 class Layout:
     """All data decisions of the ST backend; codegen asks it how to read and write each operand."""
 
-    def __init__(self, program: Program, names: NameTable, helper=lambda name: None):
+    def __init__(self, program: Program, names: NameTable, helper=lambda name: None,
+                 dialect: Dialect = TARGETS[DEFAULT_TARGET]):
         self.program = program
         self.names = names
         self.helper = helper
+        self.dialect = dialect
         self.profile = program.semantics.profile
         self.little = program.semantics.little_endian
         self.globals: dict[str, GlobalVar] = {}
@@ -272,10 +281,15 @@ class Layout:
 
     # ---- access
 
+    def ref(self, name: str) -> str:
+        """How a POU body names the global `name` on the target (`GVL_Markers.name` where lists are qualified)."""
+        return self.dialect.reference(name, group_title(self.globals[name].group))
+
     def bit_lvalue(self, op: Operand, offset: int = 0) -> E.Expr:
         """The BOOL variable of a (non-indexed) bit operand, offset for LB/B= sequences."""
         name = self._declare_bit(op.kind, op.addr + offset)
-        return E.Expr(name, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=name)
+        text = self.ref(name)
+        return E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
 
     def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:
         """The operand address of an indexed bit operand (for the accessor FB)."""
@@ -295,7 +309,7 @@ class Layout:
         """A B/W/D operand as a typed expression (SINT/INT/DINT, i.e. sign-extended by type)."""
         if self._in_array(op):
             return self._array_read(op, x)
-        return E.var(self._declare_mem(op.kind, op.addr), MEM_TYPE[op.kind])
+        return E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         """(lvalue, DINT expression) assignments that store `value` truncated to the operand width."""
@@ -303,7 +317,7 @@ class Layout:
             return self._array_write(op, x, value)
         name = self._declare_mem(op.kind, op.addr)
         typ = MEM_TYPE[op.kind]
-        return [(name, _narrow(value, typ))]
+        return [(self.ref(name), _narrow(value, typ))]
 
     def _byte_index(self, op: Operand, x: E.Expr | None, k: int) -> str:
         size = BYTES[op.kind]
@@ -314,8 +328,8 @@ class Layout:
         return str(op.addr + pos)
 
     def _array_read(self, op: Operand, x: E.Expr | None) -> E.Expr:
-        arr = self.mem_array
-        deps = frozenset([arr.upper()]) | (x.deps if op.indexed and x is not None else frozenset())
+        arr = self.ref(self.mem_array)
+        deps = frozenset([self.mem_array.upper()]) | (x.deps if op.indexed and x is not None else frozenset())
         if op.kind == "B":
             return E.Expr(f"BYTE_TO_SINT({arr}[{self._byte_index(op, x, 0)}])", "SINT", deps, -128, 127)
         parts = ", ".join(f"{arr}[{self._byte_index(op, x, k)}]" for k in range(BYTES[op.kind]))
@@ -324,7 +338,7 @@ class Layout:
         return E.Expr(f"{fn}({parts})", MEM_TYPE[op.kind], deps, *E.RANGES[MEM_TYPE[op.kind]])
 
     def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
-        arr = self.mem_array
+        arr = self.ref(self.mem_array)
         if op.kind == "B":
             return [(f"{arr}[{self._byte_index(op, x, 0)}]", E.Expr(f"{value.typ}_TO_BYTE({value.text})", "BYTE", value.deps, 0, 255))]
         self.helper("HH_BYTEOF")
@@ -334,12 +348,17 @@ class Layout:
     def string_lvalue(self, op: Operand, x: E.Expr | None) -> E.Expr:
         if op.indexed:
             index = _index(op.addr, x, 1, self.program.semantics)
-            text = f"{self.string_array}[{index.text}]"
+            text = f"{self.ref(self.string_array)}[{index.text}]"
             return E.Expr(text, "STRING", frozenset([self.string_array.upper()]) | index.deps, var=text)
         if self.string_array is not None:
-            text = f"{self.string_array}[{op.addr}]"
+            text = f"{self.ref(self.string_array)}[{op.addr}]"
             return E.Expr(text, "STRING", frozenset([self.string_array.upper()]), var=text)
-        return E.var(self._string_var[op.addr], "STRING")
+        return E.var(self.ref(self._string_var[op.addr]), "STRING")
+
+
+def group_title(group: str) -> str:
+    """The title of a group of globals (a group without one in GROUP_TITLES is titled with its key)."""
+    return GROUP_TITLES.get(group, group)
 
 
 def _index(base: int, x: E.Expr | None, scale: int, semantics) -> E.Expr:

@@ -108,7 +108,7 @@ def _reads_first(stmt: S.Stmt, word: re.Pattern[str], value: E.Expr) -> bool:
             return "(" in stmt.target     # read in a call inside the target's index; else the target is written
         return bool(word.search(stmt.value.text))
     if isinstance(stmt, S.Call):
-        if stmt.callee.upper() == value.text.split(".", 1)[0].upper():
+        if E.base_name(stmt.callee) == E.base_name(value.text):
             return False
         return any(word.search(v.text) for _, v in stmt.args)
     if isinstance(stmt, S.If) and stmt.inline:

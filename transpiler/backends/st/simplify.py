@@ -18,7 +18,6 @@ a store is dropped only when the overwrite follows in the same block with none o
 from __future__ import annotations
 
 import dataclasses
-import re
 from typing import Iterable
 
 from transpiler.backends.st import exprs as E
@@ -57,7 +56,7 @@ def _same_condition(first: S.If, second: S.If) -> bool:
     if not all(isinstance(s, (S.Assign, S.Comment)) for s in first.then):
         return False
     written = {E.base_name(s.target) for s in first.then if isinstance(s, S.Assign)}
-    return not written & {d.upper() for d in first.cond.deps} and not written & _names(first.cond.text)
+    return not written & {d.upper() for d in first.cond.deps} and not written & E.names_in(first.cond.text)
 
 
 def _joined(first: S.If, second: S.If) -> S.If:
@@ -86,10 +85,6 @@ def _flag_from_condition(stmt: S.If) -> S.Stmt:
     return S.Assign(then.target, value, stmt.note)
 
 
-def _names(text: str) -> set[str]:
-    return {m.group(0).upper() for m in re.finditer(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*", text)}
-
-
 def _reads(stmt: S.Stmt) -> set[str]:
     """Every variable a statement (nested ones included) may read: its expressions' deps and the names in its
     texts (an index in an assignment's target is read too)."""
@@ -98,7 +93,7 @@ def _reads(stmt: S.Stmt) -> set[str]:
         exprs: list[E.Expr] = []
         if isinstance(s, S.Assign):
             exprs = [s.value]
-            found |= _names(s.target.split("[", 1)[1]) if "[" in s.target else set()
+            found |= E.names_in(s.target.split("[", 1)[1]) if "[" in s.target else set()
         elif isinstance(s, S.Call):
             exprs = [value for _, value in s.args]
         elif isinstance(s, S.If):
@@ -110,7 +105,7 @@ def _reads(stmt: S.Stmt) -> set[str]:
         elif isinstance(s, S.Repeat):
             exprs = [s.until]
         for e in exprs:
-            found |= set(e.deps) | _names(e.text)
+            found |= set(e.deps) | E.names_in(e.text)
     return found
 
 
@@ -120,8 +115,8 @@ def _leaves_or_calls(stmt: S.Stmt) -> bool:
 
 
 def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
-    if isinstance(stmt, S.Assign) and stmt.target.upper() in registers and stmt.note is None:
-        return stmt.target.upper()
+    if isinstance(stmt, S.Assign) and E.unqualified(stmt.target).upper() in registers and stmt.note is None:
+        return E.unqualified(stmt.target).upper()
     return None
 
 

@@ -75,11 +75,13 @@ class StackMixin(ExecutorPart):
         if kind == "bit":
             self.ctx.helper("HH_BIT")
             out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(1, "INT"), "INT", E.PREC_ADD)))
-            value = E.Expr(f"HH_BIT(INT_TO_DINT({stack}[{sp}]), 7)", "BOOL", frozenset([stack.upper(), sp.upper()]), 0, 1)
+            value = E.Expr(f"HH_BIT(INT_TO_DINT({stack}[{sp}]), 7)", "BOOL",
+                           frozenset([E.base_name(stack), E.base_name(sp)]), 0, 1)
         else:
             self.ctx.helper("HH_FROMWORDS")
             out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(2, "INT"), "INT", E.PREC_ADD)))
-            value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT", frozenset([stack.upper(), sp.upper()]))
+            value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT",
+                           frozenset([E.base_name(stack), E.base_name(sp)]))
         # The popped value must be captured now: the stack pointer moves again later.
         return self._temp_copy(value)
 
