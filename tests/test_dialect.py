@@ -4,6 +4,7 @@ ST that blark parses."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 from pathlib import Path
 
@@ -78,10 +79,32 @@ def test_gvl_targets_read_bits_with_bit_access_instead_of_the_helper(sample, tar
     assert "HH_BIT(" not in text and "FUNCTION HH_BIT " not in text
     assert "GVL_Markers.M6001 := GVL_Words.DG_pocket_occ_low.1;" in text
     assert "HH_BIT(" in sample["matiec"].files["project.st"].decode()
-    from transpiler.backends.st.dialect import _with_bit_access
-    body = "a := HH_BIT(INT_TO_DINT(W), 3) AND HH_BIT(INT_TO_DINT(W), 20) OR HH_BIT(SINT_TO_DINT(B), 9);\nc := HH_BIT(D, 31);"
-    (pou,) = _with_bit_access((Pou("P", "PROGRAM", (), body),))
-    assert pou.body == "a := W.3 AND W.15 OR B.7;\nc := D.31;"
+
+
+def test_a_bit_of_a_widened_word_is_read_below_its_width():
+    # Catches: a widened INT or SINT read above its width (bit 15 is its sign, which INT_TO_DINT repeats), or the
+    # helper's form changed for matiec.
+    word, byte = E.to_dint(E.var("GVL_Words.W", "INT")), E.to_dint(E.var("B", "SINT"))
+    assert [E.bit_of(word, 3, True).text, E.bit_of(word, 20, True).text, E.bit_of(byte, 9, True).text] == [
+        "GVL_Words.W.3", "GVL_Words.W.15", "B.7"]
+    assert E.bit_of(E.var("D", "DINT"), 31, True).text == "D.31"
+    assert E.bit_of(E.var("W", "INT"), 3, False).text == "HH_BIT(INT_TO_DINT(W), 3)"
+    assert E.bit_of(word, 3, True).deps == {"W"}
+
+
+def test_codesys_reads_bits_of_words_and_stack_entries_with_bit_access_in_the_tree(tmp_path):
+    # Catches: a bit read left to the helper on a target with bit access (the emulated stack's bit entries
+    # included), the helper declared although nothing calls it, or a body that is not the printed tree.
+    projects = _built(tmp_path, "PS I0\nCM 9019\nPL D0\nPL M0\nL W20\nB= M8\nEM\n")
+    (main,) = _translated(projects["codesys"]).values()
+    assert main.statements and printer.body_text(main.statements) == main.body
+    assert "GVL_Markers.M0 := GVL_Registers.HH_STACK[GVL_Registers.HH_SP].7;" in main.body
+    assert "GVL_Markers.M9 := tmp3.1;" in main.body and "HH_BIT" not in main.body
+    assert "HH_BIT" not in {p.name for p in projects["codesys"].pous}
+    assert "HH_BIT" in {p.name for p in projects["matiec"].pous}
+    if importlib.util.find_spec("blark") is not None:
+        laid_out = for_target(projects["codesys"], "codesys")
+        assert check_blark(render_target_st(laid_out), "bits.st") == []
 
 
 @pytest.mark.parametrize("target", ["codesys", "twincat"])

@@ -21,6 +21,12 @@ class ArithmeticMixin(ExecutorPart):
         self.ctx.helper(name)
         return E.call(name, args, typ, lo, hi)
 
+    def _bit_of(self, word: Expr, k: int) -> Expr:
+        """Bit k of `word` (E.bit_of), through the HH_BIT helper where the target has no bit access."""
+        if not self.ctx.dialect.bit_access:
+            self.ctx.helper("HH_BIT")
+        return E.bit_of(word, k, self.ctx.dialect.bit_access)
+
     def _add(self, a: Expr, b: Expr, sub: bool = False) -> Expr:
         a, b = E.to_dint(a), E.to_dint(b)
         lo = a.lo - b.hi if sub else a.lo + b.lo

@@ -14,7 +14,7 @@ import dataclasses
 import re
 from types import MappingProxyType
 
-from transpiler.backends.iec_model import IecProject, Pou, VarSection
+from transpiler.backends.iec_model import IecProject, VarSection
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,36 +115,8 @@ def for_target(project: IecProject, target: str) -> TargetProject:
     gvls = tuple(Gvl(name, tuple(sections), chosen.qualified_only) for name, sections in by_name.items())
     pous = tuple(dataclasses.replace(pou, sections=tuple(s for s in pou.sections if s.kind != "VAR_EXTERNAL"))
                  for pou in project.pous)
-    if chosen.bit_access:
-        pous = _with_bit_access(pous)
     config = dataclasses.replace(project.configuration, globals=())
     return TargetProject(chosen, dataclasses.replace(project, pous=pous, configuration=config), gvls)
-
-
-_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)?"
-# HH_BIT(A, k) reads bit k of the DINT A; its argument is a DINT variable or a widened INT/SINT one.
-_BIT_OF_DINT = re.compile(rf"\bHH_BIT\((?P<var>{_NAME}), (?P<k>\d+)\)")
-_BIT_OF_NARROW = re.compile(rf"\bHH_BIT\((?P<conv>INT|SINT)_TO_DINT\((?P<var>{_NAME})\), (?P<k>\d+)\)")
-_WIDTH = MappingProxyType({"INT": 16, "SINT": 8})
-
-
-def _with_bit_access(pous: tuple[Pou, ...]) -> tuple[Pou, ...]:
-    """Reads of one bit of a variable written `var.k` (bit access), and the HH_BIT helper left out where no call
-    of it remains. A widened INT or SINT repeats its sign bit above its width, so a higher bit is its top bit."""
-    def narrow(m: re.Match) -> str:
-        return f"{m.group('var')}.{min(int(m.group('k')), _WIDTH[m.group('conv')] - 1)}"
-
-    def rewrite(pou: Pou) -> Pou:
-        if "HH_BIT(" not in pou.body:
-            return pou
-        body = _BIT_OF_NARROW.sub(narrow, pou.body)
-        body = _BIT_OF_DINT.sub(lambda m: f"{m.group('var')}.{m.group('k')}", body)
-        return dataclasses.replace(pou, body=body, statements=())
-
-    out = tuple(rewrite(p) if p.name != "HH_BIT" else p for p in pous)
-    if not any("HH_BIT(" in p.body for p in out if p.name != "HH_BIT"):
-        out = tuple(p for p in out if p.name != "HH_BIT")
-    return out
 
 
 def target_section(target: TargetProject) -> str:

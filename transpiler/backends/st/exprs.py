@@ -127,6 +127,17 @@ def b_not(a: Expr) -> Expr:
     return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY)
 
 
+def bit_of(word: Expr, k: int, access: bool) -> Expr:
+    """Bit k (0..31) of the integer `word`, a variable or the widening of one: `word.k` where the target has bit
+    access, else the HH_BIT helper on its DINT value. A SINT or INT repeats its sign bit above its width, so a
+    higher bit of it is its top bit."""
+    if not access:
+        return Expr(f"HH_BIT({to_dint(word).text}, {k})", "BOOL", word.deps, 0, 1)
+    narrow = unwiden(word) or word
+    top = {"SINT": 7, "INT": 15}.get(narrow.typ, 31)
+    return Expr(f"{narrow.text}.{min(k, top)}", "BOOL", word.deps, 0, 1)
+
+
 def unwiden(e: Expr) -> Expr | None:
     """`INT_TO_DINT(W0)` -> `W0` (typed INT): the SINT/INT value inside a widening, or None when `e` is no widening."""
     if e.const is not None:
