@@ -1,4 +1,5 @@
-"""Data layout: decides the IEC variable of every HEIDENHAIN operand (named BOOL/SINT/INT/DINT variables, or arrays where overlap or indexing is real)."""
+"""Data layout: decides the IEC variable of every HEIDENHAIN operand (named BOOL/SINT/INT/DINT variables, or arrays
+where overlap or indexing is real), the group of globals it belongs to, and how a POU body names it on the target."""
 
 from __future__ import annotations
 
