@@ -1,8 +1,10 @@
 """--target: matiec/openplc keep today's text; codesys/twincat get global variable lists, no VAR_EXTERNAL, every
-global reference GVL-qualified, their XML valid TC6 with the lists in the 3S addData, and ST that blark parses."""
+global reference GVL-qualified as the back end builds it, their XML valid TC6 with the lists in the 3S addData, and
+ST that blark parses."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 from pathlib import Path
 
@@ -13,7 +15,11 @@ from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou
 from transpiler.backends.plcopen.writer import GVL_DATA_NAME, NS, render_target_xml
 from transpiler.backends.plcopen.xsd import schema_path, validate_xml
 from transpiler.backends.st.check import check_blark
-from transpiler.backends.st.dialect import TARGETS, for_target
+from transpiler.backends.st import exprs as E
+from transpiler.backends.st import printer
+from transpiler.backends.st.backend import StBackend
+from transpiler.backends.st.dialect import GVL_NAMES, TARGETS, for_target, gvl_name
+from transpiler.backends.st.layout import GROUP_TITLES
 from transpiler.backends.st.writer import render_st, render_target_st
 from transpiler.backends.transpile import transpile_program
 from transpiler.diagnostics import Diagnostics
@@ -73,10 +79,32 @@ def test_gvl_targets_read_bits_with_bit_access_instead_of_the_helper(sample, tar
     assert "HH_BIT(" not in text and "FUNCTION HH_BIT " not in text
     assert "GVL_Markers.M6001 := GVL_Words.DG_pocket_occ_low.1;" in text
     assert "HH_BIT(" in sample["matiec"].files["project.st"].decode()
-    from transpiler.backends.st.dialect import _with_bit_access
-    body = "a := HH_BIT(INT_TO_DINT(W), 3) AND HH_BIT(INT_TO_DINT(W), 20) OR HH_BIT(SINT_TO_DINT(B), 9);\nc := HH_BIT(D, 31);"
-    (pou,) = _with_bit_access((Pou("P", "PROGRAM", (), body),))
-    assert pou.body == "a := W.3 AND W.15 OR B.7;\nc := D.31;"
+
+
+def test_a_bit_of_a_widened_word_is_read_below_its_width():
+    # Catches: a widened INT or SINT read above its width (bit 15 is its sign, which INT_TO_DINT repeats), or the
+    # helper's form changed for matiec.
+    word, byte = E.to_dint(E.var("GVL_Words.W", "INT")), E.to_dint(E.var("B", "SINT"))
+    assert [E.bit_of(word, 3, True).text, E.bit_of(word, 20, True).text, E.bit_of(byte, 9, True).text] == [
+        "GVL_Words.W.3", "GVL_Words.W.15", "B.7"]
+    assert E.bit_of(E.var("D", "DINT"), 31, True).text == "D.31"
+    assert E.bit_of(E.var("W", "INT"), 3, False).text == "HH_BIT(INT_TO_DINT(W), 3)"
+    assert E.bit_of(word, 3, True).deps == {"W"}
+
+
+def test_codesys_reads_bits_of_words_and_stack_entries_with_bit_access_in_the_tree(tmp_path):
+    # Catches: a bit read left to the helper on a target with bit access (the emulated stack's bit entries
+    # included), the helper declared although nothing calls it, or a body that is not the printed tree.
+    projects = _built(tmp_path, "PS I0\nCM 9019\nPL D0\nPL M0\nL W20\nB= M8\nEM\n")
+    (main,) = _translated(projects["codesys"]).values()
+    assert main.statements and printer.body_text(main.statements) == main.body
+    assert "GVL_Markers.M0 := GVL_Registers.HH_STACK[GVL_Registers.HH_SP].7;" in main.body
+    assert "GVL_Markers.M9 := tmp3.1;" in main.body and "HH_BIT" not in main.body
+    assert "HH_BIT" not in {p.name for p in projects["codesys"].pous}
+    assert "HH_BIT" in {p.name for p in projects["matiec"].pous}
+    if importlib.util.find_spec("blark") is not None:
+        laid_out = for_target(projects["codesys"], "codesys")
+        assert check_blark(render_target_st(laid_out), "bits.st") == []
 
 
 @pytest.mark.parametrize("target", ["codesys", "twincat"])
@@ -100,20 +128,84 @@ def test_gvl_target_xml_validates_and_holds_the_lists(sample, target):
     assert all(g.find(f".//{{{NS}}}Attribute[@Name='qualified_only']") is not None for g in lists)
 
 
-def test_qualification_skips_locals_members_literals_strings_and_comments():
-    body = ("x := g1 + 16#1F + T#10ms; (* g1 in a comment *)\ns := 'g1';\nfb.g1 := g1;\ng2 := 1.5E3;")
-    pou = Pou("P", "PROGRAM", (VarSection("VAR", (IecVar("x", "INT"), IecVar("g2", "INT"))),
-                               VarSection("VAR_EXTERNAL", (IecVar("g1", "INT"), IecVar("g2", "INT")))), body)
-    conf = Configuration("C", "R", (), (), (VarSection("VAR_GLOBAL", (IecVar("g1", "INT"), IecVar("g2", "INT")),
-                                                        comment="Markers"),))
+def test_for_target_moves_the_globals_into_lists_and_drops_the_externals():
+    # Catches: a body or statement tree touched by the layout (references are written by the back end), a global
+    # section left in the configuration, or the matiec project not returned as it is.
+    body = "x := GVL_Markers.g1;"
+    pou = Pou("P", "PROGRAM", (VarSection("VAR", (IecVar("x", "INT"),)),
+                               VarSection("VAR_EXTERNAL", (IecVar("g1", "INT"),))), body, statements=("tree",))
+    conf = Configuration("C", "R", (), (), (VarSection("VAR_GLOBAL", (IecVar("g1", "INT"),), comment="Markers"),
+                                            VarSection("VAR_GLOBAL", (IecVar("g2", "INT"),), comment="Odd group")))
     out = for_target(IecProject("P", (), (pou,), conf), "codesys")
-    assert out.project.pous[0].body == ("x := GVL_Markers.g1 + 16#1F + T#10ms; (* g1 in a comment *)\n"
-                                        "s := 'g1';\nfb.g1 := GVL_Markers.g1;\ng2 := 1.5E3;")
-    assert all(s.kind != "VAR_EXTERNAL" for s in out.project.pous[0].sections)
+    (laid_out,) = out.project.pous
+    assert (laid_out.body, laid_out.statements) == (body, ("tree",))
+    assert [s.kind for s in laid_out.sections] == ["VAR"]
+    assert [(g.name, [v.name for s in g.sections for v in s.vars]) for g in out.gvls] == [
+        ("GVL_Markers", ["g1"]), ("GVL_OddGroup", ["g2"])]
+    assert out.project.configuration.globals == ()
     assert "GVL_Markers" in render_target_st(out)
     assert for_target(IecProject("P", (), (pou,), conf), "matiec").project.pous[0] is pou
     assert render_target_st(for_target(IecProject("P", (), (pou,), conf), "matiec")) == \
         render_st(IecProject("P", (), (pou,), conf))
+
+
+def _built(tmp_path, source: str) -> dict[str, IecProject]:
+    """The back end's project of `source` for matiec and for codesys."""
+    (tmp_path / "main.src").write_text(source)
+    result = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {}))
+    assert result.ok, [d.render() for d in result.diagnostics.items]
+    return {t: StBackend(result.program, Diagnostics(), dialect=TARGETS[t]).build().project
+            for t in ("matiec", "codesys")}
+
+
+def _translated(project: IecProject) -> dict[str, Pou]:
+    return {p.name: p for p in project.pous if p.name in ("main", "Clamp")}
+
+
+def test_codesys_bodies_are_printed_from_the_tree_with_each_global_qualified_and_no_local(tmp_path):
+    # Catches: a body rewritten as text after printing (the tree no longer says what is written), a global
+    # written without its list, or a local (the subprogram's instance, a temporary) qualified as if it were one.
+    projects = _built(tmp_path, "L D8\n+ D12\nx D16\n= D4\nCM Clamp\nEM\nLBL Clamp\nL I0\n= O0\nEM\n")
+    pous = _translated(projects["codesys"])
+    assert set(pous) == {"main", "Clamp"}
+    for pou in pous.values():
+        assert pou.statements and printer.body_text(pou.statements) == pou.body
+    main = pous["main"].body
+    assert "tmp1 := HH_ADD(GVL_Words.D8, GVL_Words.D12);" in main
+    assert "GVL_Words.D4 := HH_MUL(tmp1, GVL_Words.D16);" in main and "GVL_NC.M4200 := " in main
+    assert "Clamp_1();" in main and not re.search(r"\.(Clamp_1|tmp1)\b", main)
+    assert "GVL_IO.O0 := GVL_IO.I0;" in pous["Clamp"].body
+    assert "GVL_" not in "".join(p.body for p in _translated(projects["matiec"]).values())
+
+
+def test_the_clean_up_passes_do_the_same_on_every_target(tmp_path):
+    # Catches: a pass that matches a qualified name against the plain one and so keeps a dead register or marker
+    # store, joins other IFs or propagates other temporaries on a GVL target than on matiec.
+    projects = _built(tmp_path, "L W10\nx K4\n= W0\nL W12\nx K6\n= W2\nL M4200\n= M1\nL W14\nx W16\n= W4\n"
+                                "L I0\nS M5\nL I0\nR M6\nL W40\n= X\nCM Clamp\nL K1\n= B20[X]\nL W42\n= X\nEM\n"
+                                "LBL Clamp\nL I0\n= O0\nEM\n")
+    qualifier = re.compile(r"\b(?:" + "|".join(GVL_NAMES) + r")\.")
+    matiec, codesys = _translated(projects["matiec"]), _translated(projects["codesys"])
+    assert {n: qualifier.sub("", p.body) for n, p in codesys.items()} == {n: p.body for n, p in matiec.items()}
+    assert codesys["main"].body != matiec["main"].body
+
+
+def test_every_group_of_globals_lands_in_a_known_list():
+    # Catches: a new group of globals without a row in GVL_BY_TITLE: its references would carry a qualifier that
+    # the clean-up passes do not recognise (exprs.unqualified).
+    assert {gvl_name(title) for title in GROUP_TITLES.values()} <= GVL_NAMES
+
+
+def test_a_qualified_reference_names_its_variable():
+    # Catches: the list taken for the variable (GVL_Words.D[3] read as GVL_WORDS), or a member or bit (fb.Q, w.3)
+    # taken for a qualifier.
+    assert E.base_name("GVL_Words.HH_MEM[GVL_Registers.HH_X + 3]") == "HH_MEM"
+    assert E.base_name("GVL_Jobs.HH_Jobs.RESULT") == "HH_JOBS" and E.base_name("inst.Q") == "INST"
+    assert E.unqualified("GVL_IO.I5") == "I5" and E.unqualified("GVL_IO.3") == "GVL_IO.3"
+    # a member path counts with its head (a marker STRUCT's member is a variable of its own)
+    assert E.names_in("GVL_Words.HH_MEM[GVL_Registers.HH_X + 3] AND fb.Q OR NOT GVL_Jobs.HH_Jobs.RESULT") == {
+        "HH_MEM", "HH_X", "AND", "FB", "FB.Q", "OR", "NOT", "HH_JOBS", "HH_JOBS.RESULT"}
+    assert E.target_name("GVL_Markers.ML_ax.inpos") == "ML_AX.INPOS" and E.target_name("GVL_Words.HH_MEM[3]") == "HH_MEM"
 
 
 def test_unknown_target_is_refused():

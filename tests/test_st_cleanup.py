@@ -76,6 +76,13 @@ def test_fb_output_passed_to_its_own_next_call_stays_named():
     assert propagate_temporaries(pou) == pou
 
 
+def test_temporary_whose_bit_is_read_stays():
+    # Catches: a word's temporary replaced by its expression where its bit is read (`(a + b).3` is no ST).
+    word = E.binop("+", E.var("a", "DINT"), E.var("b", "DINT"), "DINT", E.PREC_ADD)
+    pou = _fb([S.Assign("tmp1", word), S.Assign("x", E.bit_of(E.var("tmp1", "DINT"), 3, access=True))], ["tmp1"])
+    assert propagate_temporaries(pou) == pou
+
+
 def test_temporary_written_by_the_next_statement_stays():
     # Catches: an occurrence as the next statement's target taken for a read (the value would be lost).
     pou = _fb([S.Assign("tmp1", _b("a")), S.Assign("tmp1", _b("b"))], ["tmp1"])

@@ -65,8 +65,8 @@ class DataType:
 class Pou:
     """A POU. `body` is the complete ST statement text of the body, unindented, lines joined with '\\n'.
 
-    `statements` is the statement tree (backends/st/stmt.py) the ST back end printed `body` from; POUs whose body
-    is written as text (the library) have none, and a rewrite of the text alone drops it."""
+    `statements` is the statement tree (backends/st/stmt.py) the ST back end printed `body` from, on every target;
+    POUs whose body is written as text (the library) have none."""
 
     name: str
     kind: PouKind

@@ -1,5 +1,5 @@
-"""Runs the back ends on one IR program: the ST back end decides the IEC project, the writers print it as ST and
-PLCopen XML (and the libraries HH_Lib and HH_Sys as files of their own), the report module adds report.md and
+"""Runs the back ends on one IR program: the ST back end decides the IEC project (once for matiec, and once more
+for a target that writes its POUs otherwise), the writers print it as ST and PLCopen XML (and the libraries HH_Lib and HH_Sys as files of their own), the report module adds report.md and
 io_map.csv. Returns file contents; writing is the caller's job."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Mapping
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 from transpiler.backends.st.backend import StBackend, StResult
-from transpiler.backends.st.dialect import DEFAULT_TARGET, for_target, target_section
+from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, dialect, for_target, target_section
 from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
 from transpiler.backends.report.report import render_io_map, render_report
@@ -29,7 +29,7 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
                       formats: set[str], mp_file: Path | None = None, target: str = DEFAULT_TARGET) -> Transpiled:
     """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv; `target` picks the
     dialect of project.st and project.xml (st/dialect.py). `st_text` is always the matiec text: that is what the
-    co-simulation runs."""
+    co-simulation runs; `result` is the matiec translation too, for the report and the I/O map."""
     from transpiler.backends.plcopen.writer import render_target_xml, render_xml
     from transpiler.backends.st.writer import render_st, render_target_st
     mp_name = mp_file.name if mp_file is not None else None
@@ -37,7 +37,12 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     project = result.project
     files: dict[str, bytes] = {}
     st_text = render_st(project)
-    laid_out = for_target(project, target)
+    chosen = dialect(target)
+    built = project
+    if not chosen.builds_like(TARGETS[DEFAULT_TARGET]):
+        # The same translation with the target's references and bit reads; its diagnostics are the matiec run's.
+        built = StBackend(program, Diagnostics(), mp, mp_file=mp_name, dialect=chosen).build().project
+    laid_out = for_target(built, target)
     if "st" in formats:
         files["project.st"] = render_target_st(laid_out).encode("utf-8")
     if "xml" in formats:

@@ -21,6 +21,12 @@ class ArithmeticMixin(ExecutorPart):
         self.ctx.helper(name)
         return E.call(name, args, typ, lo, hi)
 
+    def _bit_of(self, word: Expr, k: int) -> Expr:
+        """Bit k of `word` (E.bit_of), through the HH_BIT helper where the target has no bit access."""
+        if not self.ctx.dialect.bit_access:
+            self.ctx.helper("HH_BIT")
+        return E.bit_of(word, k, self.ctx.dialect.bit_access)
+
     def _add(self, a: Expr, b: Expr, sub: bool = False) -> Expr:
         a, b = E.to_dint(a), E.to_dint(b)
         lo = a.lo - b.hi if sub else a.lo + b.lo
@@ -94,10 +100,10 @@ class ArithmeticMixin(ExecutorPart):
         """Division or MOD by a divisor known only at run time: WA keeps `a` and the marker is set when it is 0."""
         # Unknown divisor: keep WA and set the marker when it is 0.
         result_var = self.ctx.register("WA")
-        if not b.simple or result_var.upper() in b.deps:
+        if not b.simple or E.base_name(result_var) in b.deps:
             b = self._temp_copy(b)
         self.s.regs["WA"] = None
-        self.prepare_write(result_var.upper())
+        self.prepare_write(E.base_name(result_var))
         if a.var is None or a.var.upper() != result_var.upper():
             self.ctx.out.add(S.Assign(result_var, a))
         wa = E.var(result_var, "DINT")

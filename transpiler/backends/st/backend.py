@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import re
 from decimal import Decimal
-from types import MappingProxyType
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
@@ -16,7 +15,8 @@ from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import jobs, library, modcalls
-from transpiler.backends.st.layout import GlobalVar, Layout
+from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
+from transpiler.backends.st.layout import GROUP_TITLES, GlobalVar, Layout, group_title
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes, printer, simplify
@@ -27,11 +27,6 @@ from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, Rou
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
 
-GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
-                "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
-                "memory": "Byte memory: bytes, words, double words", "string": "Strings",
-                "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
-                "register": "Accumulators, index register, data stack", "jobs": jobs.GLOBALS_TITLE})
 # A name in a POU body; the part after a dot (`ML_ax.inpos`, `inst.Q`) is a member, no global.
 _IDENT = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*")
 _COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
@@ -65,9 +60,12 @@ class StResult:
 
 class StBackend:
     def __init__(self, program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal] | None = None,
-                 project_name: str | None = None, mp_file: str | None = None):
+                 project_name: str | None = None, mp_file: str | None = None,
+                 dialect: Dialect = TARGETS[DEFAULT_TARGET]):
+        """`dialect` is the target's table: how the POU bodies reference globals and read bits (dialect.py)."""
         self.program = program
         self.diags = diags
+        self.dialect = dialect
         self.mp = dict(mp or {})
         self.mp_file = mp_file
         self.semantics = program.semantics
@@ -101,7 +99,7 @@ class StBackend:
     def build(self) -> StResult:
         helpers = library.helper_pous()
         self._reserve_pou_names(helpers)
-        layout = Layout(self.program, self.names, self.helpers_used.add)
+        layout = Layout(self.program, self.names, self.helpers_used.add, self.dialect)
         self.layout = layout
         self._name_instances()
         self.liveness = Liveness(self.program)
@@ -232,10 +230,12 @@ class StBackend:
         return done
 
     def _register(self, reg: str) -> str:
+        """How the POU bodies name the variable of register `reg` (declared on first use)."""
         typ, wanted, comment = REG_TYPES[reg]
-        return self.layout.add_register(f"reg:{reg}", wanted, typ, comment)
+        return self.layout.ref(self.layout.add_register(f"reg:{reg}", wanted, typ, comment))
 
     def _stack_names(self) -> tuple[str, str]:
+        """The data stack array and its pointer, as the POU bodies name them (declared on first use)."""
         if self.stack is None:
             words = int(self.semantics["data_stack_words"])
             tname = self.names.name("type:stack", "T_HH_STACK")
@@ -243,7 +243,7 @@ class StBackend:
                                        comment="data stack of 16-bit words (A-19)"))
             arr = self.layout.add_register("stack", "HH_STACK", tname, "data stack (PS/PL), 16-bit words")
             sp = self.layout.add_register("sp", "HH_SP", "INT", "data stack pointer (number of words)")
-            self.stack = (arr, sp)
+            self.stack = (self.layout.ref(arr), self.layout.ref(sp))
         self.real_stack_users.setdefault(self.pou_names.get(self.current_key, self.main_pou), self.current_key)
         return self.stack
 
@@ -257,10 +257,11 @@ class StBackend:
             self.kfields[key] = name
             init = "[" + ", ".join(str(v) for v in o.kfield) + "]"
             self.layout.globals[name] = GlobalVar(name, tname, "kfield", initial=init, comment=f"KFIELD {o.text}")
-        return self.kfields[key]
+        return self.layout.ref(self.kfields[key])
 
     def _module_call(self, ex: Executor, op, live: frozenset[str]) -> None:
-        in_job = self.layout.add_register("in_job", modcalls.IN_JOB_VAR, "BOOL", "TRUE while a submit job runs")
+        in_job = self.layout.ref(self.layout.add_register("in_job", modcalls.IN_JOB_VAR, "BOOL",
+                                                           "TRUE while a submit job runs"))
         # 9050 writes the decimal character of MP7280 (0 comma, else point), as the interpreter does.
         point = "," if self.mp.get((7280, 0)) == 0 else "."
         modcalls.emit_module_call(ex, op, live, in_job, self.modules_used, point)
@@ -410,9 +411,9 @@ class StBackend:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""
         layout = self.layout
         arr = layout.bit_arrays[kind]
-        named = layout.named_bits(kind)
+        named = [(addr, layout.ref(name)) for addr, name in layout.named_bits(kind)]
         index, value = E.var("IDX", "DINT"), E.var("VALUE", "BOOL")
-        element = f"{arr}[IDX]"
+        element = f"{layout.ref(arr)}[IDX]"
         if named:
             write: S.Stmt = S.Case(index, tuple(S.CaseBranch((addr,), (S.Assign(name, value),)) for addr, name in named),
                                    (S.Assign(element, value),))
@@ -456,7 +457,7 @@ class StBackend:
             inst = self.names.name(f"timer:{t}", _service_name(start, "timer", f"Timer{t}"))
             local.append(IecVar(inst, "HH_TIMER", comment=f"service of T{t} / T{t - prof.timer_start[0] + prof.timer_running[0]}"))
             running = layout.timer_var("T", t - prof.timer_start[0] + prof.timer_running[0])
-            preset = E.var(self.preset_vars[(TIMER_MP, t)], "DINT")
+            preset = E.var(layout.ref(self.preset_vars[(TIMER_MP, t)]), "DINT")
             service.append(S.Call(inst, (("START", start), ("PRESET", preset))))
             service.append(S.Assign(running.text, E.var(f"{inst}.RUNNING", "BOOL")))
         for c in layout.counters:
@@ -465,7 +466,7 @@ class StBackend:
             local.append(IecVar(inst, "HH_COUNTER", comment=f"service of C{c}"))
             running = layout.timer_var("C", prof.counter_running[0] + c)
             release = layout.timer_var("C", prof.counter_release[0] + c)
-            preset = E.var(self.preset_vars[(COUNTER_MP, c)], "DINT")
+            preset = E.var(layout.ref(self.preset_vars[(COUNTER_MP, c)]), "DINT")
             service.append(S.Call(inst, (("START", start), ("PRESET", preset), ("RELEASE", release))))
             service.append(S.Assign(running.text, E.var(f"{inst}.RUNNING", "BOOL")))
         if self.stack is not None:
@@ -513,10 +514,10 @@ class StBackend:
         return out + self.types
 
     def _job_queue(self) -> str:
-        """The global instance of the submit-job queue (declared on first use)."""
+        """The global instance of the submit-job queue, as the POU bodies name it (declared on first use)."""
         if self.job_queue is None:
-            self.job_queue = self.layout.add_register("jobs", "HH_Jobs", jobs.QUEUE_FB,
-                                                      "queued and running submit jobs", group="jobs")
+            self.job_queue = self.layout.ref(self.layout.add_register("jobs", "HH_Jobs", jobs.QUEUE_FB,
+                                                                      "queued and running submit jobs", group="jobs"))
         return self.job_queue
 
     def _jobs_program(self, layout: Layout) -> Pou:
@@ -526,21 +527,23 @@ class StBackend:
         for reg, clear in (("LA", "FALSE"), ("WA", "0"), ("X", "0"), ("SA", "''")):
             name = self.names.get(f"reg:{reg}")
             if name is not None and name in layout.globals:
-                own.append(jobs.OwnValue(name, clear, REG_TYPES[reg][0]))
+                own.append(jobs.OwnValue(layout.ref(name), clear, REG_TYPES[reg][0]))
         itf = self.semantics.profile.interface
         for addr in (itf.mul_err, itf.div_err, itf.mod_err, itf.module_err):
             if addr is not None and ("M", addr) in layout._bit_var:
-                own.append(jobs.OwnValue(layout._bit_var[("M", addr)], "FALSE", "BOOL"))
+                own.append(jobs.OwnValue(layout.ref(layout._bit_var[("M", addr)]), "FALSE", "BOOL"))
         word = itf.module_err_code_word
         if word is not None and (("W", word) in layout._mem_var or layout.mem_array is not None):
             for lhs, zero in layout.write_value(Operand("W", word), None, E.int_const(0)):
                 own.append(jobs.OwnValue(lhs, zero.text, "BYTE" if "[" in lhs else "INT"))
+        in_job = self.names.get("in_job")
+        in_job = layout.ref(in_job) if in_job is not None else None
         name = self.names.name("pou:jobs", "HH_SubmitJobs")
         calls = [jobs.JobCall(number, self.instance_names[key], self.pou_names[key],
                               f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}")
                  for key, number in self.job_plan.numbers.items()]
         return jobs.jobs_program(name, self._job_queue(), self.semantics["submit_model"], calls,
-                                 own, self.stack[1] if self.stack is not None else None, self.names.get("in_job"),
+                                 own, self.stack[1] if self.stack is not None else None, in_job,
                                  lambda wanted: self.names.name(f"jobs:{wanted}", wanted))
 
     def _configuration(self, layout: Layout, job_program: Pou | None) -> Configuration:
@@ -553,7 +556,7 @@ class StBackend:
                 sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title))
         for key in groups:
             if key not in GROUP_TITLES:
-                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=key))
+                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=group_title(key)))
         cycle = int(self.semantics["cycle_time_ms"])
         task = self.names.name("task", "HH_Cycle")
         inst = self.names.name("instance", f"PLC_{self.main_pou}")
@@ -576,7 +579,8 @@ def _at_most_one_line_of_code(statements: list[S.Stmt]) -> bool:
 def _service_name(start: E.Expr, what: str, fallback: str) -> str:
     """The service FB instance of a timer or counter, named after its start operand (`TS_unclamp_Z_timer`); an
     operand held in an array element (reached through the index register) gives `Timer8`."""
-    return f"{start.text}_{what}" if start.var is not None and start.text.isidentifier() else fallback
+    name = E.unqualified(start.text)
+    return f"{name}_{what}" if start.var is not None and name.isidentifier() else fallback
 
 
 def _module_effect(number: int) -> Effect | None:

@@ -1,10 +1,11 @@
-"""One table per target: how the same IecProject is laid out for matiec (Beremiz, OpenPLC), CODESYS and TwinCAT 3.
+"""One table per target: how the same program is written for matiec (Beremiz, OpenPLC), CODESYS and TwinCAT 3.
 
-A target overrides tables, not control flow: the ST back end builds one project; `for_target` only moves the
-globals of a GVL target out of the configuration into named global variable lists, drops the VAR_EXTERNAL
-lists (CODESYS and TwinCAT see a GVL from every POU) and qualifies each reference with its list's name
-(the lists carry `{attribute 'qualified_only'}`, so an unqualified reference would not compile there).
-See docs/import.md for what each target gets.
+A target overrides tables, not control flow. The ST back end builds the project for one `Dialect`: where its
+lists are `qualified_only` every reference to a global is written `GVL_x.name` as its expression is built (the
+list a global lands in is `gvl_name` of its group's title), and where it has `bit_access` a bit of a word is read
+as `w.3` instead of through the HH_BIT helper. `for_target` then only moves the globals of a GVL target out of
+the configuration into named global variable lists and drops the VAR_EXTERNAL lists (CODESYS and TwinCAT see a
+GVL from every POU). See docs/import.md for what each target gets.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import dataclasses
 import re
 from types import MappingProxyType
 
-from transpiler.backends.iec_model import Configuration, IecProject, Pou, VarSection
+from transpiler.backends.iec_model import IecProject, VarSection
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,6 +30,14 @@ class Dialect:
     inline_initialised_arrays: bool = False
     # Bit access `w.3` on integer variables (matiec has none: there the HH_BIT helper reads a bit).
     bit_access: bool = False
+
+    def reference(self, name: str, title: str | None) -> str:
+        """How a POU body names the global `name` of the group titled `title`."""
+        return f"{gvl_name(title)}.{name}" if self.qualified_only else name
+
+    def builds_like(self, other: "Dialect") -> bool:
+        """The back end writes the same POUs for both (it reads only these two columns)."""
+        return (self.qualified_only, self.bit_access) == (other.qualified_only, other.bit_access)
 
 
 TARGETS = MappingProxyType({
@@ -58,6 +67,8 @@ GVL_BY_TITLE = MappingProxyType({
     "Accumulators, index register, data stack": "GVL_Registers",
     "Submit-job queue": "GVL_Jobs",
 })
+# The lists the back end's globals land in: a qualifier in a reference is one of these (exprs.unqualified).
+GVL_NAMES = frozenset(GVL_BY_TITLE.values())
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,78 +97,26 @@ def dialect(target: str) -> Dialect:
         raise ValueError(f"unknown target '{target}' (known: {', '.join(TARGETS)})") from None
 
 
-def gvl_name(section: VarSection) -> str:
-    """The list a global section lands in; a group the table does not know gets a name from its comment."""
-    title = section.comment or "Globals"
+def gvl_name(title: str | None) -> str:
+    """The list the global group titled `title` (its section comment) lands in; a group the table does not know
+    gets a name from its title."""
+    title = title or "Globals"
     return GVL_BY_TITLE.get(title) or "GVL_" + "".join(w.capitalize() for w in re.findall(r"[A-Za-z0-9]+", title))
 
 
 def for_target(project: IecProject, target: str) -> TargetProject:
-    """`project` laid out for `target` (the matiec project is returned unchanged)."""
+    """`project`, as the back end built it for `target`, laid out for it (the matiec project is returned unchanged)."""
     chosen = dialect(target)
     if chosen.externals:
         return TargetProject(chosen, project)
     by_name: dict[str, list[VarSection]] = {}
     for section in project.configuration.globals:
-        by_name.setdefault(gvl_name(section), []).append(section)
+        by_name.setdefault(gvl_name(section.comment), []).append(section)
     gvls = tuple(Gvl(name, tuple(sections), chosen.qualified_only) for name, sections in by_name.items())
-    owner = {v.name.upper(): g.name for g in gvls for s in g.sections for v in s.vars}
-    pous = tuple(_without_externals(pou, owner, chosen.qualified_only) for pou in project.pous)
-    if chosen.bit_access:
-        pous = _with_bit_access(pous)
+    pous = tuple(dataclasses.replace(pou, sections=tuple(s for s in pou.sections if s.kind != "VAR_EXTERNAL"))
+                 for pou in project.pous)
     config = dataclasses.replace(project.configuration, globals=())
     return TargetProject(chosen, dataclasses.replace(project, pous=pous, configuration=config), gvls)
-
-
-# Comments, strings, typed or numeric literals (`16#FF`, `T#10ms`, `1.5E3`), member access (`fb.out`: the
-# part after the dot is no global) and plain identifiers, in this order so that only the last alternative
-# ever names a variable.
-_TOKEN = re.compile(r"(?P<skip>\(\*.*?\*\)|'(?:\$.|[^'$])*'|[A-Za-z0-9_]+#[A-Za-z0-9_.#]+|\d[A-Za-z0-9_.]*"
-                    r"|\.\s*[A-Za-z_][A-Za-z0-9_]*)|(?P<ident>[A-Za-z_][A-Za-z0-9_]*)", re.S)
-
-
-def _without_externals(pou: Pou, owner: dict[str, str], qualify: bool) -> Pou:
-    """`pou` without its VAR_EXTERNAL lists; with `qualify`, each global it names is written `GVL.name`."""
-    sections = tuple(s for s in pou.sections if s.kind != "VAR_EXTERNAL")
-    if len(sections) == len(pou.sections):
-        return pou
-    if not qualify:
-        return dataclasses.replace(pou, sections=sections)
-    local = {v.name.upper() for s in sections for v in s.vars}
-
-    def rewrite(match: re.Match) -> str:
-        name = match.group("ident")
-        if name is None or name.upper() in local or name.upper() not in owner:
-            return match.group(0)
-        return f"{owner[name.upper()]}.{name}"
-
-    return dataclasses.replace(pou, sections=sections, body=_TOKEN.sub(rewrite, pou.body), statements=())
-
-
-_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)?"
-# HH_BIT(A, k) reads bit k of the DINT A; its argument is a DINT variable or a widened INT/SINT one.
-_BIT_OF_DINT = re.compile(rf"\bHH_BIT\((?P<var>{_NAME}), (?P<k>\d+)\)")
-_BIT_OF_NARROW = re.compile(rf"\bHH_BIT\((?P<conv>INT|SINT)_TO_DINT\((?P<var>{_NAME})\), (?P<k>\d+)\)")
-_WIDTH = MappingProxyType({"INT": 16, "SINT": 8})
-
-
-def _with_bit_access(pous: tuple[Pou, ...]) -> tuple[Pou, ...]:
-    """Reads of one bit of a variable written `var.k` (bit access), and the HH_BIT helper left out where no call
-    of it remains. A widened INT or SINT repeats its sign bit above its width, so a higher bit is its top bit."""
-    def narrow(m: re.Match) -> str:
-        return f"{m.group('var')}.{min(int(m.group('k')), _WIDTH[m.group('conv')] - 1)}"
-
-    def rewrite(pou: Pou) -> Pou:
-        if "HH_BIT(" not in pou.body:
-            return pou
-        body = _BIT_OF_NARROW.sub(narrow, pou.body)
-        body = _BIT_OF_DINT.sub(lambda m: f"{m.group('var')}.{m.group('k')}", body)
-        return dataclasses.replace(pou, body=body, statements=())
-
-    out = tuple(rewrite(p) if p.name != "HH_BIT" else p for p in pous)
-    if not any("HH_BIT(" in p.body for p in out if p.name != "HH_BIT"):
-        out = tuple(p for p in out if p.name != "HH_BIT")
-    return out
 
 
 def target_section(target: TargetProject) -> str:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from types import MappingProxyType
+
+from transpiler.backends.st.dialect import GVL_NAMES
 
 INT32 = (-(2 ** 31), 2 ** 31 - 1)
 RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)})
@@ -49,15 +52,45 @@ def var(name: str, typ: str, deps_name: str | None = None) -> Expr:
 
 
 def base_name(text: str) -> str:
-    """The variable an lvalue text belongs to (array element `A[3]` -> `A`)."""
-    return text.split("[", 1)[0].split(".", 1)[0].upper()
+    """The variable an lvalue text belongs to (array element `A[3]` -> `A`, `GVL_Words.A[3]` -> `A`)."""
+    return unqualified(text).split("[", 1)[0].split(".", 1)[0].upper()
+
+
+# A global's reference on a qualified_only target: its list's name, a dot, the variable (dialect.py). Otherwise
+# only an FB instance is followed by a dot and a name, and none is named like a list: so this is a qualifier.
+_QUALIFIED = re.compile(r"(?<![A-Za-z0-9_.])(?:" + "|".join(sorted(map(re.escape, GVL_NAMES), key=len, reverse=True))
+                        + r")\.(?=[A-Za-z_])")
+# A name or member path (`ML_ax.inpos`) not itself after a dot.
+_PATH = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)?")
+
+
+def unqualified(text: str) -> str:
+    """`text` without the list qualifier of a global reference (`GVL_IO.I5` -> `I5`)."""
+    match = _QUALIFIED.match(text)
+    return text[match.end():] if match else text
+
+
+def names_in(text: str) -> set[str]:
+    """The variables expression or lvalue text names (upper case, no list qualifiers): each name, and each member
+    path with its head (a marker STRUCT's member `ML_ax.inpos` is a variable of its own)."""
+    found: set[str] = set()
+    for m in _PATH.finditer(_QUALIFIED.sub("", text)):
+        path = m.group(0).upper()
+        found |= {path, path.split(".", 1)[0]}
+    return found
+
+
+def target_name(lvalue: str) -> str:
+    """The variable an assignment's target text writes (upper case, no list qualifier): a member path stays whole,
+    an array element is its array."""
+    return unqualified(lvalue).split("[", 1)[0].upper()
 
 
 def written_name(lvalue: Expr) -> str:
     """The name a store to `lvalue` changes, as the deps of the values that read it name it: the lvalue's own text
     where its deps hold that (a variable, or a member of a marker STRUCT, which is a variable of its own), else the
     variable it belongs to (an array element, an FB instance's output)."""
-    own = lvalue.text.upper()
+    own = unqualified(lvalue.text).upper()
     return own if own in lvalue.deps else base_name(lvalue.text)
 
 
@@ -114,6 +147,17 @@ def b_not(a: Expr) -> Expr:
     return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY)
 
 
+def bit_of(word: Expr, k: int, access: bool) -> Expr:
+    """Bit k (0..31) of the integer `word`, a variable or the widening of one: `word.k` where the target has bit
+    access, else the HH_BIT helper on its DINT value. A SINT or INT repeats its sign bit above its width, so a
+    higher bit of it is its top bit."""
+    if not access:
+        return Expr(f"HH_BIT({to_dint(word).text}, {k})", "BOOL", word.deps, 0, 1)
+    narrow = unwiden(word) or word
+    top = {"SINT": 7, "INT": 15}.get(narrow.typ, 31)
+    return Expr(f"{narrow.text}.{min(k, top)}", "BOOL", word.deps, 0, 1)
+
+
 def unwiden(e: Expr) -> Expr | None:
     """`INT_TO_DINT(W0)` -> `W0` (typed INT): the SINT/INT value inside a widening, or None when `e` is no widening."""
     if e.const is not None:
@@ -122,7 +166,8 @@ def unwiden(e: Expr) -> Expr | None:
         prefix = f"{typ}_TO_DINT("
         if e.text.startswith(prefix) and e.text.endswith(")") and _balanced(e.text[len(prefix):-1]):
             inner = e.text[len(prefix):-1]
-            return Expr(inner, typ, e.deps, e.lo, e.hi, PREC_ATOM if inner.isidentifier() or inner.endswith(")") else PREC_OR)
+            atom = unqualified(inner).isidentifier() or inner.endswith(")")
+            return Expr(inner, typ, e.deps, e.lo, e.hi, PREC_ATOM if atom else PREC_OR)
     return None
 
 

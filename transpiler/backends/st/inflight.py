@@ -75,7 +75,7 @@ class InFlightMixin(ExecutorPart):
         # Other in-flight values reading this register variable are saved first; the value itself
         # is evaluated before the assignment, so it may read the variable.
         self.s.regs[reg] = None
-        self.prepare_write(name.upper())
+        self.prepare_write(E.base_name(name))
         self.ctx.out.add(S.Assign(name, value))
 
     def _assign_raw(self, lvalue: str, value: Expr) -> None:

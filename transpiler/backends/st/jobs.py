@@ -27,7 +27,6 @@ from transpiler.backends.st.routine import Unsupported
 from transpiler.ir import CallTarget, Op, Program
 
 QUEUE_FB = "HH_JOB_QUEUE"
-GLOBALS_TITLE = "Submit-job queue"
 QUEUE_INTS, QUEUE_FLAGS = "T_HH_JOB_INTS", "T_HH_JOB_FLAGS"
 MAX_QUEUED = 8
 MAX_ID = 255
@@ -108,7 +107,7 @@ class OwnValue:
     """A variable of which the main program and each job have their own value: saved before a job, set to
     `clear` for it, restored after it."""
 
-    target: str
+    target: str                     # as the POU bodies name it
     clear: str
     typ: str
 
@@ -129,11 +128,11 @@ def jobs_program(name: str, queue: str, model: str, calls: list[JobCall], own: l
     its own copy of; `stack_pointer` and `in_job` the data stack pointer and the in-job flag where the program has
     them; `local_name` gives unique names."""
     calls = sorted(calls, key=lambda c: c.number)
-    saved = [(v, local_name(f"main_{v.target.replace('[', '_').replace(']', '')}")) for v in own]
+    saved = [(v, local_name(f"main_{E.unqualified(v.target).replace('[', '_').replace(']', '')}")) for v in own]
     def command(number: int) -> S.Call:
         return S.Call(queue, (("CMD", E.int_const(number)),))
 
-    result = E.Expr(f"{queue}.RESULT", "DINT", frozenset([queue.upper()]), 0, MAX_ID)
+    result = E.Expr(f"{queue}.RESULT", "DINT", frozenset([E.base_name(queue)]), 0, MAX_ID)
     body: list[S.Stmt] = [S.Assign(local, E.Expr(v.target, v.typ, frozenset([E.base_name(v.target)]), var=v.target))
                           for v, local in saved]
     body += [S.Assign(v.target, E.Expr(v.clear, v.typ)) for v, _ in saved]
@@ -151,7 +150,8 @@ def jobs_program(name: str, queue: str, model: str, calls: list[JobCall], own: l
     if model != "same_cycle":
         statements.append(command(PHASE_END))
     local = [IecVar(c.instance, c.fb_type, comment=f"job {c.number}") for c in calls]
-    local += [IecVar(local, v.typ, comment=f"the main program's {v.target} while a job runs") for v, local in saved]
+    local += [IecVar(local, v.typ, comment=f"the main program's {E.unqualified(v.target)} while a job runs")
+              for v, local in saved]
     return printer.with_statements(Pou(name, "PROGRAM", (VarSection("VAR", tuple(local)),), "", comment=(
         "Phase 5 of the PLC cycle: the submit jobs the main program queued run now, one after the other, each to "
         "its end. A job starts with cleared accumulators, index register, data stack and error markers; the main "

@@ -1,4 +1,5 @@
-"""Data layout: decides the IEC variable of every HEIDENHAIN operand (named BOOL/SINT/INT/DINT variables, or arrays where overlap or indexing is real)."""
+"""Data layout: decides the IEC variable of every HEIDENHAIN operand (named BOOL/SINT/INT/DINT variables, or arrays
+where overlap or indexing is real), the group of globals it belongs to, and how a POU body names it on the target."""
 
 from __future__ import annotations
 
@@ -10,8 +11,15 @@ from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.marker_groups import MarkerGroup, Refusal, SymbolicOperand, nonvolatile_ranges, plan_groups
+from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
 from transpiler.backends.st.names import NameTable
 
+# The groups of globals, titled as their sections of the configuration (a GVL target makes lists of them).
+GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "Outputs (process image)",
+                "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
+                "memory": "Byte memory: bytes, words, double words", "string": "Strings",
+                "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
+                "register": "Accumulators, index register, data stack", "jobs": "Submit-job queue"})
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
@@ -22,7 +30,7 @@ STRING_ARRAY_TYPE = "T_HH_STRINGS"
 class GlobalVar:
     name: str
     type: str
-    group: str                      # 'io_in', 'io_out', 'nc', 'marker', 'memory', 'string', 'timer', 'register', 'mp', 'stack'
+    group: str                      # a key of GROUP_TITLES
     address: str | None = None
     initial: str | None = None
     comment: str | None = None
@@ -44,10 +52,12 @@ class OperandVar:
 class Layout:
     """All data decisions of the ST backend; codegen asks it how to read and write each operand."""
 
-    def __init__(self, program: Program, names: NameTable, helper=lambda name: None):
+    def __init__(self, program: Program, names: NameTable, helper=lambda name: None,
+                 dialect: Dialect = TARGETS[DEFAULT_TARGET]):
         self.program = program
         self.names = names
         self.helper = helper
+        self.dialect = dialect
         self.profile = program.semantics.profile
         self.little = program.semantics.little_endian
         self.globals: dict[str, GlobalVar] = {}
@@ -328,10 +338,16 @@ class Layout:
 
     # ---- access
 
+    def ref(self, name: str) -> str:
+        """How a POU body names the global `name` on the target (`GVL_Markers.name` where lists are qualified); a
+        member path (`ML_ax.inpos`) is qualified by the list of its STRUCT global."""
+        return self.dialect.reference(name, group_title(self.globals[name.split(".", 1)[0]].group))
+
     def bit_lvalue(self, op: Operand, offset: int = 0) -> E.Expr:
         """The BOOL variable of a (non-indexed) bit operand, offset for LB/B= sequences."""
         name = self._declare_bit(op.kind, op.addr + offset)
-        return E.Expr(name, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=name)
+        text = self.ref(name)
+        return E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
 
     def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:
         """The operand address of an indexed bit operand (for the accessor FB)."""
@@ -351,7 +367,7 @@ class Layout:
         """A B/W/D operand as a typed expression (SINT/INT/DINT, i.e. sign-extended by type)."""
         if self._in_array(op):
             return self._array_read(op, x)
-        return E.var(self._declare_mem(op.kind, op.addr), MEM_TYPE[op.kind])
+        return E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         """(lvalue, DINT expression) assignments that store `value` truncated to the operand width."""
@@ -359,7 +375,7 @@ class Layout:
             return self._array_write(op, x, value)
         name = self._declare_mem(op.kind, op.addr)
         typ = MEM_TYPE[op.kind]
-        return [(name, _narrow(value, typ))]
+        return [(self.ref(name), _narrow(value, typ))]
 
     def _byte_index(self, op: Operand, x: E.Expr | None, k: int) -> str:
         size = BYTES[op.kind]
@@ -370,8 +386,8 @@ class Layout:
         return str(op.addr + pos)
 
     def _array_read(self, op: Operand, x: E.Expr | None) -> E.Expr:
-        arr = self.mem_array
-        deps = frozenset([arr.upper()]) | (x.deps if op.indexed and x is not None else frozenset())
+        arr = self.ref(self.mem_array)
+        deps = frozenset([self.mem_array.upper()]) | (x.deps if op.indexed and x is not None else frozenset())
         if op.kind == "B":
             return E.Expr(f"BYTE_TO_SINT({arr}[{self._byte_index(op, x, 0)}])", "SINT", deps, -128, 127)
         parts = ", ".join(f"{arr}[{self._byte_index(op, x, k)}]" for k in range(BYTES[op.kind]))
@@ -380,7 +396,7 @@ class Layout:
         return E.Expr(f"{fn}({parts})", MEM_TYPE[op.kind], deps, *E.RANGES[MEM_TYPE[op.kind]])
 
     def _array_write(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
-        arr = self.mem_array
+        arr = self.ref(self.mem_array)
         if value.const is not None:
             # a constant's bytes are constants: byte k (0 = lowest) of its two's complement
             return [(f"{arr}[{self._byte_index(op, x, k)}]", _byte_const(value.const >> (8 * k) & 0xFF))
@@ -394,12 +410,17 @@ class Layout:
     def string_lvalue(self, op: Operand, x: E.Expr | None) -> E.Expr:
         if op.indexed:
             index = _index(op.addr, x, 1, self.program.semantics)
-            text = f"{self.string_array}[{index.text}]"
+            text = f"{self.ref(self.string_array)}[{index.text}]"
             return E.Expr(text, "STRING", frozenset([self.string_array.upper()]) | index.deps, var=text)
         if self.string_array is not None:
-            text = f"{self.string_array}[{op.addr}]"
+            text = f"{self.ref(self.string_array)}[{op.addr}]"
             return E.Expr(text, "STRING", frozenset([self.string_array.upper()]), var=text)
-        return E.var(self._string_var[op.addr], "STRING")
+        return E.var(self.ref(self._string_var[op.addr]), "STRING")
+
+
+def group_title(group: str) -> str:
+    """The title of a group of globals (a group without one in GROUP_TITLES is titled with its key)."""
+    return GROUP_TITLES.get(group, group)
 
 
 def _byte_const(value: int) -> E.Expr:

@@ -128,7 +128,7 @@ def _emit_stack_depth(ex, op: Op, live: frozenset[str]) -> None:
     _prepare(ex, live, 0)
     _, sp = ex.ctx.stack_names()
     ex.ctx.out.comment(f"CM 9019 (data stack depth in bytes)  {tag(op.span)}")
-    depth = ex._temp_copy(E.Expr(f"INT_TO_DINT({sp}) * 2", "DINT", frozenset([sp.upper()]), 0, 65534))
+    depth = ex._temp_copy(E.Expr(f"INT_TO_DINT({sp}) * 2", "DINT", frozenset([E.base_name(sp)]), 0, 65534))
     marker = Operand("M", ex.ctx.semantics.profile.interface.module_err)
     ex.bit_store(marker, lambda: E.bool_const(False), frozenset())     # 9019 never fails
     ex.forget()
@@ -148,7 +148,7 @@ def _error_marker(ex, inst: str) -> None:
         return
     assignments = layout.write_value(Operand("W", word), None, E.var(f"{inst}.{FAULT_CODE}", "DINT"))
     for lhs, _ in assignments:
-        ex.prepare_write(E.base_name(lhs).upper())
+        ex.prepare_write(E.base_name(lhs))
     ex.ctx.out.add(S.If(fault, tuple(S.Assign(lhs, value) for lhs, value in assignments)))
 
 
@@ -186,8 +186,8 @@ class _StringRef:
         i = E.var(index, "DINT")
         self.ok = E.Expr(f"({E.binop('>=', i, E.int_const(0), 'BOOL', E.PREC_CMP).text} AND "
                          f"{E.binop('<', i, E.int_const(count), 'BOOL', E.PREC_CMP).text})", "BOOL", i.deps, 0, 1)
-        array = layout.string_array
-        self.var = E.Expr(f"{array}[{index}]", "STRING", frozenset([array.upper()]) | i.deps, var=f"{array}[{index}]")
+        element = f"{layout.ref(layout.string_array)}[{index}]"
+        self.var = E.Expr(element, "STRING", frozenset([layout.string_array.upper()]) | i.deps, var=element)
 
     def read(self, ex) -> E.Expr:
         """The contents, through a STRING temporary where the number may be invalid ('' for an invalid number:
@@ -204,7 +204,7 @@ class _StringRef:
     def write(self, ex, inst: str, value: str) -> None:
         if self.var is None:
             return
-        ex.prepare_write(E.base_name(self.var.text).upper())
+        ex.prepare_write(E.base_name(self.var.text))
         failed = E.var(f"{inst}.{FAULT}", "BOOL")
         ex.ctx.out.add(S.If(E.b_not(failed), (S.Assign(self.var.text, E.var(f"{inst}.{value}", "STRING")),)))
 
@@ -227,7 +227,7 @@ def _emit_pure(ex, op: Op, live: frozenset[str], used: set[int], point: str) -> 
     note = f"CM {number} {row.st_name}  {tag(span)}"
 
     def memory() -> tuple[tuple[str, E.Expr], ...]:
-        return ("MEM_SIZE", E.int_const(mem_size)), ("MEM", E.var(layout.mem_array, "ARRAY"))
+        return ("MEM_SIZE", E.int_const(mem_size)), ("MEM", E.var(layout.ref(layout.mem_array), "ARRAY"))
 
     outputs: tuple[str, ...] = ()
     if number == 9050:

@@ -41,7 +41,7 @@ class OperandMixin(ExecutorPart):
             return
         x = self.s.reg("X")
         # Only X's own variable is safe to read: saving another register variable before a store may drop X.
-        if x.const is None and x.deps - {self.ctx.register("X").upper()}:
+        if x.const is None and x.deps - {E.base_name(self.ctx.register("X"))}:
             self.s.set("X", self._temp_copy(x))
 
     def bit(self, o: Operand, offset: int = 0) -> Expr:
@@ -106,7 +106,8 @@ class OperandMixin(ExecutorPart):
         if o.kind == "KF":
             name = self.ctx.kfield(o)
             x = self._x()
-            return E.Expr(f"{name}[{x.text}]", "DINT", frozenset([name.upper()]) | x.deps, min(o.kfield), max(o.kfield))
+            return E.Expr(f"{name}[{x.text}]", "DINT", frozenset([E.base_name(name)]) | x.deps, min(o.kfield),
+                          max(o.kfield))
         if o.kind in "BWD":
             return self.ctx.layout.read_value(o, self._xi(o))
         raise Unsupported(f"{o.display()} as a word operand")

@@ -20,13 +20,13 @@ class JobOpsMixin(ExecutorPart):
     def _queue(self, op: Op, command: int, argument: tuple[str, E.Expr]) -> str:
         """Emit one call of the queue block (values in flight that read its RESULT are saved first)."""
         queue = self._jobs(op).queue
-        self.prepare_write(queue.upper())
+        self.prepare_write(E.base_name(queue))
         args = (("CMD", E.int_const(command)), argument)
         self.ctx.out.add(S.Call(queue, args, f"{op.mnemonic} {tag(op.span)}"))
         return queue
 
     def _result(self, queue: str, hi: int) -> E.Expr:
-        return E.Expr(f"{queue}.RESULT", "DINT", frozenset([queue.upper()]), 0, hi)
+        return E.Expr(f"{queue}.RESULT", "DINT", frozenset([E.base_name(queue)]), 0, hi)
 
     def op_SUBM(self, op: Op) -> None:
         number = self._jobs(op).number(op)

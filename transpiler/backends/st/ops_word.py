@@ -38,15 +38,13 @@ class WordOpsMixin(ExecutorPart):
     def op_STBITS(self, op: Op) -> None:
         wa = self._stable(E.to_dint(self.s.reg("WA")))
         self.s.set("WA", wa)
-        if wa.const is None:
-            self.ctx.helper("HH_BIT")
         self.pin_index(op.operand)
 
         def bit(k: int) -> E.Expr:
             word = self.s.reg("WA")
             if word.const is not None:      # a constant word: each bit is TRUE or FALSE already
                 return E.bool_const(bool((word.const >> k) & 1))
-            return E.Expr(f"HH_BIT({word.text}, {k})", "BOOL", word.deps, 0, 1)
+            return self._bit_of(word, k)
 
         for k in range(op.nbits):
             self.bit_store(op.operand, lambda k=k: bit(k), frozenset(["WA", "X"]), offset=k)

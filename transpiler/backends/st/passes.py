@@ -5,7 +5,8 @@ The symbolic executor already folds constants and simplifies boolean expressions
 (exprs.py). A temporary is propagated only where the next statement evaluates the read before anything it does
 itself: an assignment's right side (or the index of its target), an IF or CASE condition, the inputs of an FB
 call. So the value cannot have changed in between. Loop conditions are evaluated again on every pass and stay
-named. An FB's output passed to the next call of that FB stays named too: the call reads the old value.
+named. An FB's output passed to the next call of that FB stays named too: the call reads the old value. So does a
+temporary a bit of which is read with bit access (`tmp1.3`): `(a + b).3` would be no ST.
 """
 
 from __future__ import annotations
@@ -25,6 +26,11 @@ _TEMP = re.compile(TEMP_PREFIX + r"[0-9]+")
 def _word(name: str) -> re.Pattern[str]:
     """`name` as a variable in expression text (a member `fb.name` is another variable)."""
     return re.compile(r"(?<![A-Za-z0-9_.])" + re.escape(name) + r"(?![A-Za-z0-9_])", re.I)
+
+
+def _bit_read(name: str) -> re.Pattern[str]:
+    """`name` with a bit of it read (`tmp1.3`)."""
+    return re.compile(r"(?<![A-Za-z0-9_.])" + re.escape(name) + r"\.", re.I)
 
 
 def _atomic(text: str) -> bool:
@@ -108,7 +114,7 @@ def _reads_first(stmt: S.Stmt, word: re.Pattern[str], value: E.Expr) -> bool:
             return "(" in stmt.target     # read in a call inside the target's index; else the target is written
         return bool(word.search(stmt.value.text))
     if isinstance(stmt, S.Call):
-        if stmt.callee.upper() == value.text.split(".", 1)[0].upper():
+        if E.base_name(stmt.callee) == E.base_name(value.text):
             return False
         return any(word.search(v.text) for _, v in stmt.args)
     if isinstance(stmt, S.If) and stmt.inline:
@@ -126,7 +132,8 @@ def _propagate_one(root: list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
             if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
                 word = _word(stmt.target)
                 j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
-                if j is not None and _uses(root, word) == 2 and _reads_first(block[j], word, stmt.value):
+                if j is not None and _uses(root, word) == 2 and not _uses(root, _bit_read(stmt.target)) \
+                        and _reads_first(block[j], word, stmt.value):
                     new = list(block)
                     new[j] = _Substitution(word, stmt.value).in_statement(block[j])
                     del new[i]

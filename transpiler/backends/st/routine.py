@@ -208,6 +208,7 @@ class RoutineContext:
         # A local FB instance named after its type (a temporary's name where the backend gives no namer).
         self.instance: Callable[[str], str] = instance or temp
         self.flag_markers = semantics.profile.interface
+        self.dialect = layout.dialect       # the target's table: how bits of a word are read
 
 
 

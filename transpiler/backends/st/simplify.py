@@ -18,14 +18,12 @@ a store is dropped only when the overwrite follows in the same block with none o
 from __future__ import annotations
 
 import dataclasses
-import re
 from typing import Iterable
 
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import stmt as S
 
 Block = tuple[S.Stmt, ...]
-_NAME = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*")
 
 
 def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]:
@@ -57,8 +55,8 @@ def _same_condition(first: S.If, second: S.If) -> bool:
         return False
     if not all(isinstance(s, (S.Assign, S.Comment)) for s in first.then):
         return False
-    written = {s.target.split("[", 1)[0].upper() for s in first.then if isinstance(s, S.Assign)}
-    return not written & {d.upper() for d in first.cond.deps} and not written & _names(first.cond.text)
+    written = {E.target_name(s.target) for s in first.then if isinstance(s, S.Assign)}
+    return not written & {d.upper() for d in first.cond.deps} and not written & E.names_in(first.cond.text)
 
 
 def _joined(first: S.If, second: S.If) -> S.If:
@@ -87,16 +85,6 @@ def _flag_from_condition(stmt: S.If) -> S.Stmt:
     return S.Assign(then.target, value, stmt.note)
 
 
-def _names(text: str) -> set[str]:
-    """The variables `text` names: each name, and each member path (`ML_ax.inpos`, a marker STRUCT's member, is a
-    variable of its own) with its head."""
-    found = set()
-    for m in _NAME.finditer(text):
-        path = m.group(0).upper()
-        found |= {path, path.split(".", 1)[0]}
-    return found
-
-
 def _reads(stmt: S.Stmt) -> set[str]:
     """Every variable a statement (nested ones included) may read: its expressions' deps and the names in its
     texts (an index in an assignment's target is read too)."""
@@ -105,7 +93,7 @@ def _reads(stmt: S.Stmt) -> set[str]:
         exprs: list[E.Expr] = []
         if isinstance(s, S.Assign):
             exprs = [s.value]
-            found |= _names(s.target.split("[", 1)[1]) if "[" in s.target else set()
+            found |= E.names_in(s.target.split("[", 1)[1]) if "[" in s.target else set()
         elif isinstance(s, S.Call):
             exprs = [value for _, value in s.args]
         elif isinstance(s, S.If):
@@ -117,7 +105,7 @@ def _reads(stmt: S.Stmt) -> set[str]:
         elif isinstance(s, S.Repeat):
             exprs = [s.until]
         for e in exprs:
-            found |= set(e.deps) | _names(e.text)
+            found |= set(e.deps) | E.names_in(e.text)
     return found
 
 
@@ -127,8 +115,8 @@ def _leaves_or_calls(stmt: S.Stmt) -> bool:
 
 
 def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
-    if isinstance(stmt, S.Assign) and stmt.target.upper() in registers and stmt.note is None:
-        return stmt.target.upper()
+    if isinstance(stmt, S.Assign) and E.unqualified(stmt.target).upper() in registers and stmt.note is None:
+        return E.unqualified(stmt.target).upper()
     return None
 
 
@@ -137,7 +125,7 @@ def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
     condition does not read it and whose two branches each overwrite it (a division's zero check sets its error
     marker on both)."""
     for stmt in block:
-        if (isinstance(stmt, S.If) and stmt.orelse and reg not in set(stmt.cond.deps) | _names(stmt.cond.text)
+        if (isinstance(stmt, S.If) and stmt.orelse and reg not in set(stmt.cond.deps) | E.names_in(stmt.cond.text)
                 and _overwritten(stmt.then, reg, registers) and _overwritten(stmt.orelse, reg, registers)):
             return True
         if reg in _reads(stmt) or _leaves_or_calls(stmt):

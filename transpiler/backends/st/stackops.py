@@ -49,7 +49,8 @@ class StackMixin(ExecutorPart):
         out = self.ctx.out
         pointer = E.var(sp, "INT")
         if kind == "bit":
-            self.ctx.helper("HH_BIT")
+            if not self.ctx.dialect.bit_access:
+                self.ctx.helper("HH_BIT")       # the pop reads the entry's bit with it
             word = E.call("BOOL_TO_INT", [value], "INT", 0, 1)
             out.add(S.Assign(f"{stack}[{sp}]", E.binop("*", word, E.int_const(128, "INT"), "INT", E.PREC_MUL, 0, 128)))
             out.add(S.Assign(sp, E.binop("+", pointer, E.int_const(1, "INT"), "INT", E.PREC_ADD)))
@@ -73,13 +74,14 @@ class StackMixin(ExecutorPart):
         out = self.ctx.out
         pointer = E.var(sp, "INT")
         if kind == "bit":
-            self.ctx.helper("HH_BIT")
             out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(1, "INT"), "INT", E.PREC_ADD)))
-            value = E.Expr(f"HH_BIT(INT_TO_DINT({stack}[{sp}]), 7)", "BOOL", frozenset([stack.upper(), sp.upper()]), 0, 1)
+            entry = E.Expr(f"{stack}[{sp}]", "INT", frozenset([E.base_name(stack), E.base_name(sp)]))
+            value = self._bit_of(entry, 7)
         else:
             self.ctx.helper("HH_FROMWORDS")
             out.add(S.Assign(sp, E.binop("-", pointer, E.int_const(2, "INT"), "INT", E.PREC_ADD)))
-            value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT", frozenset([stack.upper(), sp.upper()]))
+            value = E.Expr(f"HH_FROMWORDS({stack}[{sp} + 1], {stack}[{sp}])", "DINT",
+                           frozenset([E.base_name(stack), E.base_name(sp)]))
         # The popped value must be captured now: the stack pointer moves again later.
         return self._temp_copy(value)
 
