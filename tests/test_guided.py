@@ -105,3 +105,14 @@ def test_compare_pairs_let_the_search_put_a_compared_word_next_to_its_constant(t
     kept = generate(project.program, names, 200, seed=5)
     near = {value for s in kept for value in [s.initial.get("W10"), *(e.set.get("W10") for e in s.events if e.set)]}
     assert near & {99, 101}, [(s.initial, [e.set for e in s.events]) for s in kept]
+
+
+def test_dirty_fillers_start_every_written_marker_at_1_once(tmp_path):
+    # `R M6` only ever writes M6's power-on value 0: a translation that drops the store is told apart only from a
+    # run in which M6 starts at 1. The two dirty filler runs start each written marker at opposite values.
+    (tmp_path / "main.src").write_text("L     I1\n=     M5\nL     I2\nR     M6\nL     M6\n=     O1\nEM\n")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    names = project_names(project.program)
+    kept = generate(project.program, names, 2000, seed=3)
+    dirty = [s.initial for s in kept if s.name.startswith("random_") and "M6" in s.initial]
+    assert len(dirty) == 2 and {d["M6"] for d in dirty} == {0, 1} and {d["M5"] for d in dirty} == {0, 1}, dirty

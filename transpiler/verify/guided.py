@@ -199,12 +199,12 @@ def _stem(name: str) -> str:
 
 
 def corner_random(program: Program, corners: Corners, names: NameTable, cycles: int, rng: random.Random, name: str,
-                  machine_parameters: Path | None, healthy: bool, dirty: bool = False) -> Scenario:
+                  machine_parameters: Path | None, healthy: bool, dirty: Mapping[str, int] | None = None) -> Scenario:
     """`cycles` cycles of corner-random stimulus: every input toggling (from all 1, a healthy machine with its
     normally-closed contacts made, or all 0), NC jobs with corner values every 20-200 cycles, and a foreign word or
     marker set to a corner value with each job. `dirty`: the memory the program writes starts as remanent memory
-    left by an earlier run would (each such marker 0 or 1, some words at corners), so that a store that only ever
-    writes the power-on value still shows whether it happens."""
+    left by an earlier run would (the markers at these values, some words at corners), so that a store that only
+    ever writes the power-on value still shows whether it happens."""
     events: list[Event] = []
     cycle = rng.randrange(2, 20)
     while cycle < cycles:
@@ -216,8 +216,8 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
             events.append(Event(cycle=cycle, set={rng.choice(corners.foreign_markers): rng.randrange(2)}))
         cycle += rng.randrange(20, 200)
     initial: dict[str, Any] = {n: 1 for n in corners.inputs} if healthy else {}
-    if dirty:
-        initial.update((marker, rng.randrange(2)) for marker in corners.remanent_markers)
+    if dirty is not None:
+        initial.update(dirty)
         initial.update((word, corners.word_value(rng, kind)) for word, kind in corners.remanent_words
                        if rng.random() < 0.3)
     inputs = list(corners.inputs)
@@ -281,13 +281,17 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         corpus.append(child)
         spent += length
     attempt = 0
+    # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
+    dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
     while spent < budget and attempt < FILLER_ATTEMPTS:
         # healthy and not, from clean and from dirty memory: the four kinds share what is left of the budget (a
         # share too short to matter goes to the one running now)
         share = (budget - spent) // max(1, FILLER_KINDS - attempt)
         cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
         filler = corner_random(program, corners, names, cycles, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
-                               machine_parameters, healthy=attempt % 2 == 0, dirty=attempt % 4 >= 2)
+                               machine_parameters, healthy=attempt % 2 == 0,
+                               dirty=None if attempt % 4 < 2 else dirty if attempt % 4 == 2 else
+                               {marker: 1 - value for marker, value in dirty.items()})
         attempt += 1
         probe = search.probe(filler)
         if probe is None or probe.cycles_ok == 0:
