@@ -96,3 +96,18 @@ def test_value_profile_marks_compares_whose_operands_come_out_equal_or_one_apart
     assert seen[4] == {(cmp_w, d) for d in (-1, 0, 1)} | {(cmp_b, d) for d in (-1, 0, 1)}
     assert machine.value_outcome_count == 6 and plain.value_outcome_count == 0
     assert machine.branch_outcome_count == plain.branch_outcome_count
+
+
+def test_value_profile_marks_the_pairs_a_bit_gate_combines(tmp_path: Path) -> None:
+    # Catches: the mark of the wrong op, LA taken after the gate instead of before, an inverted operand (ON) marked
+    # before its inversion, pairs marked on which AND and OR agree.
+    (tmp_path / "main.src").write_text("L     I1\nA     I2\n=     O1\nL     I1\nON    I2\n=     O2\nEM\n")
+    program = _program(tmp_path / "main.src")
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=False, value_profile=True),
+                      coverage=True)
+    for cycle, (i1, i2) in enumerate([(1, 0), (0, 0)]):
+        machine.run_cycle(cycle, [("I", 1, i1), ("I", 2, i2)])
+    and_op, or_op = 1, 4
+    # (1, 0): AND sees LA 1 and I2 0 (they differ: marked); ON sees LA 1 and NOT I2 = 1 (equal). (0, 0): AND 0/0
+    # (equal); ON sees LA 0 and 1 (marked).
+    assert machine.value_outcomes() == {(and_op, 1), (or_op, 0)}

@@ -82,7 +82,9 @@ class Corners:
                 return {kind: max(0, min(_WORD_MAX, rng.choice(self.tables) + rng.choice((0, 0, 0, -1, 1))))}
             return {kind: self.nc_value(rng)}
         if kind in ("tool_call", "tool_def"):
-            job = {"tool": self.nc_value(rng), "pocket": self.nc_value(rng, -1)}
+            # a quarter of the jobs have no pocket (0 or -1: a tool without one, or the spindle tool's)
+            pocket = rng.choice((-1, 0)) if rng.random() < 0.25 else self.nc_value(rng, -1)
+            job = {"tool": self.nc_value(rng), "pocket": pocket}
             if kind == "tool_call" and rng.random() < 0.2:
                 job["second_strobe"] = True
             return {kind: job}

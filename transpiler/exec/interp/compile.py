@@ -69,7 +69,7 @@ class CompiledProgram:
     branch_slots: tuple[tuple[int, int], ...] = ()
     branch_ops: tuple[tuple[int, ...], ...] = ()
     stretch_ops: tuple[tuple[int, ...], ...] = ()
-    # Value-profile slots (compiled with value_profile only): (op id of a word compare, left - right) for -1, 0, 1.
+    # Value-profile slots (compiled with value_profile only, see value_slots): word compares and bit gates.
     value_slots: tuple[tuple[int, int], ...] = ()
 
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
@@ -90,9 +90,10 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     that overruns or faults with an exact variant that also records coverage (Machine.program_phase), so coverage
     costs little more than the fast variant.
 
-    `value_profile` (with coverage) also marks each word compare whose operands come out one apart or equal (see
-    value_slots): a stimulus search counts those as features of their own, since a mutated compare or constant
-    differs from the original only there. The exact re-run of a cycle does not mark them."""
+    `value_profile` (with coverage) also marks each word compare whose operands come out one apart or equal and
+    each pair of values a bit gate combines (see value_slots): a stimulus search counts those as features of their
+    own, since a mutated compare, constant or gate differs from the original only there. Bit logic is then not
+    folded into one expression per run. The exact re-run of a cycle does not mark them."""
     if exact is None:
         exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
@@ -121,15 +122,21 @@ def branch_slots(program: Program) -> list[tuple[int, int]]:
     return slots
 
 
+_GATES = frozenset({"AND", "ANDN", "OR", "ORN"})
+
+
 def value_slots(program: Program) -> list[tuple[int, int]]:
-    """(op id, left - right) for -1, 0 and 1 of every word compare, in op order: three consecutive slots each, so
-    that the generated code finds the slot of a difference d by adding d + 1."""
+    """The value profile's slots in op order: (op id, left - right) for -1, 0 and 1 of every word compare (the
+    generated code finds the slot of a difference d by adding d + 1 to the first), and (op id, LA) for LA 0 and 1
+    of every AND/OR gate whose operand differs from LA (an AND that became an OR differs only there)."""
     slots: list[tuple[int, int]] = []
     opid = 0
     for code in program.files:
         for op in code.ops:
             if op.code == "CMP":
                 slots += [(opid, -1), (opid, 0), (opid, 1)]
+            elif op.code in _GATES:
+                slots += [(opid, 0), (opid, 1)]
             opid += 1
     return slots
 
@@ -182,7 +189,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.block = 0                              # the block being generated
         # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
         # and checks every op, and with the shared accumulator LA is a bit of WA.
-        self.fuse_la = not exact and not self.shared
+        self.fuse_la = not exact and not self.shared and not value_profile
         self.la_chain = None
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))

@@ -55,7 +55,7 @@ class CoverageMarks:
         return len(self.branches) - self.branches.count(0)
 
     def value_outcomes(self) -> frozenset[tuple[int, int]]:
-        """The distinct (op id, left - right) pairs of the value profile marked so far."""
+        """The distinct (op id, outcome) pairs of the value profile marked so far (compile.value_slots)."""
         return frozenset(slot for slot, mark in zip(self.value_slots, self.values) if mark)
 
     def value_outcome_count(self) -> int:

@@ -172,6 +172,13 @@ class AccessCode:
             if c.endswith("N"):
                 b = f"({b} ^ 1)"
             sym = {"LD": "", "AND": "&", "OR": "|", "XOR": "^"}[c.rstrip("N")]
+            if sym and (opid, 0) in self.value_slot:
+                # value profile: LA and the operand differ, LA 0 (slot 0) or 1 (slot 1), the only pairs on which
+                # AND and OR disagree; the operand is read once, as without the profile (an indexed read may fault)
+                la = self.la()
+                self.out(ind, f"_b = {b}", opid)
+                self.out(ind, f"if {la} != _b: _vp[{self.value_slot[opid, 0]} + {la}] = 1", opid)
+                b = "_b"
             if not sym:
                 self.set_la(ind, b, opid)
             elif self.shared:

@@ -437,8 +437,8 @@ class Machine:
 
     @property
     def value_outcome_count(self) -> int:
-        """How many distinct (compare op, left - right) pairs of the value profile are marked (it only grows; 0
-        unless the program was compiled with value_profile)."""
+        """How many distinct (op id, outcome) pairs of the value profile (compile.value_slots: word compares, bit
+        gates) are marked (it only grows; 0 unless the program was compiled with value_profile)."""
         marks = self.runtime.marks
         return 0 if marks is None else marks.value_outcome_count()
 
