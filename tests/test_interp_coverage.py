@@ -111,3 +111,20 @@ def test_value_profile_marks_the_pairs_a_bit_gate_combines(tmp_path: Path) -> No
     # (1, 0): AND sees LA 1 and I2 0 (they differ: marked); ON sees LA 1 and NOT I2 = 1 (equal). (0, 0): AND 0/0
     # (equal); ON sees LA 0 and 1 (marked).
     assert machine.value_outcomes() == {(and_op, 1), (or_op, 0)}
+
+
+def test_value_profile_marks_zero_and_non_zero_divisors(tmp_path: Path) -> None:
+    # The translation checks a run-time divisor for 0 where the original has no branch: the profile makes both
+    # outcomes features. Catches: the dividend marked instead of the divisor.
+    (tmp_path / "main.src").write_text("L     W10\n/     W12\n=     W14\nL     W10\nMOD   W12\n=     W16\nEM\n")
+    program = _program(tmp_path / "main.src")
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=False, value_profile=True),
+                      coverage=True)
+    seen = []
+    for cycle, (w10, w12) in enumerate([(5, 0), (0, 3)]):
+        machine.write("W", 10, w10)
+        machine.write("W", 12, w12)
+        machine.run_cycle(cycle, [])
+        seen.append(machine.value_outcomes())
+    div_op, mod_op = 1, 4
+    assert seen == [{(div_op, 0), (mod_op, 0)}, {(div_op, 0), (mod_op, 0), (div_op, 1), (mod_op, 1)}]

@@ -127,15 +127,16 @@ _GATES = frozenset({"AND", "ANDN", "OR", "ORN"})
 
 def value_slots(program: Program) -> list[tuple[int, int]]:
     """The value profile's slots in op order: (op id, left - right) for -1, 0 and 1 of every word compare (the
-    generated code finds the slot of a difference d by adding d + 1 to the first), and (op id, LA) for LA 0 and 1
-    of every AND/OR gate whose operand differs from LA (an AND that became an OR differs only there)."""
+    generated code finds the slot of a difference d by adding d + 1 to the first), (op id, LA) for LA 0 and 1
+    of every AND/OR gate whose operand differs from LA (an AND that became an OR differs only there), and (op id,
+    divisor != 0) of every DIV and MOD (the translation checks the divisor where the original has no branch)."""
     slots: list[tuple[int, int]] = []
     opid = 0
     for code in program.files:
         for op in code.ops:
             if op.code == "CMP":
                 slots += [(opid, -1), (opid, 0), (opid, 1)]
-            elif op.code in _GATES:
+            elif op.code in _GATES or op.code in ("DIV", "MOD"):
                 slots += [(opid, 0), (opid, 1)]
             opid += 1
     return slots

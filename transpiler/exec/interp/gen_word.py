@@ -52,6 +52,10 @@ class WordCode:
                 self.out(ind, "WA = _r", opid)
         else:
             flag = self.itf.div_err if c == "DIV" else self.itf.mod_err
+            if (opid, 0) in self.value_slot:
+                # value profile: a zero and a non-zero divisor (slots 0 and 1); the divisor is read once
+                self.out(ind, f"_cr = {right}; _vp[{self.value_slot[opid, 0]} + (_cr != 0)] = 1", opid)
+                right = "_cr"
             self.out(ind, f"WA, M[{flag}] = _{c.lower()}({left}, {right})", opid)
 
     def _op_CMP(self, op: Op, opid: int, ind: int, *_: object) -> None:
