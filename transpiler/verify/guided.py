@@ -47,7 +47,7 @@ class Probe:
     """One candidate run on the reference interpreter."""
 
     cycles_ok: int                 # cycles that ran without a fault of the original
-    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("cmp", ...)
+    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("value", ...)
     last_new: int                  # the cycle in which the last of them first appeared (-1: none)
 
 
@@ -93,19 +93,16 @@ class Search:
             if report.faults:
                 break
             ok = cycle + 1
+            # The counts only grow; the outcomes are fetched only in the rare cycles in which one did.
+            fresh: set = set()
             if machine.branch_outcome_count != count:
-                # The count only grows; the outcomes are fetched only in the rare cycles in which it did.
-                fresh = machine.branch_outcomes() - local
-                local |= fresh
                 count = machine.branch_outcome_count
-                fresh -= self.seen
-                if fresh:
-                    new |= fresh
-                    last_new = cycle
+                fresh = machine.branch_outcomes() - local
             if machine.value_outcome_count != value_count:
-                fresh = {("cmp", *pair) for pair in machine.value_outcomes()} - local
-                local |= fresh
                 value_count = machine.value_outcome_count
+                fresh |= {("value", *pair) for pair in machine.value_outcomes()} - local
+            if fresh:
+                local |= fresh
                 fresh -= self.seen
                 if fresh:
                     new |= fresh
