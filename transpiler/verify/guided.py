@@ -40,6 +40,7 @@ FILLER_ATTEMPTS = 8
 FILLER_KINDS = 4            # healthy or not, clean or dirty memory at power-on
 FILLER_MIN = 200            # shortest filler run when the rest of the budget is split
 CHILD_CYCLES = 1000         # longest candidate run
+VALUE_SHARE = 0.25          # share of the budget for runs kept for value-profile features alone
 
 
 @dataclasses.dataclass(frozen=True)
@@ -261,6 +262,7 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
                                         machine_parameters, healthy))
     serial = 0
     stale = 0
+    spent_on_values = 0
     while spent < budget and search.interpreter_cycles < limit and stale < STALE_LIMIT:
         serial += 1
         # Short parents give short children, which leave more of the budget to the next find.
@@ -270,13 +272,19 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         if probe is None or not probe.new or probe.last_new >= budget - spent:
             stale += 1
             continue
-        stale = 0
         length = min(probe.cycles_ok, probe.last_new + 1 + MARGIN, budget - spent)
+        value_only = all(feature[0] == "value" for feature in probe.new)
+        if value_only and spent_on_values + length > VALUE_SHARE * budget:
+            # the value profile has many more features than branches: it may not crowd them out of the budget
+            stale += 1
+            continue
+        stale = 0
         child = _cut(child, length, names)
         search.keep(probe)
         kept.append(child)
         corpus.append(child)
         spent += length
+        spent_on_values += length if value_only else 0
     attempt = 0
     # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
     dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
