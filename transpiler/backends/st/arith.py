@@ -94,6 +94,10 @@ class ArithmeticMixin(ExecutorPart):
         if b.const == 0:
             self._flag(flag, E.bool_const(True))
             return a
+        if b.lo > 0 or b.hi < 0:
+            # a divisor whose range excludes 0 (a KFIELD entry without 0, say): no zero check, the marker is reset
+            self._flag(flag, E.bool_const(False))
+            return self._fn(fn, [a, b])
         return self._divmod_checked(a, b, flag, fn)
 
     def _divmod_checked(self, a: Expr, b: Expr, flag: int, fn: str) -> Expr:
