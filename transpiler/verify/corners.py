@@ -42,8 +42,8 @@ class Corners:
     # it only reads outside the NC interface (memory another module fills)
     remanent_words: tuple[tuple[str, str], ...]
     remanent_markers: tuple[str, ...]             # markers the program writes (start values)
-    # (name, kind, constant) of a drivable word the program loads and compares with a constant right away: the
-    # stimulus can put it one below, at and one above the constant (a fuzzer's compare log, found statically)
+    # (name, kind, constant) of a drivable word the program compares with a constant, directly or through copies:
+    # the stimulus can put it one below, at and one above the constant (a fuzzer's compare log, found statically)
     compare_pairs: tuple[tuple[str, str, int], ...] = ()
 
     def word_value(self, rng: random.Random, kind: str) -> int:
@@ -137,17 +137,16 @@ def harvest(program: Program, names: NameTable) -> Corners:
     foreign_markers = tuple(name(r) for r in foreign if r.kind == "M")
     filled_elsewhere = {r for r in foreign_byte_memory if r not in interface}
     remanent = sorted((r for r in set(written) | filled_elsewhere if drivable(r)), key=lambda r: (r.kind, r.addr))
-    drivable_words = {name(r): r.kind for r in foreign_byte_memory if r in interface}
-    drivable_words.update((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS)
+    remanent_words = tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS)
     return Corners(
-        compare_pairs=_compare_pairs(program, drivable_words, name),
+        compare_pairs=_compare_pairs(program, dict(foreign_words + remanent_words), name),
         constants=tuple(sorted(constants)),
         tables=tuple(sorted(tables)),
         values=tuple(sorted(values)),
         inputs=tuple(sorted({name(r) for r in used if r.kind == "I" and name(r) not in names.non_toggle})),
         foreign_words=foreign_words,
         foreign_markers=foreign_markers,
-        remanent_words=tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS),
+        remanent_words=remanent_words,
         remanent_markers=tuple(name(r) for r in remanent if r.kind == "M"))
 
 
