@@ -13,16 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from transpiler.verify.cosim import builtin_side_factory, cosimulate
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import compile_project
-from transpiler.verify.scenario import load_scenario
-from transpiler.language.semantics import make_semantics
-from transpiler.verify.simulate import project_names
-from transpiler.backends.st.check import find_iec2c
-from transpiler.backends.report.report import io_map_of
-from transpiler.backends.transpile import transpile_program
+from tests.text_project import BACKENDS, cosim, translate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -59,35 +50,20 @@ events:
 
 
 @pytest.fixture(scope="module")
-def project(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("indexed")
-    (folder / "main.src").write_text(PROGRAM)
-    (folder / "scenario.yaml").write_text(SCENARIO)
-    program = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", {})).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    names = project_names(program)
-    return folder, program, out, names, load_scenario(folder / "scenario.yaml", names)
+def folder(tmp_path_factory):
+    return tmp_path_factory.mktemp("indexed")
 
 
-def _run(project, st_text: str, backend: str = "builtin"):
-    _, program, out, names, scenario = project
-    if backend == "matiec":
-        from transpiler.exec.compiled.matiec_side import matiec_side_factory
-        factory = matiec_side_factory(st_text, out.result.project, find_iec2c())
-    else:
-        factory = builtin_side_factory(st_text)
-    return cosimulate(program, factory, io_map_of(out.result), scenario, names)
-
-
-BACKENDS = ["builtin", pytest.param("matiec", marks=pytest.mark.skipif(
-    find_iec2c() is None, reason="iec2c not found ($MATIEC_HOME/iec2c or PATH)"))]
+@pytest.fixture(scope="module")
+def project(folder):
+    return translate(folder, PROGRAM, SCENARIO)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_unmodified_translation_is_equivalent(project, backend):
     """Includes `= I20[X]`: from cycle 3 (X = 8) the input latch restores I24 on both sides, the ST side because the
     harness latches an input from its first indexed store on."""
-    result = _run(project, project[2].st_text, backend)
+    result = cosim(project, backend=backend)
     assert result.equivalent, (result.divergence, result.error)
     assert result.cycles_run == 6
     # M204 M208, W104/W108 and D304/D308 as bytes, M404 M408, S6 S10, I24 I28, and the byte of bits M604..M611
@@ -105,9 +81,9 @@ def test_unmodified_translation_is_equivalent(project, backend):
 ], ids=["bit", "word_address", "dword_value", "set_bit", "string", "bit_field"])
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_wrong_indexed_store_diverges(project, pattern, replacement, operand, original, translated, backend):
-    broken, count = re.subn(pattern, replacement, project[2].st_text)
+    broken, count = re.subn(pattern, replacement, project.out.st_text)
     assert count == 1, "the mutation site moved: update the test"
-    result = _run(project, broken, backend)
+    result = cosim(project, broken, backend)
     assert result.error is None
     d = result.divergence
     assert d is not None, "a wrong indexed store must be seen"
@@ -118,14 +94,14 @@ def test_indexed_addresses_stay_compared_after_x_moves_on(project):
     """M204 is first stored to while X = 4; the broken translation clears it in cycle 3, when X = 8 and no
     instruction of that cycle reaches M204: the divergence shows that the address is still compared."""
     clear = "    IF HH_MEM[10] = 8 THEN HH_M_index(IDX := 204, WRITE := TRUE, VALUE := FALSE); END_IF;\n"
-    broken = project[2].st_text.replace("END_PROGRAM", clear + "END_PROGRAM", 1)
-    result = _run(project, broken)
+    broken = project.out.st_text.replace("END_PROGRAM", clear + "END_PROGRAM", 1)
+    result = cosim(project, broken)
     d = result.divergence
     assert d is not None and (d.cycle, d.operand, d.original, d.translated) == (3, "M204", 1, 0)
 
 
 def test_machine_records_indexed_stores_as_operands(project):
-    result = _run(project, project[2].st_text)
+    result = cosim(project)
     writes = result.machine.indexed_writes()
     assert ("M", 204) in writes and ("S", 6) in writes and ("I", 24) in writes and ("M", 611) in writes
     assert {("B", b) for b in range(104, 106)} | {("B", b) for b in range(304, 308)} <= set(writes)
@@ -134,19 +110,14 @@ def test_machine_records_indexed_stores_as_operands(project):
 
 
 def test_program_without_indexed_stores_adds_nothing(tmp_path):
-    (tmp_path / "main.src").write_text("L     W10\n=     X\nL     M200[X]\n=     O1\nEM\n")
-    (tmp_path / "scenario.yaml").write_text("name: reads\ncycles: 3\ninitial: {W10: 4, M204: 1}\n")
-    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    names = project_names(program)
-    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result),
-                        load_scenario(tmp_path / "scenario.yaml", names), names)
+    project = translate(tmp_path, "L     W10\n=     X\nL     M200[X]\n=     O1\nEM\n",
+                        "name: reads\ncycles: 3\ninitial: {W10: 4, M204: 1}\n")
+    result = cosim(project)
     assert result.equivalent, (result.divergence, result.error)
     assert result.compared_indexed == 0 and result.machine.indexed_write_count == 0
 
 
-def test_cli_reports_indexed_addresses(project, tmp_path):
-    folder = project[0]
+def test_cli_reports_indexed_addresses(folder, project, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "equiv", str(folder / "main.src"),
                            "--scenario", str(folder / "scenario.yaml"), "--backend", "builtin",
                            "--report", str(tmp_path / "r.json")],
@@ -194,17 +165,13 @@ events:
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_indexed_reads_keep_the_value_of_their_instruction(tmp_path, backend):
-    (tmp_path / "main.src").write_text(READS)
-    (tmp_path / "scenario.yaml").write_text(READS_SCENARIO)
-    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    assert "tmp" not in out.st_text
-    names = project_names(program)
-    project = (tmp_path, program, out, names, load_scenario(tmp_path / "scenario.yaml", names))
-    result = _run(project, out.st_text, backend)
+    project = translate(tmp_path, READS, READS_SCENARIO)
+    st = project.out.st_text
+    assert "tmp" not in st
+    result = cosim(project, backend=backend)
     assert result.equivalent, (result.divergence, result.error)
     # The value stored to O1 is the one read before the write: reading the instance that wrote breaks it.
-    broken, count = re.subn(r"O1 := HH_M_index\.Q;", "O1 := HH_M_index_2.Q;", out.st_text)
+    broken, count = re.subn(r"O1 := HH_M_index\.Q;", "O1 := HH_M_index_2.Q;", st)
     assert count == 1, "the mutation site moved: update the test"
-    d = _run(project, broken, backend).divergence
+    d = cosim(project, broken, backend).divergence
     assert d is not None and d.operand == "O1"

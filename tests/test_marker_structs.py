@@ -10,17 +10,8 @@ import re
 
 import pytest
 
-from transpiler.backends.report.report import io_map_of
-from transpiler.backends.st.check import find_iec2c
+from tests.text_project import BACKENDS, cosim, translate
 from transpiler.backends.st.marker_groups import MIN_MEMBERS, MarkerGroup, SymbolicOperand, plan_groups, split_symbol
-from transpiler.backends.transpile import transpile_program
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import compile_project
-from transpiler.language.semantics import make_semantics
-from transpiler.verify.cosim import builtin_side_factory, cosimulate
-from transpiler.verify.scenario import load_scenario
-from transpiler.verify.simulate import project_names
 
 
 def _markers(*symbols: str, first: int = 10) -> list[SymbolicOperand]:
@@ -157,13 +148,8 @@ events:
 
 
 def _project(folder, **semantics):
-    (folder / "main.src").write_text(PROGRAM)
-    (folder / "defs.def").write_text(DEFS)
-    (folder / "scenario.yaml").write_text(SCENARIO)
-    program = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", semantics)).program
-    out = transpile_program(program, Diagnostics(), {}, {"st", "xml"})
-    names = project_names(program)
-    return program, out, names, load_scenario(folder / "scenario.yaml", names)
+    return translate(folder, PROGRAM, SCENARIO, files={"defs.def": DEFS}, semantics=semantics,
+                     formats=frozenset({"st", "xml"}))
 
 
 @pytest.fixture(scope="module")
@@ -201,21 +187,9 @@ def test_the_report_lists_the_groups_and_the_refusals(grouped):
     assert "ML_pair" not in section
 
 
-BACKENDS = ["builtin", pytest.param("matiec", marks=pytest.mark.skipif(
-    find_iec2c() is None, reason="iec2c not found ($MATIEC_HOME/iec2c or PATH)"))]
-
-
-def _side(out, backend: str, st_text: str):
-    if backend == "matiec":
-        from transpiler.exec.compiled.matiec_side import matiec_side_factory
-        return matiec_side_factory(st_text, out.result.project, find_iec2c())
-    return builtin_side_factory(st_text)
-
-
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_grouped_translation_is_equivalent(grouped, backend):
-    program, out, names, scenario = grouped
-    result = cosimulate(program, _side(out, backend, out.st_text), io_map_of(out.result), scenario, names)
+    result = cosim(grouped, backend=backend)
     assert result.equivalent, (result.divergence, result.error)
     assert {"M42", "M43", "M44"} <= set(result.compared_operands)
 
@@ -223,16 +197,16 @@ def test_grouped_translation_is_equivalent(grouped, backend):
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_a_wrong_member_store_diverges(grouped, backend):
     """The members are compared: an indexed store that reaches the wrong member (M43 for M44) shows at it."""
-    program, out, names, scenario = grouped
-    broken, count = re.subn(r"44: ML_ax\.fault := VALUE;", "44: ML_ax.clamp := VALUE;", out.st_text)
+    broken, count = re.subn(r"44: ML_ax\.fault := VALUE;", "44: ML_ax.clamp := VALUE;", grouped.out.st_text)
     assert count == 1, "the mutation site moved: update the test"
-    result = cosimulate(program, _side(out, backend, broken), io_map_of(out.result), scenario, names)
+    result = cosim(grouped, broken, backend)
     d = result.divergence
     assert d is not None and (d.cycle, d.operand, d.original, d.translated) == (4, "M43", 0, 1)
 
 
 def test_switched_off_every_marker_is_a_variable(tmp_path, grouped):
-    program, out, names, scenario = _project(tmp_path, marker_structs=False)
+    flat_project = _project(tmp_path, marker_structs=False)
+    out = flat_project.out
     assert _io_rows(out)["M42"] == "ML_ax_inpos" and "STRUCT" not in out.st_text
     assert "marker_structs = false" in out.files["report.md"].decode()
     # the statements are the same, only the names differ
@@ -242,5 +216,5 @@ def test_switched_off_every_marker_is_a_variable(tmp_path, grouped):
     body = lambda text: text[text.index("PROGRAM main"):text.index("END_PROGRAM")]   # noqa: E731
     assert [line for line in body(flat).splitlines() if "VAR" not in line and " : " not in line] == \
         [line for line in body(out.st_text).splitlines() if "VAR" not in line and " : " not in line]
-    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result), scenario, names)
+    result = cosim(flat_project)
     assert result.equivalent, (result.divergence, result.error)

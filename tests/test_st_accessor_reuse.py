@@ -10,16 +10,7 @@ import re
 
 import pytest
 
-from transpiler.backends.report.report import io_map_of
-from transpiler.backends.st.check import find_iec2c
-from transpiler.backends.transpile import transpile_program
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import compile_project
-from transpiler.language.semantics import make_semantics
-from transpiler.verify.cosim import builtin_side_factory, cosimulate
-from transpiler.verify.scenario import load_scenario
-from transpiler.verify.simulate import project_names
+from tests.text_project import BACKENDS, cosim, translate
 
 PROGRAM = """\
 ; X comes from W10, which the scenario sets, so no address is known at translation
@@ -68,13 +59,7 @@ events:
 
 @pytest.fixture(scope="module")
 def project(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("reuse")
-    (folder / "main.src").write_text(PROGRAM)
-    (folder / "scenario.yaml").write_text(SCENARIO)
-    program = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", {})).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    names = project_names(program)
-    return program, out, names, load_scenario(folder / "scenario.yaml", names)
+    return translate(tmp_path_factory.mktemp("reuse"), PROGRAM, SCENARIO)
 
 
 def _reads(st: str, base: int) -> int:
@@ -82,7 +67,7 @@ def _reads(st: str, base: int) -> int:
 
 
 def test_reads_are_reused_only_while_nothing_can_change_them(project):
-    st = project[1].st_text
+    st = project.out.st_text
     # M10[X]: read; read again after the named store of M50 (M10[X] is M50 when X = 40), after that of M12 and
     # after INCX (a new index).
     assert _reads(st, 10) == 4, st
@@ -91,18 +76,8 @@ def test_reads_are_reused_only_while_nothing_can_change_them(project):
     assert _reads(st, 20) == 1 and _reads(st, 30) == 0, st
 
 
-BACKENDS = ["builtin", pytest.param("matiec", marks=pytest.mark.skipif(
-    find_iec2c() is None, reason="iec2c not found ($MATIEC_HOME/iec2c or PATH)"))]
-
-
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_reused_reads_stay_equivalent_when_addresses_meet(project, backend):
-    program, out, names, scenario = project
-    if backend == "matiec":
-        from transpiler.exec.compiled.matiec_side import matiec_side_factory
-        factory = matiec_side_factory(out.st_text, out.result.project, find_iec2c())
-    else:
-        factory = builtin_side_factory(out.st_text)
-    result = cosimulate(program, factory, io_map_of(out.result), scenario, names)
+    result = cosim(project, backend=backend)
     assert result.equivalent, (result.divergence, result.error)
     assert result.cycles_run == 10

@@ -6,15 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from transpiler.backends.report.report import io_map_of
-from transpiler.backends.transpile import transpile_program
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import compile_project
-from transpiler.language.semantics import make_semantics
-from transpiler.verify.cosim import builtin_side_factory, cosimulate
-from transpiler.verify.scenario import load_scenario
-from transpiler.verify.simulate import project_names
+from tests.text_project import cosim, translate
 
 PROGRAM = """\
 L     W0
@@ -43,12 +35,7 @@ events:
 @pytest.mark.parametrize("entries, checked", [("K7\nK3\nK250", False), ("K-7\nK-3\nK-250", False),
                                               ("K7\nK0\nK250", True), ("K7\nK-3\nK250", True)])
 def test_zero_check_only_where_the_divisor_may_be_zero(tmp_path, entries, checked):
-    (tmp_path / "main.src").write_text(PROGRAM.format(entries=entries))
-    (tmp_path / "scenario.yaml").write_text(SCENARIO.format())
-    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    assert ("<> 0 THEN" in out.st_text) == checked, out.st_text
-    names = project_names(program)
-    scenario = load_scenario(tmp_path / "scenario.yaml", names)
-    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result), scenario, names)
+    project = translate(tmp_path, PROGRAM.format(entries=entries), SCENARIO.format())
+    assert ("<> 0 THEN" in project.out.st_text) == checked, project.out.st_text
+    result = cosim(project)
     assert result.equivalent, (result.divergence, result.error)

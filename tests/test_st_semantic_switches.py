@@ -5,15 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from transpiler.backends.report.report import io_map_of
-from transpiler.backends.transpile import transpile_program
-from transpiler.diagnostics import Diagnostics
-from transpiler.frontend.load import ProjectOptions
-from transpiler.frontend.pipeline import compile_project
-from transpiler.language.semantics import make_semantics
-from transpiler.verify.cosim import builtin_side_factory, cosimulate
-from transpiler.verify.scenario import load_scenario
-from transpiler.verify.simulate import project_names
+from tests.text_project import cosim, translate
 
 PROGRAM = """\
 L     D0
@@ -39,14 +31,8 @@ events:
 
 @pytest.mark.parametrize("setting", ["low_bits", "unchanged"])
 def test_multiplication_overflow_result(tmp_path, setting):
-    (tmp_path / "main.src").write_text(PROGRAM)
-    (tmp_path / "scenario.yaml").write_text(SCENARIO)
-    semantics = make_semantics("itnc530", {"mul_overflow_result": setting})
-    program = compile_project(ProjectOptions(main=tmp_path / "main.src"), semantics).program
-    out = transpile_program(program, Diagnostics(), {}, {"st"})
-    names = project_names(program)
-    scenario = load_scenario(tmp_path / "scenario.yaml", names)
-    result = cosimulate(program, builtin_side_factory(out.st_text), io_map_of(out.result), scenario, names)
+    project = translate(tmp_path, PROGRAM, SCENARIO, semantics={"mul_overflow_result": setting})
+    result = cosim(project)
     assert result.equivalent, (result.divergence, result.error)
     # the folded product of two constants that overflows: 65536 kept, or the low bits 0
-    assert f"D12 := {65536 if setting == 'unchanged' else 0};" in out.st_text
+    assert f"D12 := {65536 if setting == 'unchanged' else 0};" in project.out.st_text

@@ -1,6 +1,7 @@
 """Runs the back ends on one IR program: the ST back end decides the IEC project (once for matiec, and once more
-for a target that writes its POUs otherwise), the writers print it as ST and PLCopen XML (and the libraries HH_Lib and HH_Sys as files of their own), the report module adds report.md and
-io_map.csv. Returns file contents; writing is the caller's job."""
+for a target that writes its POUs otherwise), the writers print it as ST and PLCopen XML (and the libraries HH_Lib
+and HH_Sys as files of their own), the report module adds report.md and io_map.csv. Returns file contents; writing
+is the caller's job."""
 
 from __future__ import annotations
 
