@@ -417,6 +417,24 @@ def test_watchdog_rerun_keeps_the_state_of_the_cycle_exact(tmp_path: Path) -> No
     assert values(m, "O1", "O2", "O3", "O4") == {"O1": 1, "O2": 1, "O3": 0, "O4": 0}
 
 
+@pytest.mark.parametrize("coverage", [False, True])
+def test_a_fault_after_the_budget_is_passed_gives_way_to_the_watchdog(tmp_path: Path, coverage: bool) -> None:
+    # The fast code checks its count at jumps back, calls and module calls only: here it runs on past the
+    # budget into the stack underflow of PL. The watchdog fault of the 4th instruction is what happened first.
+    m = machine(tmp_path, """
+        L   M4172
+        =   O1
+        =   O2
+        =   O3
+        PL  W0
+        EM
+    """, overrides={"max_instructions_per_cycle": 3}, coverage=coverage)
+    fault = fault_of(cycles(m, 1))
+    assert (fault.code, fault.span.line) == ("E-RT-WATCHDOG", 4)
+    assert len(m.faults) == 1
+    assert values(m, "O1", "O2", "O3") == {"O1": 1, "O2": 1, "O3": 0}
+
+
 def test_module_calls_are_not_repeated_by_the_exact_rerun(tmp_path: Path) -> None:
     # The fast code runs the module calls, then its pre-count of the next block passes the budget, and
     # the cycle is re-run exactly from a snapshot. 9036 doubles status 10 (the jog-increment limit, any value) each time it runs: the re-run

@@ -16,8 +16,10 @@ bytearrays and native memoryview casts with constant addresses folded in. Each f
 function `F<f>(b)`: `b` selects the block (a jump target or call entry) through a binary dispatch
 tree whose leaves are short runs of sequential `if b == k` tests, so falling through into the
 next block costs one comparison, and so does a jump to a later block of the same leaf (the rest of
-the jumping block becomes an else branch); a loop head starts a leaf. The fast variant counts
-instructions per straight-line stretch (a pre-count that may only over-estimate), folds runs of bit
+the jumping block becomes an else branch); a loop head starts a leaf, and a test that always holds
+(only the block before falls or jumps to it) is left out. The fast variant counts instructions per
+straight-line stretch (a pre-count that may only over-estimate) and checks the count where
+execution can come round again (a jump back, a call) and before module calls, folds runs of bit
 logic into one expression of LA and checks a run of pushes against the stack capacity once; the
 exact variant counts and checks every instruction. Either can record coverage, with one list item
 store per mark (coverage.CoverageMarks). Every generated line maps back to its op, so a fault
@@ -142,21 +144,60 @@ def value_slots(program: Program) -> list[tuple[int, int]]:
     return slots
 
 
-def _entries(program: Program) -> list[set[int]]:
-    """Block starts per file: the main entry, every jump target, every call/CASE/SUBM target."""
+def _entries(program: Program) -> tuple[list[set[int]], list[set[int]]]:
+    """Block starts per file: every jump target, and the entries a call enters by (the main entry, every
+    call/CASE/SUBM target); (starts, entries)."""
+    starts: list[set[int]] = [set() for _ in program.files]
     entries: list[set[int]] = [set() for _ in program.files]
     if program.files and program.files[0].ops:
         entries[0].add(0)
     for f, code in enumerate(program.files):
         for op in code.ops:
             if op.code in ("JP", "JPT", "JPF") and op.target is not None:
-                entries[f].add(op.target)
+                starts[f].add(op.target)
             if op.call is not None and not op.call.is_module and op.call.file >= 0:
                 entries[op.call.file].add(op.call.index)
             for t in op.case_targets:
                 if t is not None and t.file >= 0:
                     entries[t.file].add(t.index)
-    return entries
+    return [s | e for s, e in zip(starts, entries)], entries
+
+
+def _untested_blocks(code: FileCode, starts: list[int], entries: set[int],
+                     groups: list[list[int]]) -> tuple[set[int], set[int]]:
+    """(blocks whose `if b == k` test can go, blocks the dispatch loop may be entered with) of one file.
+
+    The tests of a leaf run in order, so the values b can hold at the test of block k are known: at the leaf's top
+    the blocks of the leaf the dispatch loop enters (entries, targets of jumps that go round the loop, the first
+    block of every leaf), then after each block the values before it except its own plus the later blocks of the
+    leaf it falls or jumps to. Where that is k alone, the test always holds and block k's code runs unconditionally.
+    """
+    leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
+    seg_of = {start: k for k, start in enumerate(starts)}
+    falls: list[set[int]] = [set() for _ in starts]
+    dispatched = {seg_of[e] for e in entries if e in seg_of} | {group[0] for group in groups}
+    k = -1
+    for i, op in enumerate(code.ops):
+        while k + 1 < len(starts) and starts[k + 1] <= i:
+            k += 1
+        if k < 0 or op.code not in ("JP", "JPT", "JPF") or op.target not in seg_of:
+            continue
+        target = seg_of[op.target]
+        if k < target and leaf_of[target] == leaf_of[k]:
+            falls[k].add(target)
+        else:
+            dispatched.add(target)
+    untested = set()
+    for group in groups:
+        possible = dispatched.intersection(group)
+        for k in group:
+            if possible == {k}:
+                untested.add(k)
+            possible.discard(k)
+            possible |= falls[k]
+            if k + 1 in leaf_of and leaf_of[k + 1] == leaf_of[k]:
+                possible.add(k + 1)
+    return untested, dispatched
 
 
 class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
@@ -186,6 +227,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.every_valid = {k: every_address_valid(self.sem.profile, k) for k in "MIOTCBWD"}
         self.scale = self.sem["index_scaling"] == "elements"
         self.leaf_of: dict[int, int] = {}           # block -> its dispatch leaf, in the file being generated
+        self.entries: list[set[int]] = []           # file index -> op indices a call enters by
+        self.untested: set[int] = set()             # blocks of the file being generated without `if b == k`
+        self.dispatched: set[int] = set()           # blocks of the file the dispatch loop may be entered with
+        self.tests_broken = False
         self.max_indent = _MAX_INDENT
         self.block = 0                              # the block being generated
         # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
@@ -211,9 +256,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.line_ops.append(opid)
 
     def generate(self) -> str:
-        entries = _entries(self.program)
-        starts = [sorted(e for e in entries[f] if e <= len(code.ops)) for f, code in enumerate(self.program.files)]
+        block_starts, entries = _entries(self.program)
+        starts = [sorted(e for e in block_starts[f] if e <= len(code.ops)) for f, code in enumerate(self.program.files)]
         self.seg_maps = [{s: k for k, s in enumerate(st)} for st in starts]
+        self.entries = entries
         self.out(0, "def _factory(env):")
         for name in ("M", "I", "O", "T", "C", "mem", "mb", "S", "stk"):
             self.out(1, f"{name} = env[{name!r}]")
@@ -258,9 +304,21 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             self.out(2, "_falloff()")
             return
         self.out(2, "while True:")
+        # Generated without the tests that always hold first; a jump that has to go round the dispatch loop after
+        # all (nesting at its cap) may find no test of its target there, so the file is generated again with all.
+        rollback = (len(self.lines), len(self.stretch_ops), len(self.case_tables))
         groups = self._leaves(f, code, starts)
         self.leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
-        self._dispatch(f, code, starts, groups, 3)
+        for omit in (True, False):
+            self.untested, self.dispatched = _untested_blocks(code, starts, self.entries[f], groups)
+            if not omit:
+                self.untested, self.dispatched = set(), set(range(len(starts)))
+            self.tests_broken = False
+            self._dispatch(f, code, starts, groups, 3)
+            if not self.tests_broken:
+                return
+            del self.lines[rollback[0]:], self.line_ops[rollback[0]:]
+            del self.stretch_ops[rollback[1]:], self.case_tables[rollback[2]:]
 
     def _leaves(self, f: int, code: FileCode, starts: list[int]) -> list[list[int]]:
         """The blocks split into dispatch leaves of at most _GROUP consecutive blocks. A loop head (the target of a
@@ -283,8 +341,11 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
     def _dispatch(self, f: int, code: FileCode, starts: list[int], groups: list[list[int]], indent: int) -> None:
         if len(groups) == 1:
             for k in groups[0]:
-                self.out(indent, f"if b == {k}:")
-                self._segment(f, code, starts, k, indent + 1)
+                if k in self.untested:
+                    self._segment(f, code, starts, k, indent)
+                else:
+                    self.out(indent, f"if b == {k}:")
+                    self._segment(f, code, starts, k, indent + 1)
             return
         mid = len(groups) // 2
         self.out(indent, f"if b < {groups[mid][0]}:")
@@ -348,9 +409,14 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         if pending:
             self._mark(indent, pending)
         if k + 1 < len(starts):
-            self.out(indent, f"b = {k + 1}")
+            self.goto(indent, k + 1)
         else:
             self.out(indent, "_falloff()")
+
+    def goto(self, indent: int, block: int, opid: int = -1) -> None:
+        """Select `block`, a later one of the leaf, as the next to run: the next block, if untested, runs anyway."""
+        nxt = block == self.block + 1 and block in self.untested and self.leaf_of[block] == self.leaf_of[self.block]
+        self.out(indent, "pass" if nxt else f"b = {block}", opid)
 
     def _mark(self, indent: int, opids: list[int]) -> None:
         """The coverage mark of a stretch: one item store, the stretch's op ids go to the table."""
@@ -366,6 +432,13 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 break
         if count:
             self.out(indent, f"n += {count}", opid)
+
+    def budget_check(self, indent: int, opid: int) -> None:
+        """Fast variant: raise to the exact re-run once the pre-count has passed the budget. Checked only where
+        execution can come round again (a jump back, a call) and before a module call, whose effects outside the
+        machine's state a re-run would not undo; straight-line code between checks is finite, and the machine checks
+        the count once more after the cycle (Machine.program_phase)."""
+        if not self.exact:
             self.out(indent, f"if n > {self.budget}: raise _BudgetExceeded", opid)
     # ------------------------------------------------------------------ instructions
 

@@ -23,9 +23,11 @@ class FlowCode:
 
     def _op_JP(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> None:
         block = seg_of[op.target]
-        self.out(ind, f"b = {block}", opid)
-        if not self._falls_to(block):
-            self.out(ind, "continue", opid)
+        if self._falls_to(block):
+            self.goto(ind, block, opid)
+        else:
+            self.out(ind, f"b = {block}", opid)
+            self._go_round(ind, opid, block)
 
     def _op_JPT(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int], negate: bool = False) -> int:
         """Returns the indentation of the code after the jump: one level deeper when that code becomes the else
@@ -33,14 +35,23 @@ class FlowCode:
         block = seg_of[op.target]
         self.out(ind, f"if {'not ' if negate else ''}{self.la()}:", opid)
         self._cover(ind + 1, opid, 1)
-        self.out(ind + 1, f"b = {block}", opid)
         if self._falls_to(block) and ind < self.max_indent:
+            self.goto(ind + 1, block, opid)
             self.out(ind, "else:", opid)
             self._cover(ind + 1, opid, 0)
             return ind + 1
-        self.out(ind + 1, "continue", opid)
+        self.out(ind + 1, f"b = {block}", opid)
+        self._go_round(ind + 1, opid, block)
         self._cover(ind, opid, 0)
         return ind
+
+    def _go_round(self, ind: int, opid: int, block: int) -> None:
+        """To `block` through the dispatch loop; a jump back may close a loop, so the budget is checked there."""
+        if block not in self.dispatched:
+            self.tests_broken = True
+        if block <= self.block:
+            self.budget_check(ind, opid)
+        self.out(ind, "continue", opid)
 
     def _op_JPF(self, op: Op, opid: int, ind: int, f: int, seg_of: dict[int, int]) -> int:
         return self._op_JPT(op, opid, ind, f, seg_of, negate=True)
@@ -51,12 +62,14 @@ class FlowCode:
             self.out(ind, "_falloff()", opid)       # unresolved target: the front end reported it
             return
         if call.is_module:
+            self.budget_check(ind, opid)
             self.out(ind, f"_module({call.module}, {opid})", opid)
             return
         self._nested(ind, opid, f"F{call.file}({self.seg_maps[call.file][call.index]})")
 
     def _nested(self, ind: int, opid: int, *call: str) -> None:
         """A call one level deeper (CM and CASE), checked against call_depth (A-29)."""
+        self.budget_check(ind, opid)
         self.out(ind, "d += 1", opid)
         self.out(ind, f"if d > {self.depth_limit}: _depth_fault(d)", opid)
         for line in call:

@@ -113,6 +113,7 @@ class Machine:
         self.faults: list[RuntimeFault] = []
         self.warnings: list[RuntimeFault] = []
         self.instructions = 0
+        self._budget = int(self.semantics["max_instructions_per_cycle"])
         self.error_messages: dict[int, int] = {}     # PLC error-message marker -> first cycle it was set
         self._errors_seen: tuple[bytearray, int] | None = None
         self._report = CycleReport(-1)
@@ -284,8 +285,14 @@ class Machine:
         cycle that faults is re-run the same way, so that coverage is exact up to the fault)."""
         report = report or self._report
         self._report = report
+        self.runtime.cycle = cycle
+        try:
+            self._program_phase(cycle, report)
+        finally:
+            self.instructions += report.instructions
+
+    def _program_phase(self, cycle: int, report: CycleReport) -> None:
         rt = self.runtime
-        rt.cycle = cycle
         if self._primary.exact:
             self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
             return
@@ -296,16 +303,19 @@ class Machine:
         faults = len(report.faults)
         try:
             self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
-            if not (self.coverage_enabled and len(report.faults) > faults):
+            # The fast code checks its count only where it can loop (see budget_check): a cycle that passed the
+            # budget in straight-line code, or faulted after passing it, is seen here. And it marks coverage per
+            # straight-line stretch when the stretch ends; a fault inside one would leave the ops it ran unmarked.
+            # Either way the cycle (a faulting one is at most one: the machine halts) runs again exactly, recording
+            # every op up to the fault, and records the same fault or the watchdog's.
+            if report.instructions <= self._budget and not (self.coverage_enabled and len(report.faults) > faults):
                 return
-            # The fast code marks coverage per straight-line stretch when the stretch ends; a fault inside one
-            # would leave the ops it ran unmarked. The faulting cycle (at most one: the machine halts) runs again
-            # exactly, recording every op up to the fault, and records the same fault.
-            del self.faults[len(self.faults) - (len(report.faults) - faults):]
-            del report.faults[faults:]
-            self.halted = False
             raise BudgetExceeded
         except BudgetExceeded:
+            if len(report.faults) > faults:
+                del self.faults[len(self.faults) - (len(report.faults) - faults):]
+                del report.faults[faults:]
+                self.halted = False
             state, regs, jobs, unknown, warned = snap
             self.state.restore(state)
             self.jobs.restore(jobs)
@@ -342,7 +352,6 @@ class Machine:
                            "the main program (A-19)", get()[6])
             self._run_jobs(compiled, funcs, get, set_, cycle, report)
         report.instructions = get()[4]
-        self.instructions += report.instructions
 
     def _run_jobs(self, compiled: CompiledProgram, funcs: tuple, get: Any, set_: Any, cycle: int,
                   report: CycleReport) -> None:
