@@ -13,6 +13,7 @@ from transpiler.backends.st import jobs
 from transpiler.backends.st.writer import render_st
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.exec.stexec import load_st
+from tests.text_project import BACKENDS, cosim, translate
 
 GLOBALS = [("G_CMD", "INT"), ("G_JOB", "INT"), ("G_ID", "DINT"), ("G_RESULT", "DINT")]
 
@@ -135,3 +136,21 @@ def test_jobs_run_in_a_second_program_after_the_main_one_with_their_own_register
     # X is saved, cleared for the job and restored around the job's call
     save, clear, call, restore = (runner.index(t) for t in (":= HH_X;", "HH_X := 0;", "Job_1();", "HH_X := main_"))
     assert save < clear < call < restore
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_job_command_saves_no_accumulator_value_it_replaces(tmp_path, backend):
+    # RPLY's result is still in flight in WA when SUBM replaces it: nothing reads it, so it is not saved to HH_WA;
+    # the same value pushed to the data stack first is saved (the stack reads it) and comes back by PLW.
+    source = ("L M4172\nJPF Go\nSUBM Job\n= W0\nLBL Go\n"
+              "RPLY W0\nSUBM Job\n= W2\n"
+              "RPLY W0\nPSW\nSUBM Job\n= W4\nPLW\n= W6\nEM\n"
+              "LBL Job\nL K1\n= W8\nEM\n")
+    project = translate(tmp_path, source, "cycles: 3\nexpect:\n  - cycle: 0\n    values: {W6: 2}\n")
+    main = project.out.st_text[project.out.st_text.index("PROGRAM main"):]
+    main = main[:main.index("END_PROGRAM")]
+    assert main.count("HH_Jobs(CMD := 2") == 2
+    assert "HH_WA := HH_Jobs.RESULT" not in main
+    result = cosim(project, backend=backend)
+    assert result.equivalent, result
+    assert not result.expectation_failures

@@ -30,11 +30,13 @@ class JobOpsMixin(ExecutorPart):
 
     def op_SUBM(self, op: Op) -> None:
         number = self._jobs(op).number(op)
+        self.drop(["WA"])           # the result replaces it: a value in flight there is saved for nobody
         queue = self._queue(op, jobs.SUBMIT, ("JOB", E.int_const(number)))
         self.s.set("WA", self._result(queue, jobs.MAX_ID))
 
     def op_RPLY(self, op: Op) -> None:
         ident = E.to_dint(self.value(op.operand))
+        self.drop(["WA"])           # as in SUBM
         queue = self._queue(op, jobs.REPLY, ("ID", ident))
         self.s.set("WA", self._result(queue, 2))
 
