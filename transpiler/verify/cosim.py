@@ -552,17 +552,17 @@ def runtime_reader(rt, places: list[Place]) -> Callable[[], list]:
     integers as they are, multi-byte operands combined from their bytes and sign-extended, texts as str), from one
     generated read of every variable involved instead of one path lookup per operand and cycle."""
     paths, plan = _read_plan(places)
-    raw = rt.reader(paths)
+    env, v = rt.read_expressions(paths)
     items = []
     for first, width, big, text in plan:
         if width == 0:
-            items.append(f"{'str' if text else 'int'}(v[{first}])")
+            # unary plus gives a BOOL as 1 or 0 and an integer as it is, without int()'s call
+            items.append(f"str({v[first]})" if text else f"+{v[first]}")
             continue
-        parts = [f"((v[{first + (width - 1 - k if big else k)}] & 255) << {8 * k})" for k in range(width)]
+        parts = [f"(({v[first + (width - 1 - k if big else k)]} & 255) << {8 * k})" for k in range(width)]
         sign = 1 << (8 * width - 1)
         items.append(f"((({' | '.join(parts)}) ^ {sign}) - {sign})")
-    env = {"raw": raw}
-    exec(compile("def read():\n    v = raw()\n    return [" + ", ".join(items) + "]\n", "<cosim-reader>", "exec"), env)
+    exec(compile("def read():\n    return [" + ", ".join(items) + "]\n", "<cosim-reader>", "exec"), env)
     return env["read"]
 
 

@@ -430,6 +430,13 @@ class Runtime:
         """A function returning get(path) for every path, in order, in one call: the paths are resolved once and
         read by generated code (a co-simulation reads hundreds of variables every cycle). The holders stay valid
         for this runtime's life, as the cached references of get() do."""
+        env, items = self.read_expressions(paths)
+        exec(compile("def read():\n    return [" + ", ".join(items) + "]\n", "<stexec-reader>", "exec"), env)
+        return env["read"]
+
+    def read_expressions(self, paths: list[str]) -> tuple[dict[str, Any], list[str]]:
+        """(names, expressions): a Python expression per path that gives get(path) when evaluated with the names,
+        for readers that a caller generates around them (reader, or one that converts the values as it reads)."""
         env: dict[str, Any] = {"getattr": getattr}
         items = []
         for i, path in enumerate(paths):
@@ -445,8 +452,7 @@ class Runtime:
                 env[f"c{i}"] = ref.to_py
                 item = f"c{i}({item})"
             items.append(item)
-        exec(compile("def read():\n    return [" + ", ".join(items) + "]\n", "<stexec-reader>", "exec"), env)
-        return env["read"]
+        return env, items
 
     def names(self) -> list[str]:
         out: list[str] = []
