@@ -17,7 +17,7 @@ function `F<f>(b)`: `b` selects the block (a jump target or call entry) through 
 tree whose leaves are short runs of sequential `if b == k` tests, so falling through into the
 next block costs one comparison, and so does a jump to a later block of the same leaf (the rest of
 the jumping block becomes an else branch); a loop head starts a leaf, and a test that always holds
-(only the block before falls or jumps to it) is left out. The fast variant counts instructions per
+(b can hold no other value there, _untested_blocks) is left out. The fast variant counts instructions per
 straight-line stretch (a pre-count that may only over-estimate) and checks the count where
 execution can come round again (a jump back, a call) and before module calls, folds runs of bit
 logic into one expression of LA and checks a run of pushes against the stack capacity once; the
