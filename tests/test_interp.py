@@ -1189,3 +1189,53 @@ def test_fast_code_timer_runs_exactly_its_preset_by_hand(tmp_path: Path) -> None
         # preset 0: the running operand never becomes 1 (9.2)
         "O3": [0, 0, 0, 0, 0],
     }
+
+
+@pytest.mark.parametrize("coverage", [False, True])
+def test_dispatch_without_the_tests_that_always_hold_by_hand(tmp_path: Path, coverage: bool) -> None:
+    # IF/ELSE by jumps (the ELSE block is tested, the join after it is not: b can only be its number there),
+    # a forward jump over two blocks, a loop; every path checked against values worked out by hand
+    program = """
+        L   K0
+        =   W0
+        L   I1
+        JPF ELSE
+        L   K1
+        =   W0
+        JP  JOIN
+        LBL ELSE
+        L   K2
+        =   W0
+        LBL JOIN
+        L   W0
+        +   K10
+        =   W2
+        L   I2
+        JPT OVER
+        L   K100
+        =   W4
+        LBL SKIPPED
+        L   K200
+        =   W6
+        LBL OVER
+        L   K0
+        =   X
+        =   W8
+        LBL LOOP
+        L   W8
+        +   K3
+        =   W8
+        INCX
+        L   X
+        <   K4
+        JPT LOOP
+        EM
+    """
+    prog = compile_text(tmp_path, program)
+    code = compile_program(prog, coverage=coverage, exact=False)
+    assert code.source.count("if b == ") < 6            # 6 blocks (the start and 5 labels): some tests went
+    for i1, i2, expected in ((1, 0, (1, 11, 100, 200, 12)), (0, 0, (2, 12, 100, 200, 12)),
+                             (0, 1, (2, 12, 0, 0, 12))):
+        m = Machine(prog, compiled=code, coverage=coverage)
+        assert not cycles(m, 1, {"I1": [i1], "I2": [i2]})[0].faults
+        assert tuple(values(m, "W0", "W2", "W4", "W6", "W8").values()) == expected
