@@ -9,8 +9,8 @@ import pytest
 
 from transpiler.cli.app import main
 from transpiler.diagnostics import CompileFailed
-from transpiler.verify.mutate import (EQUIVALENT, KILLED, SURVIVED, Mutant, MutationResult, Verdict,
-                                      apply_equivalents, load_equivalents, mutation_sites)
+from transpiler.verify.mutate import (EQUIVALENT, KILLED, KILLED_ANYWAY, NO_SUCH_MUTANT, SURVIVED, Mutant,
+                                      MutationResult, Verdict, apply_equivalents, load_equivalents, mutation_sites)
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMERS = ROOT / "samples" / "constructs" / "timers"
@@ -83,12 +83,26 @@ def test_judged_equivalent_file_takes_survivors_out_of_the_denominator(tmp_path)
                      f"- pou: Main\n  operator: {killed.operator}\n  mutation: '{killed.description}'\n"
                      f"  st: '{killed.original}'\n  reason: wrong judgement\n")
     judged = load_equivalents(entry)
-    verdicts, unmatched = apply_equivalents([_verdict(survivor, SURVIVED), _verdict(killed, KILLED)], judged)
+    verdicts, unmatched = apply_equivalents([_verdict(survivor, SURVIVED), _verdict(killed, KILLED)], judged, sites)
     assert [v.outcome for v in verdicts] == [EQUIVALENT, KILLED]
     assert verdicts[0].by == "the value written is the one already there"
-    assert [u.mutation for u in unmatched] == [killed.description]     # a killed 'equivalent' is reported
+    # a killed 'equivalent' is reported as such
+    assert [(u.mutation, why) for u, why in unmatched] == [(killed.description, KILLED_ANYWAY)]
     result = MutationResult(verdicts, 2, [], "builtin", 0.0, unmatched)
     assert result.denominator == 1 and result.score == 1.0
+
+
+def test_a_judged_equivalent_entry_is_stale_when_its_mutant_is_gone_and_silent_when_not_sampled(tmp_path):
+    sites = mutation_sites(ST)
+    sampled, left_out = sites[0], sites[1]
+    entry = tmp_path / "eq.yaml"
+    entry.write_text(f"- pou: Main\n  operator: {left_out.operator}\n  mutation: '{left_out.description}'\n"
+                     f"  st: '{left_out.original}'\n  reason: not in this sample\n"
+                     f"- pou: Main\n  operator: constant\n  mutation: '7 -> 8 at column 1'\n"
+                     f"  st: 'X := 7;'\n  reason: the translation no longer has this line\n")
+    judged = load_equivalents(entry)
+    _, unmatched = apply_equivalents([_verdict(sampled, KILLED)], judged, sites)
+    assert [(u.st, why) for u, why in unmatched] == [("X := 7;", NO_SUCH_MUTANT)]
 
 
 def test_a_malformed_equivalent_file_is_an_error_at_its_entry(tmp_path):

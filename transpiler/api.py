@@ -423,6 +423,6 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
             else:
                 os.environ["HH2IEC_CACHE"] = saved_cache
     verdicts.sort(key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
-    verdicts, unmatched = apply_equivalents(verdicts, equivalents)
+    verdicts, unmatched = apply_equivalents(verdicts, equivalents, sites)
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched)
     return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

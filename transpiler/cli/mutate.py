@@ -39,8 +39,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
 
 
 def cmd_mutate(args: argparse.Namespace) -> int:
-    from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, OPERATORS, OUTCOMES, SURVIVED,
-                                          equivalents_yaml, report_json, report_junit, survivor_location)
+    from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, KILLED_ANYWAY, OPERATORS, OUTCOMES,
+                                          SURVIVED, equivalents_yaml, report_json, report_junit, survivor_location)
     if not args.scenario and args.random_cycles <= 0:
         raise UsageError("mutate needs at least one --scenario or --random-cycles N")
     if args.jobs < 1:
@@ -71,9 +71,10 @@ def cmd_mutate(args: argparse.Namespace) -> int:
             why = f" -- {v.by}" if v.by else ""
             print(f"{title}: {survivor_location(run.st_text, v.mutant)}: {v.mutant.operator}: "
                   f"{v.mutant.description}: {v.mutant.original}{why}")
-    for e in result.unmatched_equivalents:
-        print(f"{e.span}: note: judged equivalent, but no surviving mutant matches it (killed or gone): "
-              f"{e.pou}: {e.mutation}: {e.st}")
+    for e, why in result.unmatched_equivalents:
+        what = ("judged equivalent, but a scenario killed it: the judgement is wrong" if why == KILLED_ANYWAY
+                else "judged equivalent, but the translation has no such mutant: the entry is stale")
+        print(f"{e.span}: note: {what}: {e.pou}: {e.mutation}: {e.st}")
     met = result.score >= args.min_score and result.denominator > 0
     print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
           f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "

@@ -20,7 +20,7 @@ import re
 import time
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Iterator, Mapping
+from typing import Any, Callable, Iterable, Iterator, Mapping
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -370,7 +370,7 @@ class MutationResult:
     scenarios: list[str]
     backend: str
     seconds: float
-    unmatched_equivalents: list[JudgedEquivalent] = dataclasses.field(default_factory=list)
+    unmatched_equivalents: list[tuple[JudgedEquivalent, str]] = dataclasses.field(default_factory=list)
 
     def count(self, outcome: str) -> int:
         return sum(1 for v in self.verdicts if v.outcome == outcome)
@@ -385,20 +385,30 @@ class MutationResult:
         return self.count(KILLED) / self.denominator if self.denominator else 0.0
 
 
-def apply_equivalents(verdicts: list[Verdict], equivalents: list[JudgedEquivalent]
-                      ) -> tuple[list[Verdict], list[JudgedEquivalent]]:
-    """Survivors named in the judged-equivalent list become EQUIVALENT (with the reason); entries that match no
-    survivor are returned (a kill of a 'judged equivalent' mutant is worth a look: the judgement was wrong)."""
+KILLED_ANYWAY = "killed"     # a judged-equivalent mutant that a scenario told apart: the judgement was wrong
+NO_SUCH_MUTANT = "gone"      # the translation has no such mutant (any more): the entry is stale
+
+
+def apply_equivalents(verdicts: list[Verdict], equivalents: list[JudgedEquivalent],
+                      sites: Iterable[Mutant] | None = None) -> tuple[list[Verdict], list[tuple[JudgedEquivalent, str]]]:
+    """Survivors named in the judged-equivalent list become EQUIVALENT (with the reason). Entries worth a look are
+    returned with why: the mutant was judged and not a survivor (KILLED_ANYWAY), or it is not among `sites`, the
+    translation's mutants (NO_SUCH_MUTANT); an entry whose mutant a sample (--count) left out is neither."""
     by_key = {e.key: e for e in equivalents}
     used = set()
+    judged = set()
     out = []
     for v in verdicts:
+        judged.add(v.mutant.key)
         entry = by_key.get(v.mutant.key)
         if entry is not None and v.outcome == SURVIVED:
             used.add(entry.key)
             v = dataclasses.replace(v, outcome=EQUIVALENT, by=entry.reason)
         out.append(v)
-    return out, [e for e in equivalents if e.key not in used]
+    existing = {m.key for m in sites} if sites is not None else judged
+    notes = [(e, KILLED_ANYWAY if e.key in judged else NO_SUCH_MUTANT) for e in equivalents
+             if e.key not in used and (e.key in judged or e.key not in existing)]
+    return out, notes
 
 
 def survivor_location(st_text: str, mutant: Mutant) -> str:
@@ -414,8 +424,8 @@ def report_json(result: MutationResult, st_text: str) -> str:
                          "st_line": v.mutant.line, "where": survivor_location(st_text, v.mutant),
                          "st": v.mutant.original, "mutation": v.mutant.description, "by": v.by,
                          "seconds": round(v.seconds, 3)} for v in result.verdicts],
-            "unmatched_equivalents": [{"at": str(e.span), "pou": e.pou, "mutation": e.mutation, "st": e.st}
-                                      for e in result.unmatched_equivalents]}
+            "unmatched_equivalents": [{"at": str(e.span), "pou": e.pou, "mutation": e.mutation, "st": e.st,
+                                       "why": why} for e, why in result.unmatched_equivalents]}
     return json.dumps(data, indent=2) + "\n"
 
 
