@@ -149,3 +149,28 @@ def test_the_width_32_of_a_word_gate_is_never_mutated():
     assert "32 -> 33 at column 25" not in constants and "32 -> 31 at column 25" not in constants
     assert {"32 -> 33 at column 21", "16 -> 17 at column 23", "16 -> 15 at column 23"} <= set(constants)
     assert "32 -> 33 at column 20" in constants          # HH_SHL's count is no width
+
+
+def test_mutate_cli_judges_only_the_mutants_a_list_names(tmp_path, capsys):
+    # the --survivors format, as a user re-judges survivors: two mutants of the translation, one no longer in it
+    st_text = api_transpiled_st(TIMERS / "main.src")
+    first, second = mutation_sites(st_text)[:2]
+    listed = tmp_path / "list.yaml"
+    listed.write_text("".join(f"- pou: {m.pou}\n  operator: {m.operator}\n  mutation: '{m.description}'\n"
+                              f"  st: '{m.original}'\n  reason: 'TODO'\n" for m in (first, second))
+                      + "- pou: main\n  operator: constant\n  mutation: '7 -> 8 at column 1'\n  st: 'X := 7;'\n"
+                        "  reason: 'TODO'\n")
+    report = tmp_path / "m.json"
+    code = main(["mutate", str(TIMERS / "main.src"), "--scenario", str(TIMERS / "scenario.yaml"), "--random-cycles",
+                 "0", "--backend", "builtin", "--jobs", "1", "--mutants", str(listed), "--report", str(report),
+                 "--min-score", "0"])
+    out = capsys.readouterr().out
+    data = json.loads(report.read_text())
+    assert code == 0
+    assert sorted(m["st_line"] for m in data["mutants"]) == sorted([first.line, second.line])
+    assert "note: 1 of the 3 mutants --mutants lists are not mutants of the translation" in out
+
+
+def api_transpiled_st(main_src: Path) -> str:
+    from transpiler import api
+    return api.transpile(api.load_project(api.project_options(main_src)), formats=("st",)).st_text

@@ -359,12 +359,13 @@ class Mutation:
 
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
-           equivalent_file: Path | None = None,
+           equivalent_file: Path | None = None, mutants_file: Path | None = None,
            progress: Callable[[int, int], None] | None = None) -> Mutation:
     """Mutants of the emitted ST judged by co-simulation under the scenarios and `random_cycles` of
     coverage-guided stimulus (see verify/mutate.py); `count` > 0 judges a seeded sample spread over the
-    operators; `equivalent_file` lists mutants judged equivalent, which leave the denominator. Raises CompileFailed
-    on bad input, or when the unmutated translation is not equivalent under the stimulus."""
+    operators, `mutants_file` (the --survivors format) only the mutants it lists; `equivalent_file` lists mutants
+    judged equivalent, which leave the denominator. Raises CompileFailed on bad input, or when the unmutated
+    translation is not equivalent under the stimulus."""
     import os
     import tempfile
     import time
@@ -379,10 +380,11 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
         raise _usage("mutate needs at least one --scenario or --random-cycles N")
-    for path in [*scenarios, *([Path(equivalent_file)] if equivalent_file else [])]:
+    for path in [*scenarios, *(Path(f) for f in (equivalent_file, mutants_file) if f)]:
         if not path.is_file():
             raise _usage(f"file '{path}' does not exist")
     equivalents = load_equivalents(Path(equivalent_file)) if equivalent_file else []
+    listed = {e.key for e in load_equivalents(Path(mutants_file))} if mutants_file else None
     mp_path, mp, transpiled, diags = _translate(project, {"st"}, mp_file, False)
     st_text, iec = transpiled.st_text, transpiled.result.project
     chosen = choose_backend(backend, st_text, "project.st", iec)
@@ -410,6 +412,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                              "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
             sites = mutation_sites(st_text)
             mutants = choose(sites, count, seed)
+            if listed is not None:
+                mutants = [m for m in mutants if m.key in listed]
             start = time.perf_counter()
             verdicts = []
             for verdict in judge_all(judge, mutants, jobs):
@@ -424,5 +428,6 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                 os.environ["HH2IEC_CACHE"] = saved_cache
     verdicts.sort(key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
     verdicts, unmatched = apply_equivalents(verdicts, equivalents, sites)
-    result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched)
+    result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
+                            listed=len(listed) if listed is not None else None)
     return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

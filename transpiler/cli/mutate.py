@@ -26,6 +26,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, metavar="J", help="mutants judged in parallel")
     p.add_argument("--count", type=int, default=0, metavar="N",
                    help="judge a seeded sample of N mutants spread over the operators (default: all)")
+    p.add_argument("--mutants", type=Path, metavar="FILE",
+                   help="judge only the mutants this file lists (the --survivors format): re-judge survivors")
     p.add_argument("--equivalent", type=Path, metavar="FILE",
                    help="YAML list of mutants judged equivalent, each with its reason (left out of the score)")
     p.add_argument("--min-score", type=float, default=DEFAULT_MIN_SCORE, metavar="F",
@@ -47,20 +49,23 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         raise UsageError("--jobs must be at least 1")
     if not 0.0 <= args.min_score <= 1.0:
         raise UsageError("--min-score is a fraction between 0 and 1")
-    for path in [*args.scenario, *([args.equivalent] if args.equivalent else [])]:
+    for path in [*args.scenario, *(f for f in (args.equivalent, args.mutants) if f)]:
         if not path.is_file():
             raise UsageError(f"file '{path}' does not exist")
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
     run = api.mutate(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
                      backend=args.backend, mp_file=args.mp, jobs=args.jobs, count=args.count,
-                     equivalent_file=args.equivalent, progress=_progress())
+                     equivalent_file=args.equivalent, mutants_file=args.mutants, progress=_progress())
     print_diagnostics(run.diagnostics)
     if run.backend_note:
         print(f"note: {run.backend_note}", file=sys.stderr)
     result = run.result
     print(f"{result.sites} mutation sites; {len(result.verdicts)} mutants judged on the {result.backend} backend "
           f"under {len(result.scenarios)} scenarios (shortest first, until one diverges) in {result.seconds:.0f} s")
+    if result.listed is not None and args.count <= 0 and result.listed != len(result.verdicts):
+        print(f"note: {result.listed - len(result.verdicts)} of the {result.listed} mutants --mutants lists are not "
+              "mutants of the translation (it changed since the list was written)")
     print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>11}" for o in OUTCOMES))
     for op in OPERATORS:
         mine = [v for v in result.verdicts if v.mutant.operator == op]

@@ -371,6 +371,7 @@ class MutationResult:
     backend: str
     seconds: float
     unmatched_equivalents: list[tuple[JudgedEquivalent, str]] = dataclasses.field(default_factory=list)
+    listed: int | None = None                   # mutants the --mutants file lists (None: no such file)
 
     def count(self, outcome: str) -> int:
         return sum(1 for v in self.verdicts if v.outcome == outcome)
