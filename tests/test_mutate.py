@@ -10,7 +10,8 @@ import pytest
 from transpiler.cli.app import main
 from transpiler.diagnostics import CompileFailed
 from transpiler.verify.mutate import (EQUIVALENT, KILLED, KILLED_ANYWAY, NO_SUCH_MUTANT, SURVIVED, Mutant,
-                                      MutationResult, Verdict, apply_equivalents, load_equivalents, mutation_sites)
+                                      MutationResult, Verdict, apply_equivalents, equivalents_yaml, load_equivalents,
+                                      mutation_sites)
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMERS = ROOT / "samples" / "constructs" / "timers"
@@ -168,9 +169,25 @@ def test_mutate_cli_judges_only_the_mutants_a_list_names(tmp_path, capsys):
     data = json.loads(report.read_text())
     assert code == 0
     assert sorted(m["st_line"] for m in data["mutants"]) == sorted([first.line, second.line])
-    assert "note: 1 of the 3 mutants --mutants lists are not mutants of the translation" in out
+    assert "note: 1 of the mutants --mutants lists are not mutants of the translation" in out
 
 
 def api_transpiled_st(main_src: Path) -> str:
     from transpiler import api
     return api.transpile(api.load_project(api.project_options(main_src)), formats=("st",)).st_text
+
+
+def test_the_same_statement_twice_in_a_pou_gives_mutants_an_entry_tells_apart(tmp_path):
+    st_text = ("PROGRAM Main\nVAR\n    a : BOOL;\n    b : BOOL;\nEND_VAR\n    a := FALSE; (* main.src:1 *)\n"
+               "    b := a;\n    a := FALSE; (* main.src:3 *)\nEND_PROGRAM\n")
+    drops = [m for m in mutation_sites(st_text) if m.operator == "drop_statement" and m.original == "a := FALSE;"]
+    assert [(m.line, m.occurrence) for m in drops] == [(6, 1), (8, 2)]
+    entry = tmp_path / "eq.yaml"
+    entry.write_text("- pou: Main\n  operator: drop_statement\n  mutation: assignment loses its effect\n"
+                     "  st: 'a := FALSE;'\n  occurrence: 2\n  reason: the second store writes what is there\n")
+    verdicts, unmatched = apply_equivalents([_verdict(drops[0], SURVIVED), _verdict(drops[1], SURVIVED)],
+                                            load_equivalents(entry), drops)
+    assert [v.outcome for v in verdicts] == [SURVIVED, EQUIVALENT] and not unmatched
+    # the survivors file names the occurrence where it is not the first
+    assert "occurrence: 2" in equivalents_yaml([_verdict(drops[1], SURVIVED)])
+    assert "occurrence" not in equivalents_yaml([_verdict(drops[0], SURVIVED)])

@@ -428,6 +428,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                 os.environ["HH2IEC_CACHE"] = saved_cache
     verdicts.sort(key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
     verdicts, unmatched = apply_equivalents(verdicts, equivalents, sites)
+    absent = len(listed - {m.key for m in sites}) if listed is not None else 0
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
-                            listed=len(listed) if listed is not None else None)
+                            listed_absent=absent)
     return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -63,9 +63,9 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     result = run.result
     print(f"{result.sites} mutation sites; {len(result.verdicts)} mutants judged on the {result.backend} backend "
           f"under {len(result.scenarios)} scenarios (shortest first, until one diverges) in {result.seconds:.0f} s")
-    if result.listed is not None and args.count <= 0 and result.listed != len(result.verdicts):
-        print(f"note: {result.listed - len(result.verdicts)} of the {result.listed} mutants --mutants lists are not "
-              "mutants of the translation (it changed since the list was written)")
+    if result.listed_absent:
+        print(f"note: {result.listed_absent} of the mutants --mutants lists are not mutants of the translation (it "
+              "changed since the list was written)")
     print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>11}" for o in OUTCOMES))
     for op in OPERATORS:
         mine = [v for v in result.verdicts if v.mutant.operator == op]

@@ -59,6 +59,7 @@ class Mutant:
     description: str
     original: str                               # the code of the mutated line before the change (stripped)
     changes: tuple[tuple[int, str | None], ...]
+    occurrence: int = 1                         # n-th mutant of the POU with the same operator, mutation and code
 
     def apply(self, st_text: str) -> str:
         lines = st_text.splitlines()
@@ -67,9 +68,10 @@ class Mutant:
         return "\n".join(line for line in lines if line is not None) + "\n"
 
     @property
-    def key(self) -> tuple[str, str, str, str]:
-        """What a judged-equivalent entry matches: stable when the ST moves by some lines."""
-        return (self.pou.upper(), self.operator, self.description, self.original)
+    def key(self) -> tuple[str, str, str, str, int]:
+        """What a judged-equivalent entry matches: stable when the ST moves by some lines. The occurrence tells
+        apart the same statement written several times in one POU: one copy may be equivalent, another not."""
+        return (self.pou.upper(), self.operator, self.description, self.original, self.occurrence)
 
 
 def _code_part(line: str) -> tuple[str, str]:
@@ -182,6 +184,11 @@ def mutation_sites(st_text: str) -> list[Mutant]:
         first = lines[i1][:m1.start(2)] + m2.group(2) + lines[i1][m1.end(2):]
         second = lines[i2][:m2.start(2)] + m1.group(2) + lines[i2][m2.end(2):]
         add("swap_case", i1, pou1, f"CASE branches {m1.group(2)} and {m2.group(2)} swapped", first, ((i2, second),))
+    seen: dict[tuple, int] = {}
+    for i, m in enumerate(out):
+        count = seen[m.key] = seen.get(m.key, 0) + 1
+        if count > 1:
+            out[i] = dataclasses.replace(m, occurrence=count)
     return out
 
 
@@ -213,10 +220,11 @@ class JudgedEquivalent:
     st: str
     reason: str
     span: Span
+    occurrence: int = 1
 
     @property
-    def key(self) -> tuple[str, str, str, str]:
-        return (self.pou.upper(), self.operator, self.mutation, self.st)
+    def key(self) -> tuple[str, str, str, str, int]:
+        return (self.pou.upper(), self.operator, self.mutation, self.st, self.occurrence)
 
 
 def load_equivalents(path: Path) -> list[JudgedEquivalent]:
@@ -239,13 +247,17 @@ def load_equivalents(path: Path) -> list[JudgedEquivalent]:
     for i, entry in enumerate(data):
         line = nodes.value[i].start_mark.line + 1
         fields = ("pou", "operator", "mutation", "st", "reason")
-        if not isinstance(entry, dict) or set(entry) != set(fields) or not all(
+        if not isinstance(entry, dict) or set(entry) - {"occurrence"} != set(fields) or not all(
                 isinstance(entry[f], str) and entry[f].strip() for f in fields):
-            raise fail(line, "each entry needs exactly pou, operator, mutation, st and reason, all non-empty text")
+            raise fail(line, "each entry needs exactly pou, operator, mutation, st and reason, all non-empty text "
+                             "(and occurrence, a number, where the POU has the same statement more than once)")
+        occurrence = entry.get("occurrence", 1)
+        if type(occurrence) is not int or occurrence < 1:
+            raise fail(line, "occurrence is the number (1, 2, ...) of the statement among equal ones of its POU")
         if entry["operator"] not in OPERATORS:
             raise fail(line, f"unknown operator '{entry['operator']}' (one of {', '.join(OPERATORS)})")
         out.append(JudgedEquivalent(entry["pou"], entry["operator"], entry["mutation"], entry["st"].strip(),
-                                    entry["reason"].strip(), Span(str(path), line, 1)))
+                                    entry["reason"].strip(), Span(str(path), line, 1), occurrence))
     return out
 
 
@@ -371,7 +383,7 @@ class MutationResult:
     backend: str
     seconds: float
     unmatched_equivalents: list[tuple[JudgedEquivalent, str]] = dataclasses.field(default_factory=list)
-    listed: int | None = None                   # mutants the --mutants file lists (None: no such file)
+    listed_absent: int = 0                      # mutants the --mutants file lists that the translation has not
 
     def count(self, outcome: str) -> int:
         return sum(1 for v in self.verdicts if v.outcome == outcome)
@@ -452,8 +464,13 @@ def report_junit(result: MutationResult, st_text: str) -> str:
 
 def equivalents_yaml(verdicts: list[Verdict]) -> str:
     """Survivors in the format of the judged-equivalent file, with a reason still to be written."""
-    entries: list[dict[str, Any]] = [{"pou": v.mutant.pou, "operator": v.mutant.operator,
-                                      "mutation": v.mutant.description, "st": v.mutant.original,
-                                      "reason": "TODO: why this mutation cannot change behaviour"}
-                                     for v in verdicts if v.outcome == SURVIVED]
+    entries: list[dict[str, Any]] = []
+    for v in verdicts:
+        if v.outcome == SURVIVED:
+            m = v.mutant
+            entry: dict[str, Any] = {"pou": m.pou, "operator": m.operator, "mutation": m.description,
+                                     "st": m.original}
+            if m.occurrence > 1:
+                entry["occurrence"] = m.occurrence
+            entries.append({**entry, "reason": "TODO: why this mutation cannot change behaviour"})
     return yaml.safe_dump(entries, sort_keys=False, width=120, allow_unicode=True)
