@@ -74,15 +74,23 @@ def _verdict(mutant: Mutant, outcome: str) -> Verdict:
     return Verdict(mutant, outcome, "", 0.0)
 
 
+def _entry(pou: str, operator: str, mutation: str, st: str, reason: str, occurrence: int = 1) -> str:
+    """One entry of a judged-equivalent (or --mutants) file."""
+    extra = f"  occurrence: {occurrence}\n" if occurrence > 1 else ""
+    return (f"- pou: {pou}\n  operator: {operator}\n  mutation: '{mutation}'\n  st: '{st}'\n{extra}"
+            f"  reason: {reason}\n")
+
+
+def _mutant_entry(m: Mutant, reason: str) -> str:
+    return _entry(m.pou, m.operator, m.description, m.original, reason, m.occurrence)
+
+
 def test_judged_equivalent_file_takes_survivors_out_of_the_denominator(tmp_path):
     sites = mutation_sites(ST)
     survivor, killed = sites[0], sites[1]
     entry = tmp_path / "eq.yaml"
-    entry.write_text(f"- pou: {survivor.pou}\n  operator: {survivor.operator}\n"
-                     f"  mutation: '{survivor.description}'\n  st: '{survivor.original}'\n"
-                     f"  reason: the value written is the one already there\n"
-                     f"- pou: Main\n  operator: {killed.operator}\n  mutation: '{killed.description}'\n"
-                     f"  st: '{killed.original}'\n  reason: wrong judgement\n")
+    entry.write_text(_mutant_entry(survivor, "the value written is the one already there")
+                     + _mutant_entry(killed, "wrong judgement"))
     judged = load_equivalents(entry)
     verdicts, unmatched = apply_equivalents([_verdict(survivor, SURVIVED), _verdict(killed, KILLED)], judged, sites)
     assert [v.outcome for v in verdicts] == [EQUIVALENT, KILLED]
@@ -97,10 +105,8 @@ def test_a_judged_equivalent_entry_is_stale_when_its_mutant_is_gone_and_silent_w
     sites = mutation_sites(ST)
     sampled, left_out = sites[0], sites[1]
     entry = tmp_path / "eq.yaml"
-    entry.write_text(f"- pou: Main\n  operator: {left_out.operator}\n  mutation: '{left_out.description}'\n"
-                     f"  st: '{left_out.original}'\n  reason: not in this sample\n"
-                     f"- pou: Main\n  operator: constant\n  mutation: '7 -> 8 at column 1'\n"
-                     f"  st: 'X := 7;'\n  reason: the translation no longer has this line\n")
+    entry.write_text(_mutant_entry(left_out, "not in this sample")
+                     + _entry("Main", "constant", "7 -> 8 at column 1", "X := 7;", "the translation no longer has it"))
     judged = load_equivalents(entry)
     _, unmatched = apply_equivalents([_verdict(sampled, KILLED)], judged, sites)
     assert [(u.st, why) for u, why in unmatched] == [("X := 7;", NO_SUCH_MUTANT)]
@@ -157,10 +163,8 @@ def test_mutate_cli_judges_only_the_mutants_a_list_names(tmp_path, capsys):
     st_text = api_transpiled_st(TIMERS / "main.src")
     first, second = mutation_sites(st_text)[:2]
     listed = tmp_path / "list.yaml"
-    listed.write_text("".join(f"- pou: {m.pou}\n  operator: {m.operator}\n  mutation: '{m.description}'\n"
-                              f"  st: '{m.original}'\n  reason: 'TODO'\n" for m in (first, second))
-                      + "- pou: main\n  operator: constant\n  mutation: '7 -> 8 at column 1'\n  st: 'X := 7;'\n"
-                        "  reason: 'TODO'\n")
+    listed.write_text(_mutant_entry(first, "TODO") + _mutant_entry(second, "TODO")
+                      + _entry("main", "constant", "7 -> 8 at column 1", "X := 7;", "TODO"))
     report = tmp_path / "m.json"
     code = main(["mutate", str(TIMERS / "main.src"), "--scenario", str(TIMERS / "scenario.yaml"), "--random-cycles",
                  "0", "--backend", "builtin", "--jobs", "1", "--mutants", str(listed), "--report", str(report),
@@ -183,8 +187,7 @@ def test_the_same_statement_twice_in_a_pou_gives_mutants_an_entry_tells_apart(tm
     drops = [m for m in mutation_sites(st_text) if m.operator == "drop_statement" and m.original == "a := FALSE;"]
     assert [(m.line, m.occurrence) for m in drops] == [(6, 1), (8, 2)]
     entry = tmp_path / "eq.yaml"
-    entry.write_text("- pou: Main\n  operator: drop_statement\n  mutation: assignment loses its effect\n"
-                     "  st: 'a := FALSE;'\n  occurrence: 2\n  reason: the second store writes what is there\n")
+    entry.write_text(_mutant_entry(drops[1], "the second store writes what is there"))
     verdicts, unmatched = apply_equivalents([_verdict(drops[0], SURVIVED), _verdict(drops[1], SURVIVED)],
                                             load_equivalents(entry), drops)
     assert [v.outcome for v in verdicts] == [SURVIVED, EQUIVALENT] and not unmatched
