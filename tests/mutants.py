@@ -28,8 +28,8 @@ CONSTRUCTS = ROOT / "samples" / "constructs"
 MIN_SCORE = "0.97"
 
 
-def arguments(argv: list[str] | None = None) -> list[str]:
-    """The `hh2iec mutate` command line for the sample."""
+def arguments(argv: list[str] | None = None) -> list[list[str]]:
+    """The `hh2iec mutate` command lines: the sample's, then (with --constructs) each construct project's."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=150, help="mutants to judge, spread over the operators")
     parser.add_argument("--all", action="store_true", help="judge every mutation site (slow)")
