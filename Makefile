@@ -64,7 +64,8 @@ clean:
 
 # matiec's own verdicts (needs MATIEC_HOME: the folder holding iec2c and its lib/). Runs every test file that
 # uses iec2c; a skip for lack of iec2c fails the target.
-MATIEC_TESTS = $(shell grep -rl find_iec2c tests --include='test_*.py' | sort)
+# every test file that looks for iec2c, itself or through the text-project helper
+MATIEC_TESTS = $(shell grep -rlE 'find_iec2c|tests.text_project' tests --include='test_*.py' | sort)
 test-matiec: venv shim
 	@test -x "$(MATIEC_HOME)/iec2c" || { echo "test-matiec: MATIEC_HOME must name the folder holding iec2c and its lib/ (\$$MATIEC_HOME/iec2c not found: '$(MATIEC_HOME)/iec2c')" >&2; exit 1; }
 	@log=$$(mktemp); MATIEC_HOME="$(MATIEC_HOME)" $(PY) -m pytest -q -rs $(MATIEC_TESTS) >$$log 2>&1; rc=$$?; cat $$log; \
