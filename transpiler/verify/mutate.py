@@ -403,7 +403,7 @@ NO_SUCH_MUTANT = "gone"      # the translation has no such mutant (any more): th
 
 
 def apply_equivalents(verdicts: list[Verdict], equivalents: list[JudgedEquivalent],
-                      sites: Iterable[Mutant] | None = None) -> tuple[list[Verdict], list[tuple[JudgedEquivalent, str]]]:
+                      sites: Iterable[Mutant]) -> tuple[list[Verdict], list[tuple[JudgedEquivalent, str]]]:
     """Survivors named in the judged-equivalent list become EQUIVALENT (with the reason). Entries worth a look are
     returned with why: the mutant was judged and not a survivor (KILLED_ANYWAY), or it is not among `sites`, the
     translation's mutants (NO_SUCH_MUTANT); an entry whose mutant a sample (--count) left out is neither."""
@@ -418,7 +418,7 @@ def apply_equivalents(verdicts: list[Verdict], equivalents: list[JudgedEquivalen
             used.add(entry.key)
             v = dataclasses.replace(v, outcome=EQUIVALENT, by=entry.reason)
         out.append(v)
-    existing = {m.key for m in sites} if sites is not None else judged
+    existing = {m.key for m in sites}
     notes = [(e, KILLED_ANYWAY if e.key in judged else NO_SUCH_MUTANT) for e in equivalents
              if e.key not in used and (e.key in judged or e.key not in existing)]
     return out, notes

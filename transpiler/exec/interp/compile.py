@@ -163,23 +163,21 @@ def _entries(program: Program) -> tuple[list[set[int]], list[set[int]]]:
     return [s | e for s, e in zip(starts, entries)], entries
 
 
-def _untested_blocks(code: FileCode, starts: list[int], entries: set[int],
-                     groups: list[list[int]]) -> tuple[set[int], set[int]]:
-    """(blocks whose `if b == k` test can go, blocks the dispatch loop may be entered with) of one file.
+def _untested_blocks(code: FileCode, seg_of: dict[int, int], entries: set[int], groups: list[list[int]],
+                     leaf_of: dict[int, int]) -> tuple[set[int], set[int]]:
+    """(blocks whose `if b == k` test can go, blocks the dispatch loop may be entered with) of one file, given its
+    block starts (`seg_of`: op index -> block) and dispatch leaves (`groups`, and `leaf_of`: block -> leaf).
 
     The tests of a leaf run in order, so the values b can hold at the test of block k are known: at the leaf's top
     the blocks of the leaf the dispatch loop enters (entries, targets of jumps that go round the loop, the first
     block of every leaf), then after each block the values before it except its own plus the later blocks of the
     leaf it falls or jumps to. Where that is k alone, the test always holds and block k's code runs unconditionally.
     """
-    leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
-    seg_of = {start: k for k, start in enumerate(starts)}
-    falls: list[set[int]] = [set() for _ in starts]
+    falls: list[set[int]] = [set() for _ in seg_of]
     dispatched = {seg_of[e] for e in entries if e in seg_of} | {group[0] for group in groups}
     k = -1
     for i, op in enumerate(code.ops):
-        while k + 1 < len(starts) and starts[k + 1] <= i:
-            k += 1
+        k = seg_of.get(i, k)
         if k < 0 or op.code not in ("JP", "JPT", "JPF") or op.target not in seg_of:
             continue
         target = seg_of[op.target]
@@ -309,11 +307,9 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         rollback = (len(self.lines), len(self.stretch_ops), len(self.case_tables))
         groups = self._leaves(f, code, starts)
         self.leaf_of = {k: leaf for leaf, group in enumerate(groups) for k in group}
-        for omit in (True, False):
-            self.untested, self.dispatched = _untested_blocks(code, starts, self.entries[f], groups)
-            if not omit:
-                self.untested, self.dispatched = set(), set(range(len(starts)))
-            self.tests_broken = False
+        omitted = _untested_blocks(code, self.seg_maps[f], self.entries[f], groups, self.leaf_of)
+        for untested, dispatched in (omitted, (set(), set(range(len(starts))))):
+            self.untested, self.dispatched, self.tests_broken = untested, dispatched, False
             self._dispatch(f, code, starts, groups, 3)
             if not self.tests_broken:
                 return

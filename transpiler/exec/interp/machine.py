@@ -280,9 +280,10 @@ class Machine:
         self.next_cycle += 1
 
     def program_phase(self, cycle: int, report: CycleReport | None = None) -> None:
-        """Phases 4 and 5. A budget overrun seen by the fast code's pre-count re-runs both phases from a snapshot
-        with per-instruction counting, replaying the module calls, so the watchdog fault is exact (with coverage, a
-        cycle that faults is re-run the same way, so that coverage is exact up to the fault)."""
+        """Phases 4 and 5. A budget overrun seen by the fast code (at a jump back, a call or a module call, or in
+        its count after the cycle) re-runs both phases from a snapshot with per-instruction counting, replaying the
+        module calls, so the watchdog fault is exact (with coverage, a cycle that faults is re-run the same way, so
+        that coverage is exact up to the fault)."""
         report = report or self._report
         self._report = report
         self.runtime.cycle = cycle
