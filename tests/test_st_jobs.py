@@ -15,13 +15,18 @@ from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.exec.stexec import load_st
 from tests.text_project import BACKENDS, cosim, translate
 
-GLOBALS = [("G_CMD", "INT"), ("G_JOB", "INT"), ("G_ID", "DINT"), ("G_RESULT", "DINT")]
+GLOBALS = [("G_CMD", "INT"), ("G_JOB", "INT"), ("G_ID", "DINT"), ("G_RESULT", "DINT"), ("G_QUEUE", jobs.QUEUE_TYPE)]
 
 
 def _queue_runtime(model: str):
+    # The queue is a global STRUCT the block gets in-out, as the translation passes it; a fresh block instance every
+    # cycle shows that the block keeps no state of its own.
     ext = VarSection("VAR_EXTERNAL", tuple(IecVar(n, t) for n, t in GLOBALS))
-    prog = Pou("HARNESS", "PROGRAM", (ext, VarSection("VAR", (IecVar("Q", jobs.QUEUE_FB),))),
-               "Q(CMD := G_CMD, JOB := G_JOB, ID := G_ID);\nG_RESULT := Q.RESULT;")
+    prog = Pou("HARNESS", "PROGRAM", (ext, VarSection("VAR", (IecVar("B1", jobs.QUEUE_FB), IecVar("B2", jobs.QUEUE_FB),
+                                                              IecVar("FLIP", "BOOL")))),
+               "FLIP := NOT FLIP;\nIF FLIP THEN\n    B1(CMD := G_CMD, JOB := G_JOB, ID := G_ID, Q := G_QUEUE);\n"
+               "    G_RESULT := B1.RESULT;\nELSE\n    B2(CMD := G_CMD, JOB := G_JOB, ID := G_ID, Q := G_QUEUE);\n"
+               "    G_RESULT := B2.RESULT;\nEND_IF;")
     config = Configuration("CONFIG0", "RES0", (Task("TASK0", 10),), (ProgramInstance("INST0", "TASK0", "HARNESS"),),
                            (VarSection("VAR_GLOBAL", tuple(IecVar(n, t) for n, t in GLOBALS)),))
     project = IecProject("HARNESS", tuple(jobs.queue_types(model)), (jobs.queue_fb(model), prog), config)

@@ -80,7 +80,8 @@ class StBackend:
     # ---- naming
 
     def _reserve_pou_names(self, helpers: Mapping[str, Pou]) -> None:
-        for name in [*helpers, "HH_TIMER", "HH_COUNTER", jobs.QUEUE_FB, jobs.QUEUE_INTS, jobs.QUEUE_FLAGS]:
+        for name in [*helpers, "HH_TIMER", "HH_COUNTER", jobs.QUEUE_FB, jobs.QUEUE_TYPE, jobs.QUEUE_INTS,
+                     jobs.QUEUE_FLAGS]:
             self.names.reserve(name, f"lib:{name}")
         self.main_pou = self.names.name("pou:main", self.main_name_wanted)
         self.pou_names: dict[tuple[int, int], str] = {}
@@ -335,7 +336,7 @@ class StBackend:
         accessors = AccessorPool()
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
                              self._kfield, self._stack_names, self._module_call, self.semantics, accessors.pick,
-                             self.job_plan.routine(key, self._job_queue), instance)
+                             self.job_plan.routine(key, lambda: self._queue_access(temps)), instance)
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
@@ -514,11 +515,19 @@ class StBackend:
         return out + self.types
 
     def _job_queue(self) -> str:
-        """The global instance of the submit-job queue, as the POU bodies name it (declared on first use)."""
+        """The global submit-job queue, as the POU bodies name it (declared on first use)."""
         if self.job_queue is None:
-            self.job_queue = self.layout.ref(self.layout.add_register("jobs", "HH_Jobs", jobs.QUEUE_FB,
+            self.job_queue = self.layout.ref(self.layout.add_register("jobs", jobs.QUEUE_DATA, jobs.QUEUE_TYPE,
                                                                       "queued and running submit jobs", group="jobs"))
         return self.job_queue
+
+    def _queue_access(self, temps: list[tuple[str, str]] | None = None) -> jobs.QueueAccess:
+        """The queue as one POU reaches it: the block's instance (added to `temps`, the POU's locals, on first use;
+        one name in every POU) and the global queue."""
+        instance = self.names.name("jobs:block", jobs.QUEUE_INSTANCE)
+        if temps is not None and (instance, jobs.QUEUE_FB) not in temps:
+            temps.append((instance, jobs.QUEUE_FB))
+        return jobs.QueueAccess(instance, self._job_queue())
 
     def _jobs_program(self, layout: Layout) -> Pou:
         """The PROGRAM that runs the queued jobs after the main program, each with its own registers and error
@@ -542,7 +551,7 @@ class StBackend:
         calls = [jobs.JobCall(number, self.instance_names[key], self.pou_names[key],
                               f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}")
                  for key, number in self.job_plan.numbers.items()]
-        return jobs.jobs_program(name, self._job_queue(), self.semantics["submit_model"], calls,
+        return jobs.jobs_program(name, self._queue_access(), self.semantics["submit_model"], calls,
                                  own, self.stack[1] if self.stack is not None else None, in_job,
                                  lambda wanted: self.names.name(f"jobs:{wanted}", wanted))
 
@@ -565,7 +574,8 @@ class StBackend:
             # In the same task after the main program: the jobs run in phase 5 of the cycle.
             programs.append(ProgramInstance(self.names.name("instance:jobs", f"PLC_{job_program.name}"), task,
                                             job_program.name))
-        return Configuration(self.names.name("config", "HH_Config"), self.names.name("resource", "HH_Resource"),
+        # Config0/Res0: the names OpenPLC's runtime build expects (and OpenPLC Editor and Beremiz give a new project).
+        return Configuration(self.names.name("config", "Config0"), self.names.name("resource", "Res0"),
                              (Task(task, cycle, 0),), tuple(programs), tuple(sections))
 
 
