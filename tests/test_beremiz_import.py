@@ -1,7 +1,8 @@
 """The PLCopen XML that transpile writes loads in Beremiz's PLCopen importer and builds there (the import
 acceptance of docs/import.md): Beremiz opens project.xml without a load error, generates its ST without errors,
 and matiec's iec2c compiles that ST. The library files (hh_lib.xml, hh_sys.xml: POUs, no configuration) load,
-generate and compile the same way.
+generate and compile the same way. The project folder (plc_project/: plc.xml and beremiz.xml) opens with
+Beremiz's own project loader and builds to a PLC library with its own build (generator, iec2c, C compiler).
 
 Optional: runs only when BEREMIZ_HOME names a Beremiz checkout and MATIEC_HOME the folder holding iec2c and its
 lib/ (`make test-beremiz`). BEREMIZ_PYTHON is the interpreter with Beremiz's dependencies (lxml, numpy,
@@ -68,6 +69,54 @@ for job in json.load(sys.stdin):
             result["iec2c_output"] = (proc.stdout + proc.stderr)[-4000:]
     except Exception:
         result["exception"] = traceback.format_exc()
+    print("HH2IEC-BEREMIZ " + json.dumps(result), flush=True)
+'''
+
+
+# Runs inside BEREMIZ_PYTHON: opens each project folder (plc_project/) as Beremiz opens a project
+# (ProjectController.LoadProject) and builds it (its own PLCopen generator, iec2c, the C compiler, the link), headless.
+# Beremiz finds iec2c only beside its checkout or on PATH: the two look-ups are pointed at MATIEC_HOME.
+PROJECT_LOADER = r'''
+import json, os, sys, traceback
+home, matiec = sys.argv[1], sys.argv[2]
+sys.path.insert(0, home)
+os.chdir(home)
+import fake_wx  # noqa: F401
+import ProjectController as project_controller
+project_controller.Iec2CSettings.findCmd = lambda self: os.path.join(matiec, "iec2c")
+project_controller.Iec2CSettings.findLibPath = lambda self: os.path.join(matiec, "lib")
+
+
+class Log:
+    def __init__(self):
+        self.errors, self.warnings = [], []
+    def write(self, text):
+        pass
+    def write_warning(self, text):
+        if text:
+            self.warnings.append(text)
+    def write_error(self, text):
+        if text:
+            self.errors.append(text)
+    def flush(self):
+        pass
+    def isatty(self):
+        return False
+    def progress(self, text):
+        pass
+
+
+for job in json.load(sys.stdin):
+    result = {"name": job["name"]}
+    log = Log()
+    try:
+        controller = project_controller.ProjectController(None, log)
+        error, _ = controller.LoadProject(job["folder"], job["build"])
+        result["load_error"] = None if error is None else str(error)
+        result["built"] = error is None and bool(controller._Build())
+    except Exception:
+        result["exception"] = traceback.format_exc()
+    result["errors"], result["warnings"] = log.errors, log.warnings
     print("HH2IEC-BEREMIZ " + json.dumps(result), flush=True)
 '''
 
@@ -142,4 +191,32 @@ def test_transpiled_projects_load_and_build_in_beremiz(tmp_path: Path, capsys) -
                    if not re.search(rf"\b(FUNCTION_BLOCK|FUNCTION|PROGRAM)\s+{re.escape(n.upper())}\b", generated)]
         if missing:
             problems.append(f"{where}: POUs missing from Beremiz's generated ST: {missing}")
+    problems += _project_folders_open_and_build(home, matiec, python, outputs, tmp_path)
     assert not problems, "\n".join(problems)
+
+
+def _project_folders_open_and_build(home: Path, matiec: Path, python: str, outputs: dict[str, Path],
+                                    tmp_path: Path) -> list[str]:
+    """The plc_project/ folder of each transpiled project opens as a Beremiz project (no load error, no warning:
+    an XSD problem is only a warning there) and builds to a PLC library; the problems found."""
+    (tmp_path / "beremiz_build").mkdir()
+    jobs = [{"name": name, "folder": str(out / "plc_project"), "build": str(tmp_path / "beremiz_build" / name)}
+            for name, out in outputs.items()]
+    proc = subprocess.run([python, "-c", PROJECT_LOADER, str(home), str(matiec)], input=json.dumps(jobs), cwd=home,
+                          capture_output=True, text=True, timeout=1800)
+    results = {r["name"]: r for r in (json.loads(line.split(" ", 1)[1]) for line in proc.stdout.splitlines()
+                                      if line.startswith("HH2IEC-BEREMIZ "))}
+    if set(results) != {job["name"] for job in jobs}:
+        return [f"Beremiz's project loader did not run (exit {proc.returncode}):\n{proc.stdout[-3000:]}\n"
+                f"{proc.stderr[-3000:]}"]
+    problems = []
+    for job in jobs:
+        r = results[job["name"]]
+        if "exception" in r:
+            problems.append(f"{job['name']}/plc_project: Beremiz raised\n{r['exception']}")
+        elif r["load_error"] is not None or r["warnings"] or not r["built"]:
+            problems.append(f"{job['name']}/plc_project: load error {r['load_error']}, built {r['built']}, "
+                            f"warnings {r['warnings'][:5]}, errors {r['errors'][:5]}")
+        elif not list((Path(job["build"])).glob("*.so")):
+            problems.append(f"{job['name']}/plc_project: the build wrote no PLC library")
+    return problems

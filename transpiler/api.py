@@ -219,8 +219,9 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
     """Translate to ST / PLCopen XML (with the helper library hh_lib.st / hh_lib.xml, docs/hh_lib.md) plus
     report.md and io_map.csv. Raises HH2IECError on bad machine parameters, on code the back end cannot translate
     (E-UNSUPPORTED, unless `allow_untranslated`: then each is a warning and report.md opens with the list), or
-    when an XML file does not validate against the cached TC6 schema (a bug in hh2iec). `target` (matiec, openplc, codesys, twincat) picks the dialect of project.st
-    and project.xml (docs/import.md)."""
+    when an XML file does not validate against the cached TC6 schema (a bug in hh2iec). `target` (matiec, openplc,
+    codesys, twincat) picks the dialect of project.st and project.xml (docs/import.md); for openplc the ST must also
+    pass the runtime build's own rules (verify/openplc_rules.py, E-TARGET)."""
     formats = {f.strip().lower() for f in formats if f.strip()}
     if not formats or formats - {"st", "xml"}:
         raise _usage(f"formats are st, xml or both, not '{','.join(sorted(formats))}'")
@@ -228,11 +229,20 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
     if target not in TARGETS:
         raise _usage(f"target is one of {', '.join(TARGETS)}, not '{target}'")
     path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated, target)
+    if target == "openplc":
+        # The runtime's own build takes more than matiec does (names, accessor macros, I/O image): a translation it
+        # would reject is a bug here, and nothing is written. The XML holds the same text.
+        from transpiler.verify.openplc_rules import openplc_problems
+        problems = openplc_problems(out.st_text, "project.st")
+        if problems:
+            raise CompileFailed(list(diags.items) + problems)
     validated = False
     if "xml" in formats and validate_xml:
         from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
         if schema_path() is not None:
-            for name in sorted(n for n in out.files if n.endswith(".xml")):     # the project and its libraries
+            # The project and its libraries; the files in subfolders are no TC6 XML of their own (the editor
+            # project's plc.xml is project.xml byte for byte).
+            for name in sorted(n for n in out.files if n.endswith(".xml") and "/" not in n):
                 problems = validate(out.files[name], name)
                 if problems:
                     raise CompileFailed(list(diags.items) + [Diagnostic.of(

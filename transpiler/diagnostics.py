@@ -155,6 +155,10 @@ CODES: dict[str, CodeInfo] = {
            "hh2iec equiv Main.src --st broken.st\n; broken.st:  PROGRAM P  x := ;  END_PROGRAM"),
         _c("E-TOOL", "error", "internal tool error or missing tool (a bug in hh2iec or a missing dependency)",
            "hh2iec equiv Main.src --backend matiec   ; iec2c is not installed"),
+        _c("E-TARGET", "error", "the ST does not fit the chosen target's own build (for --target openplc: the "
+           "configuration's names, writes through a VAR_EXTERNAL FB instance, located addresses the runtime does not "
+           "map); in a translation this is a bug in hh2iec", "CONFIGURATION HH_Config  ; the OpenPLC runtime needs "
+           "Config0"),
         _c("E-USAGE", "error", "bad command-line usage",
            "hh2iec check          ; MAIN.src is missing\nhh2iec check Main.src -D CFG_X    ; -D needs NAME=VALUE"),
         _c("E-XSD", "error", "emitted PLCopen XML does not validate against the TC6 schema (a bug in hh2iec)",

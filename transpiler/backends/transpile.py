@@ -16,6 +16,8 @@ from transpiler.backends.st.backend import StBackend, StResult
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, dialect, for_target, target_section
 from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
+from transpiler.backends.plcopen.project_folder import project_folder
+from transpiler.backends.report.loading import how_to_load
 from transpiler.backends.report.report import render_io_map, render_report
 
 
@@ -48,6 +50,9 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         files["project.st"] = render_target_st(laid_out).encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_target_xml(laid_out)
+        if chosen.xml_globals == "configuration":
+            # The editors built on matiec (OpenPLC Editor, Beremiz) open a folder as a project.
+            files.update(project_folder(files["project.xml"]))
     # The HH_Sys interface library also as files of its own, for the target IDE (sys_library.py).
     library = library_project(project)
     if library is not None:
@@ -62,6 +67,8 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         files[hh_lib.ST_FILE] = render_library_st(helpers).encode("utf-8")
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
-    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)).encode("utf-8")
+    written = [*files, "report.md", "io_map.csv"]
+    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)
+                          + how_to_load(laid_out, written)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

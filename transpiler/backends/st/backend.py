@@ -21,7 +21,7 @@ from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes, printer, simplify
 from transpiler.backends.st import stmt as S
-from transpiler.backends.st.names import RESERVED, TEMP_PREFIX, NameTable, legalise
+from transpiler.backends.st.names import POU_KEY_PREFIX, RESERVED, TEMP_PREFIX, NameTable, legalise
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported, tag
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
@@ -83,10 +83,10 @@ class StBackend:
         for name in [*helpers, "HH_TIMER", "HH_COUNTER", jobs.QUEUE_FB, jobs.QUEUE_TYPE, jobs.QUEUE_INTS,
                      jobs.QUEUE_FLAGS]:
             self.names.reserve(name, f"lib:{name}")
-        self.main_pou = self.names.name("pou:main", self.main_name_wanted)
+        self.main_pou = self.names.name(f"{POU_KEY_PREFIX}main", self.main_name_wanted)
         self.pou_names: dict[tuple[int, int], str] = {}
         for r in self.program.routines:
-            self.pou_names[r.key] = self.names.name(f"pou:{r.file}:{r.index}", r.label)
+            self.pou_names[r.key] = self.names.name(f"{POU_KEY_PREFIX}{r.file}:{r.index}", r.label)
 
     def _name_instances(self) -> None:
         """One instance per subprogram (its markers are the program's, so every call shares it), named after it
@@ -547,7 +547,7 @@ class StBackend:
                 own.append(jobs.OwnValue(lhs, zero.text, "BYTE" if "[" in lhs else "INT"))
         in_job = self.names.get("in_job")
         in_job = layout.ref(in_job) if in_job is not None else None
-        name = self.names.name("pou:jobs", "HH_SubmitJobs")
+        name = self.names.name(f"{POU_KEY_PREFIX}jobs", "HH_SubmitJobs")
         calls = [jobs.JobCall(number, self.instance_names[key], self.pou_names[key],
                               f"{self.job_plan.labels[key]} of {self.program.files[key[0]].path}")
                  for key, number in self.job_plan.numbers.items()]

@@ -1,0 +1,89 @@
+"""report.md: "How to load this on <target>": the steps for the chosen target, written from what was emitted (the
+files, the configuration and resource, the task and the program instances it calls in order, the global variable
+lists, the libraries), so that they name exactly what the integrator will see."""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from transpiler.backends.iec_model import IecProject
+from transpiler.backends.st.dialect import TargetProject
+
+EDITOR_FOLDER = "plc_project"
+
+
+def _task_lines(project: IecProject) -> list[str]:
+    """One line per task: its name, cycle, priority and the program instances it calls, in order."""
+    conf = project.configuration
+    lines = []
+    for task in conf.tasks:
+        calls = [f"`{inst.name}` (PROGRAM `{inst.type_name}`)" for inst in conf.instances if inst.task == task.name]
+        order = " then ".join(calls) if calls else "no program"
+        lines.append(f"task `{task.name}`: cyclic, every {task.interval_ms} ms, priority {task.priority}; calls "
+                     f"{order}{', in this order, in the same task' if len(calls) > 1 else ''}")
+    return lines
+
+
+def _io_counts(target: TargetProject) -> tuple[int, int]:
+    sections = [*target.project.configuration.globals, *(s for g in target.gvls for s in g.sections),
+                *(s for pou in target.project.pous for s in pou.sections)]
+    located = [v.address for s in sections for v in s.vars if v.address]
+    return sum(a.startswith("%I") for a in located), sum(a.startswith("%Q") for a in located)
+
+
+def _libraries(files: set[str]) -> list[str]:
+    return sorted(name for name in files if name.startswith(("hh_lib.", "hh_sys.")))
+
+
+def how_to_load(target: TargetProject, file_names: Iterable[str]) -> str:
+    """The report section for `target`; `file_names` are the files transpile writes."""
+    files = set(file_names)
+    project = target.project
+    conf = project.configuration
+    name = target.dialect.name
+    title = {"matiec": "Beremiz (or any matiec-based IDE)", "openplc": "OpenPLC (runtime and Editor)",
+             "codesys": "CODESYS V3", "twincat": "TwinCAT 3"}.get(name, name)
+    inputs, outputs = _io_counts(target)
+    lines = ["", f"## How to load this on {title}", ""]
+    tasks = _task_lines(project)
+    if name == "openplc":
+        lines += [
+            "OpenPLC runtime (web interface):",
+            "",
+            "1. *Programs > Upload Program*: choose `project.st` as it is and launch the compilation. The runtime "
+            f"builds the CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` (the names its build expects); "
+            "nothing needs editing.",
+            "2. The runtime runs the " + (tasks[0] if tasks else "task") + " (as the ST declares it).",
+            "3. Start the PLC. Outputs `%QXa.b` are Modbus coils 8a+b, inputs `%IXa.b` discrete inputs 8a+b "
+            f"({inputs} inputs, {outputs} outputs; `io_map.csv` names each).",
+            "",
+            f"OpenPLC Editor: open the folder `{EDITOR_FOLDER}/` (*File > Open*), then *Generate program for OpenPLC "
+            "Runtime* writes the .st to upload as above.",
+        ]
+    elif name == "matiec":
+        lines += [
+            f"1. Open the folder `{EDITOR_FOLDER}/` as a project (*File > Open*; `plc.xml` is `project.xml`), or "
+            "import `project.xml` into a project of your own.",
+            f"2. Build. The CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` holds the "
+            + (tasks[0] if tasks else "task") + ".",
+            f"3. Map the located variables ({inputs} `%IX` inputs, {outputs} `%QX` outputs; `io_map.csv`) to your "
+            "I/O.",
+        ]
+    else:
+        gvls = ", ".join(f"`{g.name}`" for g in target.gvls) or "none"
+        lines += [
+            "1. Import `project.xml` (*Project > Import PLCopenXML*; TwinCAT: *Import PLCopenXML* in the PLC "
+            f"project's context menu) and take every object: the POUs, the data types and the global variable lists "
+            f"({gvls}).",
+            "2. An import creates no task: create it in the task configuration, as the translation runs it:",
+            *[f"   - {line}" for line in tasks],
+            f"3. Link the located variables ({inputs} `%IX` inputs, {outputs} `%QX` outputs; `io_map.csv`) to the "
+            "I/O of the device tree.",
+        ]
+    libraries = _libraries(files)
+    if libraries:
+        lines += ["", "Libraries written beside the project (optional: the project is complete without them): "
+                  + ", ".join(f"`{n}`" for n in libraries) + " (see docs/hh_lib.md and docs/modules.md)."]
+    lines += ["", "Then provide what the section \"What the target must provide\" lists (the NC side, the first-cycle "
+              "marker, the PLC modules)."]
+    return "\n".join(lines) + "\n"
