@@ -19,11 +19,13 @@ make one (the runtime's Modbus server listens on every interface).
 The comparison: the reference interpreter runs the original program over the same time from a power-on with all
 inputs low and no NC (the runtime has none: nothing pulses the first-cycle marker or writes an NC operand); every
 output whose value the reference holds steady over the whole window of the reads must have that value in every
-read. Outputs that change inside the window are counted, not compared.
+read. Outputs that change inside the window are counted, not compared; a program whose reference faults under that
+power-on (an index its inputs must set first) is built and not compared, and its verdict says why.
 
     python -m tests.openplc_runtime --measure    # build every snippet of tests/data/openplc_verdicts and every
                                                  # sample project, run the projects, rewrite the recorded verdicts
     python -m tests.openplc_runtime --check      # the same, compared with the recorded verdicts (exit 1 on a change)
+    python -m tests.openplc_runtime --random 20 --seed 3   # 20 random projects of the differential tester
 """
 
 from __future__ import annotations
@@ -291,11 +293,26 @@ class Reference:
     fault: str = ""                       # the reference's fault, when it faults before the reads end
 
 
-def reference(folder: Path) -> Reference:
-    """The openplc translation of `folder`, and the reference's outputs over the run (see the module docstring)."""
+def random_projects(count: int, seed: int, root: Path) -> list[tuple[str, Path, Path | None]]:
+    """`count` random projects of the differential tester (programs nobody wrote for this check), written under
+    `root`: (name, main program, configuration file or None)."""
+    from tests.difftest.generator import generate
+    projects = []
+    for index in range(count):
+        generated = generate(seed * 1_000_000 + index)
+        folder = root / f"random_{generated.seed}"
+        generated.write(folder)
+        projects.append((f"random:{generated.seed}", folder / generated.main,
+                         folder / generated.cfg if generated.cfg else None))
+    return projects
+
+
+def reference(folder: Path, cfg: Path | None = None) -> Reference:
+    """The openplc translation of `folder` (a project folder or its main program; `cfg` its configuration file),
+    and the reference's outputs over the run (see the module docstring)."""
     from transpiler import api
     from transpiler.verify.simulate import program_operands
-    project = api.load_project(api.project_options(folder))
+    project = api.load_project(api.project_options(folder, cfg=cfg))
     translation = api.transpile(project, target="openplc", validate_xml=False, formats=("st",))
     used, _, outputs = program_operands(project.program)
     semantics = project.program.semantics
@@ -306,7 +323,7 @@ def reference(folder: Path) -> Reference:
     lo, hi = max(semantics.profile.ranges.M, key=lambda r: r[1])
     spare = next(m for m in range(hi, lo - 1, -1) if m != int(semantics["first_cycle_marker"]) and m not in named)
     cycles = int(RUN_SECONDS * 1000 / cycle_ms)
-    lines = [f"cycles: {cycles}", f"cycle_time_ms: {cycle_ms}", f"semantics: {{first_cycle_marker: {spare}}}"]
+    lines = [f"cycles: {cycles}", f"cycle_time_ms: {cycle_ms}"]
     if translation.mp_file is not None:
         lines.append(f"machine_parameters: {json.dumps(str(Path(translation.mp_file).resolve()))}")
     outputs = sorted(outputs)
@@ -315,7 +332,10 @@ def reference(folder: Path) -> Reference:
     with tempfile.TemporaryDirectory(prefix="openplc_ref_") as tmp:
         scenario = Path(tmp) / "power_on.yaml"
         scenario.write_text("\n".join(lines) + "\n", encoding="utf-8")
-        run = api.simulate(project, scenario).run
+        # A scenario's semantics apply when the project is loaded (as `simulate` does on the command line).
+        silent_nc = api.load_project(project.options, api.semantics_for(
+            semantics.profile.name, {"first_cycle_marker": spare}))
+        run = api.simulate(silent_nc, scenario).run
     st_text = translation.files["project.st"].decode("utf-8")
     if run.fault is not None:
         # A program that faults from power-on with every input low (an index the inputs must set first) has no
@@ -338,9 +358,9 @@ def reference(folder: Path) -> Reference:
     return Reference(st_text, coils, steady, sorted(changing))
 
 
-def check_project(home: OpenPlcHome, folder: Path, scratch: Path, cache: Path) -> dict:
+def check_project(home: OpenPlcHome, folder: Path, scratch: Path, cache: Path, cfg: Path | None = None) -> dict:
     """Build and run `folder`'s translation on the runtime; the verdict as recorded in projects.json."""
-    ref = reference(folder)
+    ref = reference(folder, cfg)
     build = build_program(home, ref.st_text, scratch, cache)
     verdict = {"build": build.ok, "failed_step": build.step, "message": build.message,
                "outputs": len(ref.coils), "compared": 0, "changing": len(ref.changing), "mismatches": [],
@@ -362,6 +382,27 @@ def measure_snippet(home: OpenPlcHome, text: str, scratch: Path, cache: Path) ->
     return {"accept": build.ok, "failed_step": build.step, "message": build.message}
 
 
+def _summary(key: str, v: dict) -> str:
+    return (f"project {key}: build {'ok' if v['build'] else 'FAILED at ' + v['failed_step']}"
+            f"{', ' + v['message'] if v['message'] else ''}; {v['compared']} of {v['outputs']} outputs compared "
+            f"({v['changing']} changing), {len(v['mismatches'])} mismatches"
+            f"{'; not compared, the reference faults: ' + v['reference_fault'] if v['reference_fault'] else ''}")
+
+
+def _random_run(home: OpenPlcHome, count: int, seed: int) -> int:
+    failed = 0
+    with tempfile.TemporaryDirectory(prefix="openplc_random_") as tmp:
+        for key, main, cfg in random_projects(count, seed, Path(tmp) / "projects"):
+            scratch = Path(tmp) / key.replace(":", "_")
+            verdict = check_project(home, main, scratch, Path(tmp), cfg)
+            print(_summary(key, verdict), flush=True)
+            for line in verdict["mismatches"]:
+                print(f"  {line}")
+            failed += not verdict["build"] or bool(verdict["mismatches"])
+    print(f"{count} random projects: {count - failed} built and matched, {failed} failed")
+    return 1 if failed else 0
+
+
 def _identity(home: OpenPlcHome) -> dict:
     return {"openplc_commit": home.commit(), "platform": "linux, blank hardware layer, no opendnp3"}
 
@@ -371,7 +412,10 @@ def main(argv: list[str] | None = None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--measure", action="store_true", help="rewrite the recorded verdicts")
     mode.add_argument("--check", action="store_true", help="compare with the recorded verdicts")
+    mode.add_argument("--random", type=int, metavar="N", help="build and run N random projects of the differential "
+                      "tester instead (nothing recorded; exit 1 on a failure)")
     mode.add_argument("--read", nargs=2, metavar=("FOLDER", "COILS"), help=argparse.SUPPRESS)
+    parser.add_argument("--seed", type=int, default=1, help="seed of --random")
     parser.add_argument("--only", action="append", default=[], help="only this snippet or project key")
     args = parser.parse_args(argv)
     if args.read:
@@ -381,6 +425,8 @@ def main(argv: list[str] | None = None) -> int:
     if home is None:
         print(f"openplc_runtime: {why}", file=sys.stderr)
         return 2
+    if args.random:
+        return _random_run(home, args.random, args.seed)
     snippets: dict[str, dict] = {}
     projects: dict[str, dict] = {}
     with tempfile.TemporaryDirectory(prefix="openplc_runtime_") as tmp:
@@ -398,11 +444,7 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             projects[key] = {**check_project(home, folder, cache / key.replace("/", "_"), cache), **_identity(home)}
             v = projects[key]
-            print(f"project {key}: build {'ok' if v['build'] else 'FAILED at ' + v['failed_step']}"
-                  f"{', ' + v['message'] if v['message'] else ''}; {v['compared']} of {v['outputs']} outputs compared "
-                  f"({v['changing']} changing), {len(v['mismatches'])} mismatches"
-                  f"{'; not compared, the reference faults: ' + v['reference_fault'] if v['reference_fault'] else ''}",
-                  flush=True)
+            print(_summary(key, v), flush=True)
             for line in v["mismatches"]:
                 print(f"  {line}")
     if args.measure:

@@ -5,9 +5,9 @@ recorded verdicts on the corpus tests/data/openplc_verdicts/*.st, every sample p
 those rules, and the recorded verdicts of the sample projects say they built, ran and matched the reference.
 
 With OPENPLC_HOME (an OpenPLC_v3 checkout with its iec2c, libmodbus and snap7 built in place; `make test-openplc`):
-the verdicts are measured again, every sample project is built with the runtime's own steps, linked, started, and
-its coils read over Modbus TCP are compared with the reference (tests/openplc_runtime.py says how), and an ST whose
-outputs are deliberately wired wrong is caught.
+the verdicts are measured again, every sample project and a few random projects of the differential tester are built
+with the runtime's own steps, linked, started, and their coils read over Modbus TCP are compared with the reference
+(tests/openplc_runtime.py says how), and an ST whose outputs are deliberately wired wrong is caught.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pytest
 from openplc_runtime import (DATA_DIR, PROJECT_VERDICTS, SNIPPET_VERDICTS, UNSAFE_PREFIX, build_program,
-                             check_project, find_home, measure_snippet, project_key, reference, run_and_read,
-                             sample_projects)
+                             check_project, find_home, measure_snippet, project_key, random_projects, reference,
+                             run_and_read, sample_projects)
 
 from transpiler import api
 from transpiler.cli import main as hh2iec
@@ -31,6 +31,7 @@ HOME, WHY = find_home()
 NEEDS_OPENPLC = pytest.mark.skipif(HOME is None, reason=f"OpenPLC runtime build not checked: {WHY}; "
                                                         "`make test-openplc OPENPLC_HOME=<checkout>` runs it")
 MIN_SNIPPETS = 12
+RANDOM_PROJECTS, RANDOM_SEED = 6, 2
 
 
 def _snippets() -> list[Path]:
@@ -124,6 +125,11 @@ def test_every_sample_builds_runs_and_matches_on_the_runtime():
         for folder in sample_projects():
             key = project_key(folder)
             verdict = check_project(HOME, folder, Path(tmp) / key.replace("/", "_"), Path(tmp))
+            if not verdict["build"] or verdict["mismatches"]:
+                failures.append(f"{key}: {verdict}")
+        # Programs nobody wrote for this check: random projects of the differential tester.
+        for key, main, cfg in random_projects(RANDOM_PROJECTS, RANDOM_SEED, Path(tmp) / "random"):
+            verdict = check_project(HOME, main, Path(tmp) / key.replace(":", "_"), Path(tmp), cfg)
             if not verdict["build"] or verdict["mismatches"]:
                 failures.append(f"{key}: {verdict}")
         # The comparison can fail: the sample with two steady outputs of different values wired to each other's
