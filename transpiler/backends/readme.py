@@ -4,6 +4,7 @@ how to load it, and the task to create by hand (task_setup.py). Formats with tem
 from __future__ import annotations
 
 from collections.abc import Iterable
+from types import MappingProxyType
 
 from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.st.task_setup import task_lines
@@ -12,7 +13,7 @@ from transpiler.backends.twincat.layout import TcProject
 
 README_FILE = "README.md"
 # How the user knows each IDE.
-IDE_NAMES = {"codesys": "CODESYS V3", "twincat": "TwinCAT 3"}
+IDE_NAMES = MappingProxyType({"codesys": "CODESYS V3", "twincat": "TwinCAT 3"})
 
 
 def render_readme(target: TargetProject, files: Iterable[str], twincat: TcProject | None = None) -> str:

@@ -12,6 +12,7 @@ import dataclasses
 import re
 import uuid
 from pathlib import PurePosixPath
+from types import MappingProxyType
 from typing import Literal
 
 from transpiler.backends.st.dialect import TargetProject
@@ -34,8 +35,8 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _NOT_FILE_NAME = re.compile(r"[^A-Za-z0-9_.-]")
 
 ObjectKind = Literal["POU", "GVL", "DUT"]
-_FOLDER = {"POU": "POUs", "GVL": "GVLs", "DUT": "DUTs"}
-_SUFFIX = {"POU": ".TcPOU", "GVL": ".TcGVL", "DUT": ".TcDUT"}
+_FOLDER = MappingProxyType({"POU": "POUs", "GVL": "GVLs", "DUT": "DUTs"})
+_SUFFIX = MappingProxyType({"POU": ".TcPOU", "GVL": ".TcGVL", "DUT": ".TcDUT"})
 
 
 @dataclasses.dataclass(frozen=True)

@@ -8,7 +8,6 @@ sections, which every XML reader joins back into the same text.
 from __future__ import annotations
 
 from pathlib import PurePosixPath
-
 from xml.sax.saxutils import quoteattr
 
 from transpiler.backends.plcopen.writer import xml_safe
