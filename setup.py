@@ -9,8 +9,9 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
-# What the installed tool reads: the ST templates and the shim's C sources (not its tests, Makefile or build/).
-DATA = {"templates": ("st/*.j2",), "runtime_shim": ("*.c", "*.h")}
+# What the installed tool reads: the templates (ST, TwinCAT project files, the output README) and the shim's C
+# sources (not its tests, Makefile or build/).
+DATA = {"templates": ("st/*.j2", "twincat/*.j2", "readme/*.j2"), "runtime_shim": ("*.c", "*.h")}
 
 
 class BuildPyWithData(build_py):

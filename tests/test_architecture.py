@@ -22,7 +22,8 @@ FLOORS = [
     ("transpiler.api",),
     ("transpiler.cli",),
 ]
-STAGE_PACKAGES = ["frontend", "language", "backends", "backends/st", "backends/plcopen", "backends/report", "exec",
+STAGE_PACKAGES = ["frontend", "language", "backends", "backends/st", "backends/plcopen", "backends/report",
+                  "backends/twincat", "exec",
                   "exec/interp", "exec/stexec", "exec/compiled", "verify", "cli"]
 
 

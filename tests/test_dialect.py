@@ -47,6 +47,7 @@ def sample():
 @pytest.mark.parametrize("target", ["matiec", "openplc"])
 def test_matiec_targets_write_the_golden_text(sample, target):
     assert sample[target].files["project.st"] == (GOLDEN / "project.st").read_bytes()
+    assert "README.md" not in sample[target].files and not any("/" in name for name in sample[target].files)
     stamp = re.compile(rb"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d")
     assert stamp.sub(b"", sample[target].files["project.xml"]) == stamp.sub(b"", sample["matiec"].files["project.xml"])
     assert b"externalVars" in sample[target].files["project.xml"]
@@ -69,6 +70,14 @@ def test_gvl_targets_have_no_externals_and_qualify_every_global(sample, target):
     # The co-simulated text stays the matiec one.
     assert sample[target].st_text == sample["matiec"].st_text
     assert f"## Target: {target}" in sample[target].files["report.md"].decode()
+    # The closing comment says which task to create, with the programs in order, as README.md does.
+    priority = 20 if target == "twincat" else 0
+    task = [f"Task HH_Cycle: cyclic, interval T#20ms, priority {priority}.",
+            "It calls these programs once per cycle, in this order: Main_PGM, HH_SubmitJobs.",
+            "HH_SubmitJobs must run in this same task right after Main_PGM; call neither from another task."]
+    assert text.rstrip("\n").endswith("\n".join(f"(* {line} *)" for line in task))
+    readme = sample[target].files["README.md"].decode()
+    assert all(f"- {line}\n" in readme for line in task)
 
 
 @pytest.mark.parametrize("target", ["codesys", "twincat"])
@@ -120,7 +129,10 @@ def test_gvl_target_xml_validates_and_holds_the_lists(sample, target):
     assert validate_xml(xml) == []
     root = etree.fromstring(xml)
     assert not root.findall(f".//{{{NS}}}externalVars")
-    assert root.find(f".//{{{NS}}}configuration/{{{NS}}}globalVars") is None
+    # CODESYS rejects a configuration on import (and everything under it): there is none, the task is described
+    assert root.find(f".//{{{NS}}}configuration") is None and root.find(f"{{{NS}}}instances/{{{NS}}}configurations") \
+        is not None
+    assert b"<task " not in xml and b"pouInstance" not in xml
     lists = root.findall(f"{{{NS}}}addData/{{{NS}}}data[@name='{GVL_DATA_NAME}']/{{{NS}}}globalVars")
     assert [g.get("name") for g in lists] == ["GVL_IO", "GVL_NC", "GVL_Markers", "GVL_TimersCounters", "GVL_Words",
                                               "GVL_Strings", "GVL_MachineParams", "GVL_Constants", "GVL_Registers",

@@ -57,8 +57,10 @@ def test_wheel_installs_into_a_new_venv_and_runs_the_sample_outside_the_checkout
     installed = Path(_run([str(python), "-c", "import transpiler, sys; print(transpiler.__file__)"], tmp_path,
                           env).stdout.strip()).parent
     assert installed.is_relative_to(target), installed
-    assert sorted(p.name for p in (installed / "_data" / "templates" / "st").glob("*.j2")) == sorted(
-        p.name for p in (ROOT / "templates" / "st").glob("*.j2"))
+    # Every template folder of the checkout is packaged whole (a folder setup.py does not name would be missing).
+    assert sorted(p.relative_to(installed / "_data" / "templates") for p in
+                  (installed / "_data" / "templates").glob("*/*.j2")) == sorted(
+        p.relative_to(ROOT / "templates") for p in (ROOT / "templates").glob("*/*.j2"))
     assert {p.name for p in (installed / "_data" / "runtime_shim").iterdir()} == {
         p.name for p in (ROOT / "runtime_shim").glob("*.[ch]")}
 
@@ -70,6 +72,10 @@ def test_wheel_installs_into_a_new_venv_and_runs_the_sample_outside_the_checkout
     _run([str(hh2iec), "transpile", str(SAMPLE / "Main_PGM.src"), "--out", "out"], work, run_env)
     for name in ("project.st", "project.xml", "report.md", "io_map.csv"):
         assert (work / "out" / name).stat().st_size > 0, name
+    # The TwinCAT project folder and the README come from the packaged templates too.
+    _run([str(hh2iec), "transpile", str(SAMPLE / "Main_PGM.src"), "--target", "twincat", "--out", "tc"], work, run_env)
+    assert (work / "tc" / "README.md").stat().st_size > 0
+    assert len(list((work / "tc" / "twincat").rglob("*.TcPOU"))) > 50
     scenarios = sorted(SAMPLE.glob("scenarios/*.yaml"))[:3]
     proc = _run([str(hh2iec), "equiv", str(SAMPLE / "Main_PGM.src"), "--backend", "builtin",
                  *[a for s in scenarios for a in ("--scenario", str(s))], "--random-cycles", "200",

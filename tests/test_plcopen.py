@@ -287,6 +287,17 @@ def test_instances_and_configuration_order(epoch: None) -> None:
     assert (instance.get("name"), instance.get("typeName")) == ("inst0", "Main")
 
 
+def test_without_configuration_the_instances_are_empty_and_valid(schema: etree.XMLSchema, epoch: None) -> None:
+    # Catches: a configuration (task, program instance, globals) left in the file CODESYS would reject, or an
+    # `instances` element dropped altogether (the schema requires it).
+    data = render_xml(rich_project(), configuration=False)
+    assert xsd.validate_xml(data, schema=schema) == []
+    configurations = _parse(data).find("p:instances/p:configurations", NS)
+    assert configurations is not None and len(configurations) == 0
+    assert b"<task " not in data and b"pouInstance" not in data
+    assert _parse(render_xml(rich_project())).find("p:instances/p:configurations/p:configuration", NS) is not None
+
+
 def test_instance_with_unknown_task_is_refused() -> None:
     project = rich_project()
     conf = dataclasses.replace(project.configuration, instances=(ProgramInstance("inst0", "Nope", "Main"),))

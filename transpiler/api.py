@@ -12,7 +12,7 @@ from __future__ import annotations
 import codecs
 import dataclasses
 from decimal import Decimal
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from transpiler.atomic import write_files_atomically
@@ -151,8 +151,18 @@ class Transpilation:
         return len(user_pous(self.result))
 
     def write(self, out_dir: Path) -> None:
-        """Write every file into `out_dir` all-or-nothing (OSError when the folder cannot be written)."""
-        write_files_atomically({Path(out_dir) / name: data for name, data in self.files.items()})
+        """Write every file into `out_dir` all-or-nothing (OSError when the folder cannot be written); names with
+        '/' go into sub-folders, which are created."""
+        write_files_atomically({inside(Path(out_dir), name): data for name, data in self.files.items()})
+
+
+def inside(out_dir: Path, name: str) -> Path:
+    """Where the output file `name` ('/'-separated, relative) goes in `out_dir`. ValueError for a name that could
+    leave the folder (absolute, '..', a backslash, empty): the back ends never make one, so it is a bug."""
+    relative = PurePosixPath(name)
+    if "\\" in name or relative.is_absolute() or any(part in ("", ".", "..") for part in name.split("/")):
+        raise ValueError(f"output file name {name!r} does not name a file inside the output folder")
+    return out_dir.joinpath(*relative.parts)
 
 
 def machine_parameters_of(project: Project, mp_file: Path | None = None, *, allowed: Iterable[str] = ()

@@ -1,7 +1,8 @@
 """Runs the back ends on one IR program: the ST back end decides the IEC project (once for matiec, and once more
 for a target that writes its POUs otherwise), the writers print it as ST and PLCopen XML (and the libraries HH_Lib
-and HH_Sys as files of their own), the report module adds report.md and io_map.csv. Returns file contents; writing
-is the caller's job."""
+and HH_Sys as files of their own), the report module adds report.md and io_map.csv; for TwinCAT the PLC project
+folder follows, and where the import creates no task, a README.md that says which task to create. Returns file
+contents (names may hold '/' for sub-folders); writing is the caller's job."""
 
 from __future__ import annotations
 
@@ -18,7 +19,10 @@ from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project, render_library_st
 from transpiler.backends.plcopen.project_folder import project_folder
 from transpiler.backends.report.loading import how_to_load
+from transpiler.backends.readme import README_FILE, render_readme
 from transpiler.backends.report.report import render_io_map, render_report
+from transpiler.backends.twincat.layout import plan_project
+from transpiler.backends.twincat.writer import render_project
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,8 +71,14 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         files[hh_lib.ST_FILE] = render_library_st(helpers).encode("utf-8")
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
-    written = [*files, "report.md", "io_map.csv"]
+    # A native project folder of the target (one file per object), beside project.st and from the same text.
+    native = plan_project(laid_out) if chosen.project_folder == "twincat" and "st" in formats else None
+    if native is not None:
+        files.update(render_project(native))
+    written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
+    if chosen.task_by_hand:
+        files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")
     files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)
-                          + how_to_load(laid_out, written)).encode("utf-8")
+                          + how_to_load(laid_out, written, native)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

@@ -45,10 +45,21 @@ def cmd_transpile(args: argparse.Namespace) -> int:
         print(f"{args.out}:1:1: error[E-TOOL]: cannot write output: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print_diagnostics(project.diagnostics + out.diagnostics)
-    print(f"hh2iec transpile: wrote {', '.join(sorted(out.files))} for {args.target} to {args.out} "
+    print(f"hh2iec transpile: wrote {', '.join(_written(out.files))} for {args.target} to {args.out} "
           f"({out.pou_count} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
           f"{len(out.result.untranslated)} not translated)")
     return EXIT_OK
+
+
+def _written(files) -> list[str]:
+    """The files at the top of the output folder, and each sub-folder once with its file count (a TwinCAT project
+    folder holds one file per POU: listing them all would bury the rest)."""
+    counts: dict[str, int] = {}
+    for name in files:
+        top, _, rest = name.partition("/")
+        key = top + "/" if rest else top
+        counts[key] = counts.get(key, 0) + 1
+    return [f"{name} ({count} files)" if name.endswith("/") else name for name, count in sorted(counts.items())]
 
 
 def cmd_fetch_schema(args: argparse.Namespace) -> int:

@@ -220,13 +220,16 @@ def _pou(parent: etree._Element, pou: Pou) -> None:
     _documentation(element, pou.comment)
 
 
-def _instances(parent: etree._Element, project: IecProject) -> None:
+def _instances(parent: etree._Element, project: IecProject, configuration: bool) -> None:
     conf = project.configuration
     task_names = {task.name for task in conf.tasks}
     for instance in conf.instances:
         if instance.task not in task_names:
             raise ValueError(f"program instance {instance.name} names unknown task {instance.task}")
+    # The schema requires `instances` and lets `configurations` stay empty.
     configurations = _sub(_sub(parent, "instances"), "configurations")
+    if not configuration:
+        return
     if not conf.instances and not conf.globals:
         # A library (no program runs): an empty resource is no IEC configuration (matiec rejects it after a
         # Beremiz import), so the library has none.
@@ -282,10 +285,11 @@ def _headers(root: etree._Element, project: IecProject, stamp: str) -> None:
         _sub(_sub(coordinates, language), "scaling", x="0", y="0")
 
 
-def render_xml(project: IecProject, creation: datetime | None = None) -> bytes:
+def render_xml(project: IecProject, creation: datetime | None = None, *, configuration: bool = True) -> bytes:
     """The project as TC6 XML v2.01 bytes: UTF-8, XML declaration, pretty-printed, deterministic.
 
-    The timestamp is `creation`, else $SOURCE_DATE_EPOCH (UTC), else the current UTC time.
+    The timestamp is `creation`, else $SOURCE_DATE_EPOCH (UTC), else the current UTC time. Without
+    `configuration` the file has an empty `configurations` element (no task, no program instance).
     Raises ValueError for model shapes that cannot be written (st_writer.check_formattable).
     """
     check_formattable(project)
@@ -298,17 +302,21 @@ def render_xml(project: IecProject, creation: datetime | None = None) -> bytes:
     pous = _sub(types, "pous")
     for pou in project.pous:
         _pou(pous, pou)
-    _instances(root, project)
+    _instances(root, project, configuration)
     return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 
 def render_target_xml(target: TargetProject, creation: datetime | None = None) -> bytes:
-    """The project in `target.dialect`'s XML flavour: for a GVL target the POUs have no externalVars, the
-    configuration keeps its task and instance, and each global variable list is a `globalVars` in the project's
-    addData where the CODESYS/TwinCAT importers look for it (with the qualified_only attribute)."""
+    """The project in `target.dialect`'s XML flavour: for a GVL target the POUs have no externalVars, there is no
+    configuration, and each global variable list is a `globalVars` in the project's addData where the
+    CODESYS/TwinCAT importers look for it (with the qualified_only attribute).
+
+    No configuration because CODESYS rejects one on import and skips everything under it (its task and program
+    instances included); its own exports of POUs and lists leave `configurations` empty and keep the lists in
+    addData. The task is described to the user instead (task_setup.py)."""
     if target.dialect.xml_globals == "configuration":
         return render_xml(target.project, creation)
-    root = etree.fromstring(render_xml(target.project, creation))
+    root = etree.fromstring(render_xml(target.project, creation, configuration=False))
     add_data = _sub(root, "addData")
     for gvl in target.gvls:
         # One data element per list: a TC6 data element holds exactly one child.

@@ -1,13 +1,16 @@
 """report.md: "How to load this on <target>": the steps for the chosen target, written from what was emitted (the
 files, the configuration and resource, the task and the program instances it calls in order, the global variable
-lists, the libraries), so that they name exactly what the integrator will see."""
+lists, the libraries), so that they name exactly what the integrator will see. For CODESYS and TwinCAT the steps
+and the task to create are the README's (backends/readme.py), printed once for both files."""
 
 from __future__ import annotations
 
 from typing import Iterable
 
 from transpiler.backends.iec_model import IecProject
+from transpiler.backends.readme import render_loading
 from transpiler.backends.st.dialect import TargetProject
+from transpiler.backends.twincat.layout import TcProject
 
 EDITOR_FOLDER = "plc_project"
 
@@ -35,8 +38,9 @@ def _libraries(files: set[str]) -> list[str]:
     return sorted(name for name in files if name.startswith(("hh_lib.", "hh_sys.")))
 
 
-def how_to_load(target: TargetProject, file_names: Iterable[str]) -> str:
-    """The report section for `target`; `file_names` are the files transpile writes."""
+def how_to_load(target: TargetProject, file_names: Iterable[str], twincat: TcProject | None = None) -> str:
+    """The report section for `target`; `file_names` are the files transpile writes, `twincat` the TwinCAT project
+    folder among them, if any."""
     files = set(file_names)
     project = target.project
     conf = project.configuration
@@ -70,16 +74,8 @@ def how_to_load(target: TargetProject, file_names: Iterable[str]) -> str:
             "I/O.",
         ]
     else:
-        gvls = ", ".join(f"`{g.name}`" for g in target.gvls) or "none"
-        lines += [
-            "1. Import `project.xml` (*Project > Import PLCopenXML*; TwinCAT: *Import PLCopenXML* in the PLC "
-            f"project's context menu) and take every object: the POUs, the data types and the global variable lists "
-            f"({gvls}).",
-            "2. An import creates no task: create it in the task configuration, as the translation runs it:",
-            *[f"   - {line}" for line in tasks],
-            f"3. Link the located variables ({inputs} `%IX` inputs, {outputs} `%QX` outputs; `io_map.csv`) to the "
-            "I/O of the device tree.",
-        ]
+        # The import creates no task: the same steps and task as the README of the output folder.
+        lines += [render_loading(target, files, twincat).rstrip("\n")]
     libraries = _libraries(files)
     if libraries:
         lines += ["", "Libraries written beside the project (optional: the project is complete without them): "

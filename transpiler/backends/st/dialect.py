@@ -4,8 +4,9 @@ A target overrides tables, not control flow. The ST back end builds the project 
 lists are `qualified_only` every reference to a global is written `GVL_x.name` as its expression is built (the
 list a global lands in is `gvl_name` of its group's title), and where it has `bit_access` a bit of a word is read
 as `w.3` instead of through the HH_BIT helper. `for_target` then only moves the globals of a GVL target out of
-the configuration into named global variable lists and drops the VAR_EXTERNAL lists (CODESYS and TwinCAT see a
-GVL from every POU). See docs/import.md for what each target gets.
+the configuration into named global variable lists, drops the VAR_EXTERNAL lists (CODESYS and TwinCAT see a
+GVL from every POU) and gives the task the target's own PLC task priority where it has one. See docs/import.md
+for what each target gets.
 """
 
 from __future__ import annotations
@@ -30,6 +31,14 @@ class Dialect:
     inline_initialised_arrays: bool = False
     # Bit access `w.3` on integer variables (matiec has none: there the HH_BIT helper reads a bit).
     bit_access: bool = False
+    # The target's PLCopen import creates no task (CODESYS, TwinCAT): the XML carries no configuration and the
+    # output's README.md and project.st say which task to create (task_setup.py).
+    task_by_hand: bool = False
+    # The priority the target's own project template gives its PLC task, used for the translation's single task
+    # (whose priority carries nothing from the control); None keeps the back end's.
+    task_priority: int | None = None
+    # A native project folder written beside project.st (backends/twincat for "twincat").
+    project_folder: str | None = None
 
     def reference(self, name: str, title: str | None) -> str:
         """How a POU body names the global `name` of the group titled `title`."""
@@ -45,9 +54,11 @@ TARGETS = MappingProxyType({
     # OpenPLC v3 runs matiec (with -f -l -p -r -R -a): the same text is right for it.
     "openplc": Dialect("openplc", externals=True, st_template="project.st.j2", xml_globals="configuration"),
     "codesys": Dialect("codesys", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True, bit_access=True),
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True, task_by_hand=True),
+    # TwinCAT's PLC project template gives its PlcTask priority 20 (as its .TcTTO and .tsproj files show).
     "twincat": Dialect("twincat", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True, bit_access=True),
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True, task_by_hand=True,
+                       task_priority=20, project_folder="twincat"),
 })
 
 DEFAULT_TARGET = "matiec"
@@ -116,6 +127,9 @@ def for_target(project: IecProject, target: str) -> TargetProject:
     pous = tuple(dataclasses.replace(pou, sections=tuple(s for s in pou.sections if s.kind != "VAR_EXTERNAL"))
                  for pou in project.pous)
     config = dataclasses.replace(project.configuration, globals=())
+    if chosen.task_priority is not None:
+        config = dataclasses.replace(config, tasks=tuple(dataclasses.replace(t, priority=chosen.task_priority)
+                                                         for t in config.tasks))
     return TargetProject(chosen, dataclasses.replace(project, pous=pous, configuration=config), gvls)
 
 

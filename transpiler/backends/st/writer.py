@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from pathlib import Path
 
 import jinja2
 
-from transpiler.backends.iec_model import IecProject, IecVar, VarSection, st_comment
-from transpiler.backends.st.dialect import TargetProject
-from transpiler.resources import data_dir
+from transpiler.backends.iec_model import DataType, IecProject, IecVar, Pou, VarSection, st_comment
+from transpiler.backends.st.dialect import Gvl, TargetProject
+from transpiler.backends.st.task_setup import task_lines
+from transpiler.backends.templating import template_environment
+
 BODY_INDENT = "    "
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
@@ -62,28 +63,14 @@ def _block(section: VarSection, run: list[IecVar], first: bool) -> VarSection:
                       retain=section.retain, comment=section.comment if first else None)
 
 
-def template_dir() -> Path:
-    """templates/st as installed with the package (a wheel), else from the checkout."""
-    return data_dir("templates") / "st"
-
-
 def _environment() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(template_dir())),
-        undefined=jinja2.StrictUndefined,
-        autoescape=False,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-    )
-    env.filters.update(
+    return template_environment("st", dict(
         comment_lines=comment_lines,
         trailing_comment=trailing_comment,
         indent_body=indent_body,
         section_header=section_header,
         located_blocks=located_blocks,
-    )
-    return env
+    ))
 
 
 def check_formattable(project: IecProject) -> None:
@@ -115,17 +102,41 @@ def render_target_st(target: TargetProject) -> str:
     if target.dialect.st_template == "project.st.j2":
         return render_st(target.project)
     check_formattable(target.project)
+    text = _environment().get_template(target.dialect.st_template).render(
+        project=target.project, gvls=target_gvls(target), dialect=target.dialect, task_lines=task_lines(target))
+    return text.rstrip("\n") + "\n"
+
+
+def target_gvls(target: TargetProject) -> tuple[Gvl, ...]:
+    """The global variable lists as the target's ST declares them (initialised arrays inlined where it needs that).
+
+    Raises ValueError for a section that cannot be written (see section_header)."""
     for gvl in target.gvls:
         for section in gvl.sections:
             section_header(section)
-    gvls = target.gvls
-    if target.dialect.inline_initialised_arrays:
-        arrays = {t.name: t for t in target.project.types if t.kind == "array"}
-        gvls = tuple(dataclasses.replace(g, sections=tuple(dataclasses.replace(s, vars=tuple(
-            _inline_array(v, arrays) for v in s.vars)) for s in g.sections)) for g in gvls)
-    text = _environment().get_template(target.dialect.st_template).render(
-        project=target.project, gvls=gvls, dialect=target.dialect)
-    return text.rstrip("\n") + "\n"
+    if not target.dialect.inline_initialised_arrays:
+        return target.gvls
+    arrays = {t.name: t for t in target.project.types if t.kind == "array"}
+    return tuple(dataclasses.replace(g, sections=tuple(dataclasses.replace(s, vars=tuple(
+        _inline_array(v, arrays) for v in s.vars)) for s in g.sections)) for g in target.gvls)
+
+
+# --- one object at a time: the pieces of project.st that a per-object project (TwinCAT) stores in files of their own
+
+
+def render_pou_head(pou: Pou) -> str:
+    """A POU's declaration part as project.st prints it: comments, header and variable sections, no body."""
+    return _environment().get_template("pou_head.st.j2").render(pou=pou).rstrip("\n") + "\n"
+
+
+def render_gvl(gvl: Gvl) -> str:
+    """A global variable list's declaration as project.st prints it under the list's name (attribute, VAR_GLOBAL)."""
+    return _environment().get_template("gvl.st.j2").render(gvl=gvl).rstrip("\n") + "\n"
+
+
+def render_type(data_type: DataType) -> str:
+    """One named TYPE as project.st prints it."""
+    return _environment().get_template("type.st.j2").render(type=data_type).rstrip("\n") + "\n"
 
 
 def _inline_array(var: IecVar, arrays: dict) -> IecVar:
