@@ -13,7 +13,7 @@ from transpiler.backends.st import exprs as E
 from transpiler.backends.st.arith import wrap32
 from transpiler.backends.st.layout import Layout
 from transpiler.backends.st.liveness import Liveness, use_def
-from transpiler.backends.st.names import MAX_LEN, NameTable, legalise
+from transpiler.backends.st.names import MAX_LEN, POU_KEY_PREFIX, NameTable, legalise
 from transpiler.backends.st import printer
 from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext
 from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
@@ -273,6 +273,18 @@ def test_keywords_and_standard_names_are_renamed_and_recorded():
     assert names.name("M2", "ton") == "ton_2"
     assert [(r.original, r.iec, r.reason) for r in names.renames] == [
         ("AND", "AND_2", "IEC keyword or standard name"), ("ton", "ton_2", "IEC keyword or standard name")]
+
+
+def test_a_pou_avoids_the_variable_names_of_the_iec_libraries_a_variable_may_take_them():
+    # Catches: a subprogram Init or Cycle becoming an FB of that name (matiec's standard library and OpenPLC's own
+    # libraries declare variables so named, and no longer parse once a POU has taken it as a type name).
+    names = NameTable()
+    assert names.name(f"{POU_KEY_PREFIX}0:4", "Init") == "Init_2"
+    assert names.name(f"{POU_KEY_PREFIX}0:9", "cycle") == "cycle_2"
+    assert names.name("M5", "Init") == "Init"               # a marker may
+    assert names.name(f"{POU_KEY_PREFIX}0:12", "Spindle") == "Spindle"
+    assert [r.iec for r in names.renames] == ["Init_2", "cycle_2"]
+    assert "libraries" in names.renames[0].reason
 
 
 def test_illegal_characters_and_shapes_are_legalised():
