@@ -16,11 +16,15 @@ is linked instead). The run starts the runtime, turns its Modbus TCP server on t
 (127.0.0.1:43628) and reads the coils (%QX) from 127.0.0.1, in a private network namespace when `unshare` can
 make one (the runtime's Modbus server listens on every interface).
 
-The comparison: the reference interpreter runs the original program over the same time from a power-on with all
-inputs low and no NC (the runtime has none: nothing pulses the first-cycle marker or writes an NC operand); every
-output whose value the reference holds steady over the whole window of the reads must have that value in every
-read. Outputs that change inside the window are counted, not compared; a program whose reference faults under that
-power-on (an index its inputs must set first) is built and not compared, and its verdict says why.
+The comparison, over the same time from a power-on with all inputs low and no NC (the runtime has none: nothing
+pulses the first-cycle marker or writes an NC operand): the built-in ST executor runs the translated ST exactly as
+written, and every output it holds steady over the whole window of the reads must have that value in every read.
+The reference interpreter runs the original program under the same conditions, and every output both hold steady
+must agree, except where the translation calls PLC-module blocks the target must provide: on the runtime those are
+the stubs of the ST (they report a fault until implemented), so such differences are listed as theirs, not
+failures (with the modules modelled, `equiv` proves the ST equal to the original). Outputs that change inside the
+window are counted, not compared; a program that faults under that power-on (an index its inputs must set first)
+is built and not compared, and its verdict says why.
 
     python -m tests.openplc_runtime --measure    # build every snippet of tests/data/openplc_verdicts and every
                                                  # sample project, run the projects, rewrite the recorded verdicts
@@ -288,9 +292,11 @@ def project_key(folder: Path) -> str:
 class Reference:
     st_text: str
     coils: dict[int, str]                 # coil number -> operand name, for every output the program uses
-    steady: dict[int, int]                # coil -> its value, for outputs the reference holds over the read window
+    steady: dict[int, int]                # coil -> its value, for outputs the original holds over the read window
     changing: list[int]
-    fault: str = ""                       # the reference's fault, when it faults before the reads end
+    fault: str = ""                       # the original's fault, when it faults before the reads end
+    st_steady: dict[int, int] = dataclasses.field(default_factory=dict)   # the same for the ST as written
+    stubs: tuple[str, ...] = ()           # the PLC-module blocks the target must provide (stubs in the ST)
 
 
 def random_projects(count: int, seed: int, root: Path) -> list[tuple[str, Path, Path | None]]:
@@ -311,6 +317,7 @@ def reference(folder: Path, cfg: Path | None = None) -> Reference:
     """The openplc translation of `folder` (a project folder or its main program; `cfg` its configuration file),
     and the reference's outputs over the run (see the module docstring)."""
     from transpiler import api
+    from transpiler.backends.st.hh_sys import fb_names
     from transpiler.verify.simulate import program_operands
     project = api.load_project(api.project_options(folder, cfg=cfg))
     translation = api.transpile(project, target="openplc", validate_xml=False, formats=("st",))
@@ -341,39 +348,70 @@ def reference(folder: Path, cfg: Path | None = None) -> Reference:
         # A program that faults from power-on with every input low (an index the inputs must set first) has no
         # steady state to compare: the build is still checked, the outputs are not.
         return Reference(st_text, {}, {}, [], f"{run.fault.code} in cycle {run.fault.cycle}: {run.fault.message}")
-    first = max(0, int((READ_FROM - START_SLACK) * 1000 / cycle_ms))
-    last = min(cycles - 1, int((READ_UNTIL + START_SLACK) * 1000 / cycle_ms))
-    steady: dict[int, int] = {}
-    changing: list[int] = []
-    coils = {}
-    for name, ref in run.trace.columns:
-        if ref.kind != "O":
-            continue
-        coils[ref.addr] = name
-        window = {int(v) for v in run.trace.column(name)[first:last + 1]}
-        if len(window) == 1:
-            steady[ref.addr] = window.pop()
-        else:
-            changing.append(ref.addr)
-    return Reference(st_text, coils, steady, sorted(changing))
+    window = slice(max(0, int((READ_FROM - START_SLACK) * 1000 / cycle_ms)),
+                   min(cycles, int((READ_UNTIL + START_SLACK) * 1000 / cycle_ms) + 1))
+    coils = {ref.addr: name for name, ref in run.trace.columns if ref.kind == "O"}
+    steady, changing = _steady({addr: run.trace.column(name)[window] for addr, name in coils.items()})
+    stubs = tuple(sorted(p.name for p in translation.result.project.pous if p.name.upper() in fb_names()))
+    return Reference(st_text, coils, steady, changing, st_steady=_st_outputs(st_text, cycles, coils, window),
+                     stubs=stubs)
+
+
+def _steady(values: dict[int, list]) -> tuple[dict[int, int], list[int]]:
+    """(coil -> value for the coils whose values are all one, the coils whose values change)."""
+    steady = {coil: int(seen[0]) for coil, seen in values.items() if len({int(v) for v in seen}) == 1}
+    return steady, sorted(set(values) - set(steady))
+
+
+def _st_outputs(st_text: str, cycles: int, coils: dict[int, str], window: slice) -> dict[int, int]:
+    """The outputs the built-in ST executor holds steady over `window` running `st_text` exactly as written (the
+    PLC-module blocks as the stubs they are there, nothing writing the NC variables): what the runtime must show.
+    Empty when the ST faults."""
+    from transpiler.exec.stexec import StRuntimeError, load_st
+    runtime = load_st(st_text, "project.st").instantiate()
+    addresses = {coil: f"%QX{coil // 8}.{coil % 8}" for coil in coils}
+    seen: dict[int, list] = {coil: [] for coil in coils}
+    try:
+        for _ in range(cycles):
+            runtime.run_cycle()
+            for coil, address in addresses.items():
+                seen[coil].append(int(runtime.get(address)))
+    except StRuntimeError:
+        return {}
+    return _steady({coil: values[window] for coil, values in seen.items()})[0]
 
 
 def check_project(home: OpenPlcHome, folder: Path, scratch: Path, cache: Path, cfg: Path | None = None) -> dict:
-    """Build and run `folder`'s translation on the runtime; the verdict as recorded in projects.json."""
+    """Build and run `folder`'s translation on the runtime; the verdict as recorded in projects.json.
+
+    Every output the ST (run as written by the built-in executor) holds steady over the reads must read the same on
+    the runtime (`mismatches`: the runtime runs the ST otherwise). Where the original program holds the output steady
+    too, the two must agree, except where the translation calls PLC-module blocks the target must provide, which
+    are stubs until then (`module_stub_differences`, listed, not failures)."""
     ref = reference(folder, cfg)
     build = build_program(home, ref.st_text, scratch, cache)
     verdict = {"build": build.ok, "failed_step": build.step, "message": build.message,
                "outputs": len(ref.coils), "compared": 0, "changing": len(ref.changing), "mismatches": [],
-               "reference_fault": ref.fault}
-    if not build.ok or not ref.coils:
+               "reference_fault": ref.fault, "module_stubs": list(ref.stubs), "module_stub_differences": []}
+    if not build.ok or not ref.coils or not ref.st_steady:
         return verdict
+
+    def where(coil: int) -> str:
+        return f"{ref.coils[coil]} (%QX{coil // 8}.{coil % 8})"
     reads = run_and_read(home, build.folder, max(ref.coils) + 1)
     mismatches = []
-    for coil, value in sorted(ref.steady.items()):
+    for coil, value in sorted(ref.st_steady.items()):
         seen = sorted({values[coil] for _, values in reads})
         if seen != [value]:
-            mismatches.append(f"{ref.coils[coil]} (%QX{coil // 8}.{coil % 8}): reference {value}, runtime {seen}")
-    verdict.update(compared=len(ref.steady), reads=len(reads), mismatches=mismatches)
+            mismatches.append(f"{where(coil)}: the ST as written {value}, runtime {seen}")
+    differences = [f"{where(coil)}: original {ref.steady[coil]}, the ST as written {value}"
+                   for coil, value in sorted(ref.st_steady.items())
+                   if coil in ref.steady and ref.steady[coil] != value]
+    if ref.stubs:
+        verdict["module_stub_differences"] = differences
+    else:
+        mismatches += differences
+    verdict.update(compared=len(ref.st_steady), reads=len(reads), mismatches=mismatches)
     return verdict
 
 
@@ -385,7 +423,8 @@ def measure_snippet(home: OpenPlcHome, text: str, scratch: Path, cache: Path) ->
 def _summary(key: str, v: dict) -> str:
     return (f"project {key}: build {'ok' if v['build'] else 'FAILED at ' + v['failed_step']}"
             f"{', ' + v['message'] if v['message'] else ''}; {v['compared']} of {v['outputs']} outputs compared "
-            f"({v['changing']} changing), {len(v['mismatches'])} mismatches"
+            f"({v['changing']} changing in the original), {len(v['mismatches'])} mismatches"
+            f"{'; ' + str(len(v['module_stub_differences'])) + ' differ from the original by the module stubs ' + ', '.join(v['module_stubs']) if v['module_stub_differences'] else ''}"
             f"{'; not compared, the reference faults: ' + v['reference_fault'] if v['reference_fault'] else ''}")
 
 

@@ -27,7 +27,8 @@ def test_load_transpile_simulate_and_check_equivalence():
     project = _project(TIMERS, scenario)
     assert project.program.instruction_count() > 0
     out = api.transpile(project)
-    assert set(out.files) == {"project.st", "project.xml", "report.md", "io_map.csv", "hh_lib.st", "hh_lib.xml"}
+    assert set(out.files) == {"project.st", "project.xml", "report.md", "io_map.csv", "hh_lib.st", "hh_lib.xml",
+                              "plc_project/plc.xml", "plc_project/beremiz.xml"}
     assert out.files["project.st"].decode() == out.st_text and "PROGRAM" in out.st_text
     assert out.pou_count >= 1 and len(out.io_map.rows) > 0
     sim = api.simulate(project, scenario)

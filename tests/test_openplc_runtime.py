@@ -135,8 +135,8 @@ def test_every_sample_builds_runs_and_matches_on_the_runtime():
         # The comparison can fail: the sample with two steady outputs of different values wired to each other's
         # addresses must show a mismatch.
         ref = reference(sample_projects()[0])
-        ones = [c for c, v in ref.steady.items() if v == 1]
-        zeros = [c for c, v in ref.steady.items() if v == 0]
+        ones = [c for c, v in ref.st_steady.items() if v == 1]
+        zeros = [c for c, v in ref.st_steady.items() if v == 0]
         assert ones and zeros, "the sample needs steady outputs of both values for the self-check"
 
         def address(coil: int) -> str:

@@ -111,7 +111,7 @@ def test_output_is_deterministic(tmp_path):
         proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "transpile", str(SAMPLE / "Main_PGM.src"),
                                "--out", str(out)], capture_output=True, text=True, env=env)
         assert proc.returncode == 0, proc.stderr
-        outputs.append({p.name: p.read_bytes() for p in out.iterdir()})
+        outputs.append({p.relative_to(out).as_posix(): p.read_bytes() for p in out.rglob("*") if p.is_file()})
     assert outputs[0] == outputs[1]
 
 
@@ -149,8 +149,9 @@ def test_cli_transpile_writes_all_outputs(tmp_path):
                            str(out)], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.returncode == 0, proc.stderr
     # the sample calls data and machine modules: the HH_Sys interface library is written beside the project
-    assert sorted(p.name for p in out.iterdir()) == ["hh_lib.st", "hh_lib.xml", "hh_sys.st", "hh_sys.xml", "io_map.csv",
-                                                      "project.st", "project.xml", "report.md"]
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == [
+        "hh_lib.st", "hh_lib.xml", "hh_sys.st", "hh_sys.xml", "io_map.csv", "plc_project/beremiz.xml",
+        "plc_project/plc.xml", "project.st", "project.xml", "report.md"]
     report = (out / "report.md").read_text()
     assert "## I/O map" in report and "## Assumptions applied" in report and "state-machine fallback" in report
     limits = report.split("## Target limits", 1)[1].split("\n## ", 1)[0]
