@@ -26,6 +26,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--seed", type=int, default=1, metavar="S", help="seed of the random stimulus")
     p.add_argument("--report", type=Path, metavar="OUT.json")
     p.add_argument("--junit", type=Path, metavar="OUT.xml")
+    p.add_argument("--cobertura", type=Path, metavar="OUT.xml",
+                   help="line and branch coverage of the .src files as Cobertura XML (GitLab, coverage actions)")
+    p.add_argument("--lcov", type=Path, metavar="OUT.info", help="the same coverage as an LCOV tracefile (genhtml)")
     p.add_argument("--vcd", type=Path, metavar="DIR", help="write both traces of each run as value-change dumps")
     p.add_argument("--mp", type=Path, help="machine-parameter file used for the transpilation's preset defaults")
     p.add_argument("--no-shrink", action="store_true", help="do not shrink a divergent stimulus")
@@ -65,6 +68,13 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         files[args.report] = report_json(result)
     if args.junit:
         files[args.junit] = report_junit(result)
+    if args.cobertura or args.lcov:
+        from transpiler.verify.coverage_export import coverage_files
+        try:
+            files.update(coverage_files(result.source, project.main.parent, Path.cwd(), cobertura=args.cobertura,
+                                        lcov=args.lcov))
+        except ValueError as exc:           # SOURCE_DATE_EPOCH that is not a number
+            raise UsageError(str(exc)) from None
     write_files_atomically(files)
     if files:
         print("reports: " + ", ".join(str(path) for path in files))

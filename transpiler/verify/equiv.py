@@ -16,6 +16,7 @@ from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.verify.simulate import program_operands
+from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
 from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
 from transpiler.verify.traces import TraceRecorder, write_vcd_scopes
@@ -147,9 +148,6 @@ def _builtin(st_text: str, st_name: str) -> tuple[Callable[[], StSide] | None, l
         return None, list(exc.diagnostics)
 
 
-_TWO_WAY = ("JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF")
-
-
 def _untaken(op: Any, seen: set) -> str:
     """The outcome of a conditional jump, call or module end that no run took, in the words of the source.
     The interpreter records 1 when the jump/call/end happens (an IFT is a JPF over its body), else 0."""
@@ -164,35 +162,31 @@ def _untaken(op: Any, seen: set) -> str:
 def coverage_summary(program: Program, sets: list) -> dict[str, Any]:
     """Instructions executed, conditional branches taken both ways and CASE entries taken over the runs'
     coverage sets; `never_taken` lists each branch outcome and CASE entry no run took, with its source line."""
-    executed: set = set()
-    outcomes: dict = {}
-    for cov in sets:
-        executed |= set(cov.executed)
-        for key, values in cov.branches.items():
-            outcomes.setdefault(key, set()).update(values)
+    return summarize_coverage(op_coverage(program, sets))
+
+
+def summarize_coverage(ops: list[OpCoverage]) -> dict[str, Any]:
+    """The summary of coverage_summary from the per-instruction figures of source_coverage.op_coverage."""
     instructions = hit = two_way = both = case_entries = case_hit = 0
     never: list[dict[str, str]] = []
-    for fi, f in enumerate(program.files):
-        for i, op in enumerate(f.ops):
-            if op.code in ("LBL", "KFIELD", "NOP"):
-                continue
-            instructions += 1
-            hit += (fi, i) in executed
-            seen = outcomes.get((fi, i), set())
-            if op.code in _TWO_WAY:
-                two_way += 1
-                if seen >= {0, 1}:
-                    both += 1
+    for oc in ops:
+        op, seen = oc.op, oc.seen
+        instructions += 1
+        hit += oc.runs > 0
+        if op.code in TWO_WAY:
+            two_way += 1
+            if seen >= {0, 1}:
+                both += 1
+            else:
+                never.append({"at": str(op.span), "what": f"{op.mnemonic} {_untaken(op, seen)}"})
+        elif op.code == "CASE":
+            case_entries += len(op.case_targets)
+            for entry, target in enumerate(op.case_targets):
+                if entry in seen:
+                    case_hit += 1
                 else:
-                    never.append({"at": str(op.span), "what": f"{op.mnemonic} {_untaken(op, seen)}"})
-            elif op.code == "CASE":
-                case_entries += len(op.case_targets)
-                for entry, target in enumerate(op.case_targets):
-                    if entry in seen:
-                        case_hit += 1
-                    else:
-                        at = op.case_notes[entry][0] if entry < len(op.case_notes) else op.span
-                        never.append({"at": str(at), "what": f"CASE entry {entry} ({target.label}) never taken"})
+                    at = op.case_notes[entry][0] if entry < len(op.case_notes) else op.span
+                    never.append({"at": str(at), "what": f"CASE entry {entry} ({target.label}) never taken"})
     return {"instructions": instructions, "instructions_executed": hit,
             "branches": two_way, "branches_both_ways": both, "case_entries": case_entries,
             "case_entries_taken": case_hit, "never_taken": never}
@@ -206,6 +200,7 @@ class EquivalenceResult:
     backend: str
     coverage: dict[str, Any]
     untranslated: tuple[tuple[Span, str], ...] = ()     # code the translation left out (allowed by the user)
+    source: SourceCoverage | None = None                # the same coverage per source file and line
 
     @property
     def equivalent(self) -> bool:
@@ -274,7 +269,9 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
             coverage_sets.append(res.coverage)
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
-    return EquivalenceResult(outcomes, backend, coverage_summary(program, coverage_sets), tuple(untranslated))
+    ops = op_coverage(program, coverage_sets)
+    return EquivalenceResult(outcomes, backend, summarize_coverage(ops), tuple(untranslated),
+                             source_coverage(program, ops, len(coverage_sets)))
 
 
 def report_json(result: EquivalenceResult) -> str:
@@ -299,6 +296,11 @@ def report_json(result: EquivalenceResult) -> str:
     data = {"backend": backend, "verdict": result.verdict, "equivalent": result.equivalent, "runs": runs,
             "not_translated": [{"at": str(span), "what": text} for span, text in result.untranslated],
             "coverage": coverage}
+    if result.source is not None:
+        data["coverage"] = {**coverage, "files": [
+            {"file": f.path, "lines": f.lines_valid, "lines_executed": f.lines_covered,
+             "branch_outcomes": f.branches_valid, "branch_outcomes_taken": f.branches_covered}
+            for f in result.source.files]}
     return json.dumps(data, indent=2) + "\n"
 
 

@@ -260,6 +260,12 @@ def creation_stamp(creation: datetime | None = None) -> str:
 
     Raises ValueError when SOURCE_DATE_EPOCH is set but is not a usable integer.
     """
+    return build_time(creation).strftime("%Y-%m-%dT%H:%M:%S")
+
+
+def build_time(creation: datetime | None = None) -> datetime:
+    """`creation` in UTC, else $SOURCE_DATE_EPOCH (reproducible builds), else now: the time stamped on an output
+    file. Raises ValueError when SOURCE_DATE_EPOCH is set but is not a usable integer."""
     if creation is None:
         epoch = os.environ.get("SOURCE_DATE_EPOCH")
         if epoch is not None and epoch.strip():
@@ -271,7 +277,7 @@ def creation_stamp(creation: datetime | None = None) -> str:
             creation = datetime.now(timezone.utc)
     if creation.tzinfo is not None:
         creation = creation.astimezone(timezone.utc)
-    return creation.strftime("%Y-%m-%dT%H:%M:%S")
+    return creation
 
 
 def _headers(root: etree._Element, project: IecProject, stamp: str) -> None:

