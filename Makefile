@@ -10,11 +10,13 @@ OUT := out/basic_program
 
 all: test
 
+# pip's own output goes to .venv/install.log, shown only when the install fails.
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
-	touch $(STAMP)
+	@echo "setting up $(VENV): every dependency from the package registry (first run, or pyproject.toml changed)"
+	@$(PYTHON) -m venv $(VENV)
+	@$(PY) -m pip install --quiet --upgrade pip >$(VENV)/install.log 2>&1 || { cat $(VENV)/install.log; exit 1; }
+	@$(PY) -m pip install --quiet -e '.[test]' >>$(VENV)/install.log 2>&1 || { cat $(VENV)/install.log; exit 1; }
+	@touch $(STAMP)
 
 venv: $(STAMP)
 
@@ -33,13 +35,14 @@ test: venv shim
 test-install: venv
 	$(PY) -m pytest -q tests/test_install.py
 
-# Quiet: the translation's one-line summary and equiv's verdict, coverage and reports (equiv -v: every run).
+# Quiet: the translation's one-line summary and equiv's verdict, coverage and reports, among them the HTML proof
+# out/basic_program/proof/index.html (equiv -v: a line per run).
 demo: venv
 	@$(PY) -c 'from transpiler.exec.compiled.shim import ensure_built; ensure_built()'
 	@-$(VENV)/bin/hh2iec fetch-schema >/dev/null || echo "demo: the PLCopen schema could not be fetched; project.xml is not validated" >&2
 	@$(VENV)/bin/hh2iec transpile $(SAMPLE)/Main_PGM.src --out $(OUT)
 	@$(VENV)/bin/hh2iec equiv $(SAMPLE)/Main_PGM.src $(foreach s,$(wildcard $(SAMPLE)/scenarios/*.yaml),--scenario $(s)) \
-		--random-cycles 2000 --seed 1 --report $(OUT)/equiv.json --junit $(OUT)/equiv.junit.xml
+		--random-cycles 2000 --seed 1 --report $(OUT)/equiv.json --junit $(OUT)/equiv.junit.xml --html $(OUT)/proof
 
 bench: venv shim
 	$(PY) -m tests.bench

@@ -307,6 +307,7 @@ class Equivalence:
     st_name: str
     backend_note: str
     diagnostics: tuple[Diagnostic, ...]
+    html_page: bytes | None = None          # the evidence as one HTML page, when asked for
 
     @property
     def equivalent(self) -> bool:
@@ -317,12 +318,13 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
                       mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
                       progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
-                      allow_untranslated: bool = False) -> Equivalence:
+                      allow_untranslated: bool = False, html: bool = False) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
     `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
     as written, with the presets of the machine parameters it was made with; a scenario whose own machine
     parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
-    code out is co-simulated but its verdict is at best NOT PROVEN."""
+    code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
+    one self-contained HTML page (each divergent run replayed once more with every cycle recorded)."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify import pipeline
     from transpiler.verify.equiv import choose_backend, run_equivalence
@@ -362,9 +364,16 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
                                  untranslated=tuple(transpiled.result.untranslated),
                                  pipelined=pipeline.worthwhile())
+        page = None
+        if html:
+            from transpiler.verify.evidence import divergence_traces, equivalence_evidence
+            from transpiler.verify.html_report import render_page
+            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text, mp)
+            page = render_page(equivalence_evidence(result, project.program, project.main.parent,
+                                                    f"Equivalence of {project.main.name}", traces))
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
-    return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))
+    return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), page)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -11,6 +11,7 @@ from transpiler import api
 from transpiler.atomic import write_files_atomically
 from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
 from transpiler.cli.progress import ProgressLine
+from transpiler.verify.html_report import PAGE_FILE
 from transpiler.diagnostics import NO_SPAN
 
 
@@ -34,6 +35,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--no-shrink", action="store_true", help="do not shrink a divergent stimulus")
     p.add_argument("--allow-untranslated", action="store_true",
                    help="co-simulate a translation that left code out; the verdict is then at best NOT PROVEN")
+    p.add_argument("--html", type=Path, metavar="DIR",
+                   help="write the evidence as one self-contained page, DIR/index.html: verdict, runs, each "
+                        "divergence as a timeline, every source file with its coverage")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also a line for every equivalent run and the list of what no run covered")
     p.set_defaults(handler=cmd_equiv)
@@ -55,7 +59,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles,
                                       seed=args.seed, backend=args.backend, st_file=args.st, io_map_file=args.io_map,
                                       mp_file=args.mp, shrink=not args.no_shrink, vcd_dir=args.vcd,
-                                      progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated)
+                                      progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated,
+                                      html=args.html is not None)
     finally:
         line.close()
     print_diagnostics(check.diagnostics)
@@ -75,6 +80,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
                                         lcov=args.lcov))
         except ValueError as exc:           # SOURCE_DATE_EPOCH that is not a number
             raise UsageError(str(exc)) from None
+    if args.html is not None and check.html_page is not None:
+        files[args.html / PAGE_FILE] = check.html_page
     write_files_atomically(files)
     if files:
         print("reports: " + ", ".join(str(path) for path in files))

@@ -1,0 +1,95 @@
+"""The evidence of an equivalence check as the HTML page shows it (html_report.Evidence): runs, divergences replayed
+with every cycle recorded, and the source files with their line coverage; decided here, laid out there."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Mapping, Sequence
+
+from transpiler.backends.report.iomap import IoMap
+from transpiler.frontend.sources import decode_text
+from transpiler.ir import Program
+from transpiler.verify.cosim import StSide
+from transpiler.verify.divergence_trace import DivergenceTrace, trace_divergence
+from transpiler.verify.equiv import EquivalenceResult
+from transpiler.verify.html_report import Evidence, RunRow, source_files
+from transpiler.verify.scenario import NameTable, Scenario
+
+
+def _status(outcome) -> str:
+    r = outcome.result
+    if r.error:
+        return f"FAULT ({r.error_side or 'harness'}): {r.error}"
+    if r.divergence is not None:
+        return f"DIVERGENCE at cycle {r.divergence.cycle}: {r.divergence.name}"
+    if r.missing:
+        return f"MISSING: {len(r.missing)} operands"
+    if r.expectation_failures:
+        return f"EXPECTATION FAILED ({len(r.expectation_failures)})"
+    return "equivalent"
+
+
+def divergence_traces(result: EquivalenceResult, program: Program, make_side: Callable[[], StSide], iomap: IoMap,
+                      names: NameTable, scenarios: Sequence[Scenario], st_text: str,
+                      base_mp: Mapping | None = None) -> list[DivergenceTrace]:
+    """Each divergent run replayed with every cycle recorded (its shrunk stimulus where there is one)."""
+    by_name = {s.name: s for s in scenarios}
+    traces = []
+    for outcome in result.outcomes:
+        r = outcome.result
+        if r.divergence is None or r.scenario not in by_name:
+            continue
+        replay = outcome.shrunk if outcome.shrunk is not None else by_name[r.scenario]
+        trace = trace_divergence(program, make_side, iomap, names, r.scenario, replay, st_text, base_mp)
+        if trace is None and replay is not by_name[r.scenario]:
+            trace = trace_divergence(program, make_side, iomap, names, r.scenario, by_name[r.scenario], st_text,
+                                     base_mp)
+        if trace is not None:
+            traces.append(trace)
+    return traces
+
+
+def source_texts(program: Program, main_dir: Path) -> dict[str, str]:
+    """Each .src file of the program (as its spans name it) -> its text."""
+    texts = {}
+    for f in program.files:
+        path = main_dir / f.path
+        try:
+            texts[f.path] = decode_text(path.read_bytes())
+        except OSError:
+            texts[f.path] = ""
+    return texts
+
+
+def equivalence_evidence(result: EquivalenceResult, program: Program, main_dir: Path, title: str,
+                         traces: Sequence[DivergenceTrace] = ()) -> Evidence:
+    c = result.coverage
+    cycles = sum(o.result.cycles_run for o in result.outcomes)
+    summary = [f"{len(result.outcomes)} runs, {cycles} cycles, backend {result.backend}.",
+               f"Coverage of the original: instructions {c['instructions_executed']}/{c['instructions']}, "
+               f"conditional branches both ways {c['branches_both_ways']}/{c['branches']}, CASE entries "
+               f"{c['case_entries_taken']}/{c['case_entries']}."]
+    summary += [f"Not translated: {span}: {text}" for span, text in result.untranslated]
+    coverage: dict[str, dict[int, tuple[int, int, int]]] = {}
+    if result.source is not None:
+        for f in result.source.files:
+            coverage[f.path] = {line.number: (line.hits, line.branches_covered, line.branches_valid)
+                                for line in f.lines}
+    notes: dict[tuple[str, int], list[str]] = {}
+    for trace in traces:
+        for where in trace.source_lines:
+            file, line = _file_line(where)
+            if file is not None:
+                notes.setdefault((file, line), []).append(f"divergence: writes {trace.name} ({trace.run})")
+    runs = [RunRow(o.result.scenario, _status(o), o.result.cycles_run, o.result.compared, o.result.seconds)
+            for o in result.outcomes]
+    return Evidence(title, result.verdict, result.equivalent, summary, runs, tuple(traces),
+                    source_files(source_texts(program, main_dir), coverage, notes))
+
+
+def _file_line(where: str) -> tuple[str | None, int]:
+    """`file:line:col` -> (file, line)."""
+    parts = where.rsplit(":", 2)
+    if len(parts) == 3 and parts[1].isdigit():
+        return parts[0], int(parts[1])
+    return None, 0
