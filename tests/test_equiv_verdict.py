@@ -59,7 +59,7 @@ def test_allowed_untranslated_code_is_written_with_the_list_first_and_never_equi
     assert code == 1 and "hh2iec equiv: NOT EQUIVALENT" in out and "NOT TRANSLATED: sub.src:8:1" in out
     # A lost routine whose effect no compared operand shows: every run agrees, and still no EQUIVALENT.
     _write(tmp_path, {"sub.src": "GLOBAL Read_pos\nLBL Read_pos\nPS K96\nL M101\nAN M101\nCMT 9006\nEM\n"})
-    code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated",
+    code, out, _ = _run(["equiv", main_src, "--random-cycles", "50", "--allow-untranslated", "-v",
                          "--report", tmp_path / "equiv.json"], capsys)
     assert code == 1
     assert "equivalent: random_seed1" in out

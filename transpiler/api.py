@@ -316,7 +316,7 @@ class Equivalence:
 def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
                       mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
-                      progress: Callable[[str], Callable[[int, int], None]] | None = None,
+                      progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
                       allow_untranslated: bool = False) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
     `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly

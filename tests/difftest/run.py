@@ -27,6 +27,7 @@ if str(ROOT) not in sys.path:
 
 from tests.difftest.check import OK, PASSING, STR_MAX, TARGET_LIMIT, Verdict, available_backends, check_files  # noqa: E402
 from tests.difftest.generator import generate  # noqa: E402
+from transpiler.cli.progress import ProgressLine  # noqa: E402
 
 REGRESSIONS = ROOT / "tests" / "regressions"
 
@@ -89,30 +90,22 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def run_batch(jobs: list[Job], processes: int) -> list[tuple[Job, Verdict, float]]:
-    """Every job, in worker processes when asked; results in program-seed order."""
-    start = time.perf_counter()
+    """Every job, in worker processes when asked; results in program-seed order. A progress line on a terminal."""
+    line = ProgressLine("difftest", "programs")
     results: list[tuple[Job, Verdict, float]] = []
-    if processes > 1 and len(jobs) > 1:
-        with multiprocessing.get_context("fork").Pool(processes) as pool:
-            for res in pool.imap_unordered(run_job, jobs, chunksize=2):
-                results.append(res)
-                _progress(len(results), len(jobs), start)
-    else:
-        for job in jobs:
-            results.append(run_job(job))
-            _progress(len(results), len(jobs), start)
-    if sys.stderr.isatty():
-        print(file=sys.stderr)
+    try:
+        if processes > 1 and len(jobs) > 1:
+            with multiprocessing.get_context("fork").Pool(processes) as pool:
+                for res in pool.imap_unordered(run_job, jobs, chunksize=2):
+                    results.append(res)
+                    line.update(len(results), len(jobs))
+        else:
+            for job in jobs:
+                results.append(run_job(job))
+                line.update(len(results), len(jobs))
+    finally:
+        line.close()
     return sorted(results, key=lambda r: r[0].program_seed)
-
-
-def _progress(done: int, total: int, start: float) -> None:
-    text = f"difftest: {done}/{total} programs ({time.perf_counter() - start:.0f} s)"
-    if sys.stderr.isatty():
-        print(f"\r{text}", end="", file=sys.stderr)
-    elif total >= 1000 and done % (total // 20) == 0:
-        # A long run in a log or CI: a line every 5 % shows it is alive.
-        print(text, file=sys.stderr, flush=True)
 
 
 def print_summary(results: list[tuple[Job, Verdict, float]], seconds: float, quiet: bool = False) -> None:

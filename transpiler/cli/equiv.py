@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 from typing import Callable
 
 from transpiler import api
 from transpiler.atomic import write_files_atomically
 from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
 
 
@@ -31,6 +31,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--no-shrink", action="store_true", help="do not shrink a divergent stimulus")
     p.add_argument("--allow-untranslated", action="store_true",
                    help="co-simulate a translation that left code out; the verdict is then at best NOT PROVEN")
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="also a line for every equivalent run and the list of what no run covered")
     p.set_defaults(handler=cmd_equiv)
 
 
@@ -45,38 +47,39 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         raise UsageError(f"ST file '{args.st}' does not exist")
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
-    check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
-                                  backend=args.backend, st_file=args.st, io_map_file=args.io_map, mp_file=args.mp,
-                                  shrink=not args.no_shrink, vcd_dir=args.vcd, progress=_progress_printer,
-                                  allow_untranslated=args.allow_untranslated)
+    line = ProgressLine("equiv", "cycles")
+    try:
+        check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles,
+                                      seed=args.seed, backend=args.backend, st_file=args.st, io_map_file=args.io_map,
+                                      mp_file=args.mp, shrink=not args.no_shrink, vcd_dir=args.vcd,
+                                      progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated)
+    finally:
+        line.close()
     print_diagnostics(check.diagnostics)
     if check.backend_note:
         print(f"note: {check.backend_note}", file=sys.stderr)
     result = check.result
-    _print_outcomes(result)
+    _print_outcomes(result, args.verbose)
     files = {}
     if args.report:
         files[args.report] = report_json(result)
     if args.junit:
         files[args.junit] = report_junit(result)
     write_files_atomically(files)
+    if files:
+        print("reports: " + ", ".join(str(path) for path in files))
+    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "
+          f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
     return EXIT_OK if result.equivalent else EXIT_FAILED
 
 
-def _progress_printer(label: str) -> Callable[[int, int], None]:
-    start = time.perf_counter()
-    state = {"last": start}
-
-    def show(done: int, total: int) -> None:
-        now = time.perf_counter()
-        if now - start > 3 and now - state["last"] > 1 and sys.stderr.isatty():
-            state["last"] = now
-            print(f"\r{label}: cycle {done}/{total} ({done / (now - start):.0f} cycles/s)", end="", file=sys.stderr)
-        if done == total and now - start > 3 and sys.stderr.isatty():
-            print(file=sys.stderr)
-    return show
+def _cycle_progress(line: ProgressLine) -> Callable[[str, int, int], Callable[[int, int], None]]:
+    """The cycle counter of each run, drawn as the progress of all runs' cycles."""
+    def run(label: str, before: int, total: int) -> Callable[[int, int], None]:
+        return lambda done, _: line.update(before + done, total, label)
+    return run
 
 
 def _pct(a: int, b: int) -> str:
@@ -94,7 +97,8 @@ def _compared_text(r) -> str:
     return text
 
 
-def _print_outcomes(result) -> None:
+def _print_outcomes(result, verbose: bool) -> None:
+    """Everything that went wrong, always; a line per equivalent run and the uncovered places with `verbose`."""
     from transpiler.verify.stimulus import scenario_to_yaml
     for o in result.outcomes:
         r = o.result
@@ -113,7 +117,7 @@ def _print_outcomes(result) -> None:
         elif r.missing:
             print(f"NOT EQUIVALENT: {r.scenario}: {len(r.missing)} operands the original writes are missing in the "
                   f"translation; {r.cycles_run} cycles, {_compared_text(r)} equal ({r.seconds:.2f} s)")
-        else:
+        elif verbose:
             print(f"equivalent: {r.scenario}: {r.cycles_run} cycles, {_compared_text(r)} ({r.seconds:.2f} s)")
         for m in r.missing:
             print(f"MISSING in the translation ({r.scenario}): {m.render()}")
@@ -127,6 +131,9 @@ def _print_outcomes(result) -> None:
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
           f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
-    for item in c.get("never_taken", ()):
-        print(f"  not covered: {item['at']}: {item['what']}")
-    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, backend {result.backend})")
+    never = c.get("never_taken", ())
+    if verbose:
+        for item in never:
+            print(f"  not covered: {item['at']}: {item['what']}")
+    elif never:
+        print(f"  {len(never)} branch outcomes or CASE entries no run took (-v lists them)")

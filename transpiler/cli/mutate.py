@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 from transpiler import api
 from transpiler.atomic import write_files_atomically
 from transpiler.cli.common import EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.progress import ProgressLine
 
 DEFAULT_MIN_SCORE = 0.9
 
@@ -40,6 +40,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--mutation-report", type=Path, metavar="OUT.json",
                    help="every mutant in the mutation-testing-report-schema (Stryker's report format, for its HTML "
                         "viewer and dashboard)")
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="also the table per operator and every mutant judged equivalent or invalid")
     p.set_defaults(handler=cmd_mutate)
 
 
@@ -57,9 +59,13 @@ def cmd_mutate(args: argparse.Namespace) -> int:
             raise UsageError(f"file '{path}' does not exist")
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
-    run = api.mutate(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
-                     backend=args.backend, mp_file=args.mp, jobs=args.jobs, count=args.count,
-                     equivalent_file=args.equivalent, mutants_file=args.mutants, progress=_progress())
+    line = ProgressLine("mutate", "mutants judged")
+    try:
+        run = api.mutate(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
+                         backend=args.backend, mp_file=args.mp, jobs=args.jobs, count=args.count,
+                         equivalent_file=args.equivalent, mutants_file=args.mutants, progress=line.update)
+    finally:
+        line.close()
     print_diagnostics(run.diagnostics)
     if run.backend_note:
         print(f"note: {run.backend_note}", file=sys.stderr)
@@ -69,12 +75,17 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     if result.listed_absent:
         print(f"note: {result.listed_absent} of the mutants --mutants lists are not mutants of the translation (it "
               "changed since the list was written)")
-    print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>11}" for o in OUTCOMES))
-    for op in OPERATORS:
-        mine = [v for v in result.verdicts if v.mutant.operator == op]
-        print(f"{op:<16}{len(mine):>8}" + "".join(f"{sum(1 for v in mine if v.outcome == o):>11}" for o in OUTCOMES))
-    for outcome, title in ((SURVIVED, "SURVIVED"), (ERROR, "ERROR (only exceptions, no divergence)"),
-                           (INVALID, "invalid (the mutated ST was rejected)"), (EQUIVALENT, "judged equivalent")):
+    if args.verbose:
+        print(f"{'operator':<16}{'mutants':>8}" + "".join(f"{o:>11}" for o in OUTCOMES))
+        for op in OPERATORS:
+            mine = [v for v in result.verdicts if v.mutant.operator == op]
+            print(f"{op:<16}{len(mine):>8}" + "".join(f"{sum(1 for v in mine if v.outcome == o):>11}"
+                                                      for o in OUTCOMES))
+    # Survivors and errors are what the user must act on: always listed. The judged and the invalid only with -v.
+    listed = ((SURVIVED, "SURVIVED"), (ERROR, "ERROR (only exceptions, no divergence)"))
+    if args.verbose:
+        listed += ((INVALID, "invalid (the mutated ST was rejected)"), (EQUIVALENT, "judged equivalent"))
+    for outcome, title in listed:
         for v in (v for v in result.verdicts if v.outcome == outcome):
             why = f" -- {v.by}" if v.by else ""
             print(f"{title}: {survivor_location(run.st_text, v.mutant)}: {v.mutant.operator}: "
@@ -84,9 +95,6 @@ def cmd_mutate(args: argparse.Namespace) -> int:
                 else "judged equivalent, but the translation has no such mutant: the entry is stale")
         print(f"{e.span}: note: {what}: {e.pou}: {e.mutation}: {e.st}")
     met = result.score >= args.min_score and result.denominator > 0
-    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
-          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
-          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
     files = {}
     if args.report:
         files[args.report] = report_json(result, run.st_text)
@@ -98,14 +106,9 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         from transpiler.verify.mutation_report import mutation_report
         files[args.mutation_report] = mutation_report(result, run.st_text, args.min_score)
     write_files_atomically(files)
+    if files:
+        print("reports: " + ", ".join(str(path) for path in files))
+    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
+          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
+          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
     return EXIT_OK if met else EXIT_FAILED
-
-
-def _progress():
-    start = time.perf_counter()
-
-    def show(done: int, total: int) -> None:
-        if sys.stderr.isatty():
-            end = "\n" if done == total else ""
-            print(f"\rmutate: {done}/{total} judged ({time.perf_counter() - start:.0f} s)", end=end, file=sys.stderr)
-    return show

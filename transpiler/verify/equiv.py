@@ -246,21 +246,25 @@ def _translation_fault(result: CosimResult) -> bool:
 
 def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenarios: list[Scenario],
                     names: NameTable, backend: str, *, shrink_divergences: bool = True, vcd_dir: Path | None = None,
-                    progress: Callable[[str], Callable[[int, int], None]] | None = None,
+                    progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
                     base_mp: Mapping | None = None,
                     untranslated: tuple[tuple[Span, str], ...] = (), pipelined: bool = False) -> EquivalenceResult:
     """Co-simulate every scenario; shrink each divergent stimulus. Raises CompileFailed on bad scenario input.
     `base_mp` are the machine parameters the translation was made with, `pipelined` runs the reference in a process
-    of its own where it can (see cosim.cosimulate)."""
+    of its own where it can (see cosim.cosimulate). `progress(run name, cycles of the runs before, cycles of all
+    runs)` gives the cycle counter of one run."""
     outcomes: list[Outcome] = []
     coverage_sets: list = []
     reference = compile_program(program, coverage=True, exact=False)      # fast code, exact coverage
+    total_cycles = sum(s.cycles for s in scenarios)
+    cycles_before = 0
     for scenario in scenarios:
         traces: list = []
         record = (lambda c, a, b: traces.append((c, a, b))) if vcd_dir else None
         res = cosimulate(program, make_side, iomap, scenario, names, coverage=True,
-                         progress=progress(scenario.name) if progress else None, record=record, compiled=reference,
-                         base_mp=base_mp, pipelined=pipelined)
+                         progress=progress(scenario.name, cycles_before, total_cycles) if progress else None,
+                         record=record, compiled=reference, base_mp=base_mp, pipelined=pipelined)
+        cycles_before += scenario.cycles
         outcome = Outcome(res)
         if res.divergence is not None and shrink_divergences:
             outcome.shrunk, outcome.shrink_runs = shrink(program, make_side, iomap, scenario, names, res,
