@@ -427,6 +427,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
         side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
+    users = list(loaded)                    # the user's scenarios, before the generated ones join them
     loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), mp)
@@ -458,6 +459,9 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     verdicts.sort(key=lambda v: (v.mutant.line, v.mutant.operator, v.mutant.description))
     verdicts, unmatched = apply_equivalents(verdicts, equivalents, sites)
     absent = len(listed - {m.key for m in sites}) if listed is not None else 0
+    files = {id(s): str(s.source) for s in users if s.source is not None}
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
-                            listed_absent=absent)
+                            listed_absent=absent, scenario_files=tuple(files.get(id(s), "") for s in judge.scenarios),
+                            pou_sources={p.name: ", ".join(r.tag() for r in p.source_map) for p in iec.pous
+                                         if p.source_map})
     return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

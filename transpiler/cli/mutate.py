@@ -37,6 +37,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--junit", type=Path, metavar="OUT.xml")
     p.add_argument("--survivors", type=Path, metavar="OUT.yaml",
                    help="write the survivors in the --equivalent format, for judging")
+    p.add_argument("--mutation-report", type=Path, metavar="OUT.json",
+                   help="every mutant in the mutation-testing-report-schema (Stryker's report format, for its HTML "
+                        "viewer and dashboard)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also the table per operator and every mutant judged equivalent or invalid")
     p.set_defaults(handler=cmd_mutate)
@@ -99,6 +102,9 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         files[args.junit] = report_junit(result, run.st_text)
     if args.survivors:
         files[args.survivors] = equivalents_yaml(result.verdicts)
+    if args.mutation_report:
+        from transpiler.verify.mutation_report import mutation_report
+        files[args.mutation_report] = mutation_report(result, run.st_text, args.min_score)
     write_files_atomically(files)
     if files:
         print("reports: " + ", ".join(str(path) for path in files))

@@ -142,15 +142,17 @@ def mutation_sites(st_text: str) -> list[Mutant]:
         code, rest = _code_part(line)
         plain = _masked(code)
         assignment = ASSIGNMENT.match(code)
+        gap = code[len(code.rstrip()):]          # the blank before a trailing comment stays: only the code changes
         if assignment:
             # `x := x;` rather than deleting the line: a statement list may not be empty
             target = assignment.group(2)
             add("drop_statement", index, pou, "assignment loses its effect",
-                f"{assignment.group(1)}{target} := {target};" + rest)
+                f"{assignment.group(1)}{target} := {target};" + gap + rest)
         elif CALL.match(code):
             # kept as a statement that never runs: deleting the line could leave an IF or a loop with no statement
             indent = code[:len(code) - len(code.lstrip())]
-            add("drop_statement", index, pou, "call dropped", f"{indent}IF FALSE THEN {code.strip()} END_IF;" + rest)
+            add("drop_statement", index, pou, "call dropped",
+                f"{indent}IF FALSE THEN {code.strip()} END_IF;" + gap + rest)
         for m in re.finditer(r"\b(AND|OR)\b", plain):
             new = "OR" if m.group(1) == "AND" else "AND"
             add("and_or", index, pou, f"{m.group(1)} -> {new} at column {m.start() + 1}",
@@ -271,6 +273,7 @@ class Verdict:
     outcome: str
     by: str                      # the killing scenario and how, a message, or the reason of a judged equivalent
     seconds: float
+    runs: int = 0                # scenarios run on it, shortest first: a killed mutant's killer is the last of them
 
 
 @dataclasses.dataclass
@@ -298,7 +301,7 @@ class Judge:
         except Exception as exc:  # noqa: BLE001 - a mutant that cannot be built is invalid, with its message
             return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
         first_error = None
-        for scenario in self.scenarios:
+        for runs, scenario in enumerate(self.scenarios, 1):
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
                                     base_mp=self.base_mp, pipelined=self.pipelined)
@@ -313,12 +316,12 @@ class Judge:
             elif result.error is not None and result.error_side == "translated":
                 how = f"fault of the translation: {result.error}"
             if how is not None:
-                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start)
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, runs)
             if result.error is not None:
                 first_error = first_error or f"{scenario.name}: {result.error}"
         if first_error is not None:
-            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start)
-        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start)
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, len(self.scenarios))
+        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start, len(self.scenarios))
 
 
 def _message(exc: BaseException) -> str:
@@ -343,7 +346,7 @@ def _worker(judge: Judge, mutants: list[Mutant], tasks, results) -> None:
     """A forked process: judges mutants by index until it takes the end marker."""
     while (index := tasks.get()) is not None:
         verdict = judge(mutants[index])
-        results.put((index, verdict.outcome, verdict.by, verdict.seconds))
+        results.put((index, verdict.outcome, verdict.by, verdict.seconds, verdict.runs))
 
 
 def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
@@ -366,8 +369,8 @@ def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdic
         w.start()
     try:
         for _ in mutants:
-            index, outcome, by, seconds = results.get()
-            yield Verdict(mutants[index], outcome, by, seconds)
+            index, outcome, by, seconds, runs = results.get()
+            yield Verdict(mutants[index], outcome, by, seconds, runs)
     finally:
         for w in workers:
             if w.is_alive():
@@ -384,6 +387,8 @@ class MutationResult:
     seconds: float
     unmatched_equivalents: list[tuple[JudgedEquivalent, str]] = dataclasses.field(default_factory=list)
     listed_absent: int = 0                      # mutants the --mutants file lists that the translation has not
+    scenario_files: tuple[str, ...] = ()        # the file of each of `scenarios` ("" for generated stimulus)
+    pou_sources: Mapping[str, str] = dataclasses.field(default_factory=dict)   # POU -> its lines: `main.src:3-40`
 
     def count(self, outcome: str) -> int:
         return sum(1 for v in self.verdicts if v.outcome == outcome)
