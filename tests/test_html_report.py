@@ -101,3 +101,23 @@ def test_a_browser_renders_the_divergence(tmp_path, capsys):
     subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
                     "--window-size=1200,900", page.as_uri()], capture_output=True, timeout=120, check=True)
     assert shot.stat().st_size > 10_000
+
+
+def test_mutate_page_shows_survivors_at_their_source_lines(tmp_path, capsys):
+    (tmp_path / "main.src").write_text(PROGRAM)
+    # Only I0 ever changes: the mutants of the I1 and I2 paths survive.
+    (tmp_path / "weak.yaml").write_text("cycles: 4\nevents:\n  - cycle: 1\n    set: {I0: 1}\n")
+    out = tmp_path / "proof"
+    code = main(["mutate", str(tmp_path / "main.src"), "--scenario", str(tmp_path / "weak.yaml"), "--random-cycles",
+                 "0", "--jobs", "1", "--backend", "builtin", "--html", str(out)])
+    assert code == 1
+    printed = capsys.readouterr().out
+    survived = len([line for line in printed.splitlines() if line.startswith("SURVIVED: ")])
+    assert survived >= 1
+    page = _page(out)
+    assert page.get_element_by_id("verdict").text_content().startswith("score ")
+    assert "fail" in page.get_element_by_id("verdict").get("class").split()
+    assert len(page.xpath("//tr[@class='survivor']")) == survived
+    marked = [row for row in page.find_class("line") if "survivor" in row.get("class").split()]
+    assert marked and all(row.find_class("note")[0].text_content().startswith("mutant survived") for row in marked)
+    _self_contained((out / "index.html").read_text())

@@ -386,6 +386,15 @@ class Mutation:
     diagnostics: tuple[Diagnostic, ...]
 
 
+def mutation_page(project: Project, mutation: Mutation, min_score: float) -> bytes:
+    """The mutation run as one self-contained HTML page: the score, and every surviving mutant beside the source line
+    it was translated from."""
+    from transpiler.verify.evidence import mutation_evidence
+    from transpiler.verify.html_report import render_page
+    return render_page(mutation_evidence(mutation.result, mutation.st_text, project.program, project.main.parent,
+                                         f"Mutation check of {project.main.name}", min_score))
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,

@@ -11,6 +11,7 @@ from transpiler import api
 from transpiler.atomic import write_files_atomically
 from transpiler.cli.common import EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
 from transpiler.cli.progress import ProgressLine
+from transpiler.verify.html_report import PAGE_FILE
 
 DEFAULT_MIN_SCORE = 0.9
 
@@ -40,6 +41,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--mutation-report", type=Path, metavar="OUT.json",
                    help="every mutant in the mutation-testing-report-schema (Stryker's report format, for its HTML "
                         "viewer and dashboard)")
+    p.add_argument("--html", type=Path, metavar="DIR",
+                   help="write the result as one self-contained page, DIR/index.html: the score and every "
+                        "surviving mutant beside the source line it comes from")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also the table per operator and every mutant judged equivalent or invalid")
     p.set_defaults(handler=cmd_mutate)
@@ -105,6 +109,8 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     if args.mutation_report:
         from transpiler.verify.mutation_report import mutation_report
         files[args.mutation_report] = mutation_report(result, run.st_text, args.min_score)
+    if args.html is not None:
+        files[args.html / PAGE_FILE] = api.mutation_page(project, run, args.min_score)
     write_files_atomically(files)
     if files:
         print("reports: " + ", ".join(str(path) for path in files))

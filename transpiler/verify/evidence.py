@@ -93,3 +93,35 @@ def _file_line(where: str) -> tuple[str | None, int]:
     if len(parts) == 3 and parts[1].isdigit():
         return parts[0], int(parts[1])
     return None, 0
+
+
+def mutation_evidence(result, st_text: str, program: Program, main_dir: Path, title: str,
+                      min_score: float) -> Evidence:
+    """The page of a mutation run: the score against `min_score`, the surviving mutants, each beside the source line
+    its statement was translated from (the traceability tag above it in the ST)."""
+    from transpiler.verify.mutate import EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, survivor_location
+    met = result.score >= min_score and result.denominator > 0
+    summary = [f"{result.sites} mutation sites; {len(result.verdicts)} mutants judged on the {result.backend} "
+               f"backend under {len(result.scenarios)} scenarios in {result.seconds:.0f} s.",
+               f"{result.count(KILLED)} killed of {result.denominator} non-equivalent mutants; "
+               f"{result.count(SURVIVED)} survived, {result.count(EQUIVALENT)} judged equivalent, "
+               f"{result.count(ERROR)} errors, {result.count(INVALID)} invalid; minimum {100 * min_score:.1f}%."]
+    survivors = []
+    notes: dict[tuple[str, int], list[str]] = {}
+    for v in result.verdicts:
+        if v.outcome != SURVIVED:
+            continue
+        where = survivor_location(st_text, v.mutant)
+        if " from " in where:               # the statement's own tag: the source line it was translated from
+            source = where.rsplit(" from ", 1)[1]
+            file, line = _file_line(source + ":1")
+            note = f"mutant survived: {v.mutant.description}"
+        else:                               # no tag of its own: the lines its POU was translated from
+            source = result.pou_sources.get(v.mutant.pou, "").split(", ")[0]
+            file, line = _file_line(source.split("-")[0] + ":1") if source else (None, 0)
+            note = f"mutant survived (in {source}): {v.mutant.description}: {v.mutant.original}"
+        survivors.append((source, where.split(", from ")[0], f"{v.mutant.description}: {v.mutant.original}"))
+        if file is not None:
+            notes.setdefault((file, line), []).append(note)
+    return Evidence(title, f"score {100 * result.score:.1f}%", met, summary, survivors=survivors,
+                    sources=source_files(source_texts(program, main_dir), {}, notes))

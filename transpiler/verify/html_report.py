@@ -23,7 +23,7 @@ table{border-collapse:collapse;font-size:.9em}td,th{padding:.15em .6em;border-bo
 table.src{font-family:ui-monospace,monospace;font-size:.82em;width:100%}table.src td{border:0;white-space:pre}
 tr.covered td.code{background:#e8f5e9}tr.partial td.code{background:#fff8e1}tr.uncovered td.code{background:#ffebee}
 tr.diverges td.code{outline:2px solid #c62828}tr.survivor td.code{background:#f3e5f5}
-td.num,td.hits,td.branches{color:#888;text-align:right}td.note{color:#6a1b9a;font-family:system-ui,sans-serif}
+td.num,td.hits,td.branches{color:#888;text-align:right}td.note{color:#6a1b9a;font-family:system-ui,sans-serif;white-space:normal}
 .side{display:flex;gap:2em}.side>div{flex:1;min-width:0}pre{background:#f7f7f7;padding:.5em;overflow-x:auto}
 svg text{font-size:11px;font-family:system-ui,sans-serif}.legend span{margin-right:1.5em}
 """
@@ -89,10 +89,13 @@ def render_page(evidence: Evidence) -> bytes:
         parts += [f'<tr class="run"><td>{e(r.name)}</td><td>{e(r.status)}</td><td>{r.cycles}</td><td>{r.compared}</td>'
                   f"<td>{r.seconds:.2f}</td></tr>" for r in evidence.runs]
         parts.append("</table>")
-    if evidence.sources:
+    if any(line.hits is not None for f in evidence.sources for line in f.lines):
         parts.append('<h2 id="sources">Source coverage</h2><p class="legend"><span style="background:#e8f5e9">'
                      'executed, every outcome taken</span><span style="background:#fff8e1">executed, an outcome '
                      'never taken</span><span style="background:#ffebee">never executed</span></p>')
+        parts += [_source(f) for f in evidence.sources]
+    elif evidence.sources:
+        parts.append('<h2 id="sources">Source</h2>')
         parts += [_source(f) for f in evidence.sources]
     parts.append("</body></html>")
     return ("\n".join(parts) + "\n").encode("utf-8")
