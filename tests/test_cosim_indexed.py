@@ -120,7 +120,7 @@ def test_program_without_indexed_stores_adds_nothing(tmp_path):
 def test_cli_reports_indexed_addresses(folder, project, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "equiv", str(folder / "main.src"),
                            "--scenario", str(folder / "scenario.yaml"), "--backend", "builtin",
-                           "--report", str(tmp_path / "r.json")],
+                           "--report", str(tmp_path / "r.json"), "-v"],
                           capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "+ 32 indexed addresses from their first indexed store" in proc.stdout
