@@ -226,3 +226,22 @@ def test_a_qualified_reference_names_its_variable():
 def test_unknown_target_is_refused():
     with pytest.raises(ValueError, match="known: matiec"):
         for_target(IecProject("P", (), (), Configuration("C", "R", (), (), ())), "s7")
+
+
+def test_report_says_how_to_load_each_target_with_the_names_written(sample):
+    # Catches: steps that name another configuration, task or program than the files hold, or lose the order of the
+    # two programs (the submit-job program runs after the main program in the same task).
+    def section(target: str) -> str:
+        report = sample[target].files["report.md"].decode()
+        return report.split("## How to load this on ", 1)[1]
+    openplc = section("openplc")
+    assert openplc.startswith("OpenPLC") and "`project.st` as it is" in openplc
+    assert "CONFIGURATION `Config0` with RESOURCE `Res0`" in openplc and "`plc_project/`" in openplc
+    assert "calls `PLC_Main_PGM` (PROGRAM `Main_PGM`) then `PLC_HH_SubmitJobs` (PROGRAM `HH_SubmitJobs`)" in openplc
+    assert "(42 inputs, 30 outputs" in openplc
+    assert section("matiec").startswith("Beremiz") and "task `HH_Cycle`: cyclic, every 20 ms" in section("matiec")
+    codesys, readme = section("codesys"), sample["codesys"].files["README.md"].decode()
+    assert "- It calls these programs once per cycle, in this order: Main_PGM, HH_SubmitJobs." in codesys
+    assert codesys.split("### Loading it", 1)[1].split("### The task")[0].strip() \
+        == readme.split("## Loading it", 1)[1].split("## The task")[0].strip()
+    assert "twincat/Main_PGM/Main_PGM.plcproj" in section("twincat")

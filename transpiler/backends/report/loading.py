@@ -8,11 +8,10 @@ from __future__ import annotations
 from typing import Iterable
 
 from transpiler.backends.iec_model import IecProject
+from transpiler.backends.plcopen.project_folder import FOLDER as EDITOR_FOLDER
 from transpiler.backends.readme import render_loading
 from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.twincat.layout import TcProject
-
-EDITOR_FOLDER = "plc_project"
 
 
 def _task_lines(project: IecProject) -> list[str]:
