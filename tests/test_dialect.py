@@ -245,3 +245,18 @@ def test_report_says_how_to_load_each_target_with_the_names_written(sample):
     assert codesys.split("### Loading it", 1)[1].split("### The task")[0].strip() \
         == readme.split("## Loading it", 1)[1].split("## The task")[0].strip()
     assert "twincat/Main_PGM/Main_PGM.plcproj" in section("twincat")
+
+
+def test_load_steps_name_only_files_that_were_written():
+    result = compile_project(ProjectOptions(main=SAMPLE / "Main_PGM.src", cfg=SAMPLE / "OEM.cfg"),
+                             make_semantics("itnc530"))
+    mp = read_mp_file(SAMPLE / "MP_data.mp", Diagnostics())
+    for target in ("openplc", "matiec"):
+        st_only = transpile_program(result.program, Diagnostics(), mp, {"st"}, mp_file=SAMPLE / "MP_data.mp",
+                                    target=target).files
+        steps = st_only["report.md"].decode().split("## How to load this on ", 1)[1]
+        assert "plc_project" not in steps and not any(name.startswith("plc_project/") for name in st_only)
+    xml_only = transpile_program(result.program, Diagnostics(), mp, {"xml"}, mp_file=SAMPLE / "MP_data.mp",
+                                 target="openplc").files
+    steps = xml_only["report.md"].decode().split("## How to load this on ", 1)[1]
+    assert "not written this time" in steps and "`plc_project/`" in steps

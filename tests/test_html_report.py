@@ -121,3 +121,14 @@ def test_mutate_page_shows_survivors_at_their_source_lines(tmp_path, capsys):
     marked = [row for row in page.find_class("line") if "survivor" in row.get("class").split()]
     assert marked and all(row.find_class("note")[0].text_content().startswith("mutant survived") for row in marked)
     _self_contained((out / "index.html").read_text())
+
+
+def test_a_report_folder_that_cannot_be_written_is_an_error_not_a_traceback(tmp_path, capsys):
+    (tmp_path / "main.src").write_text(PROGRAM)
+    (tmp_path / "s.yaml").write_text(SCENARIO)
+    blocked = tmp_path / "a_file"
+    blocked.write_text("not a folder")
+    code = main(["equiv", str(tmp_path / "main.src"), "--scenario", str(tmp_path / "s.yaml"), "--html", str(blocked)])
+    err = capsys.readouterr().err
+    assert code == 2 and "error[E-TOOL]: cannot write the reports" in err and "Traceback" not in err
+    assert blocked.read_text() == "not a folder"

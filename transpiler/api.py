@@ -370,7 +370,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
             from transpiler.verify.html_report import render_page
             traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text, mp)
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
-                                                    f"Equivalence of {project.main.name}", traces))
+                                                    f"Equivalence of {project.main.name}", traces,
+                                                    project.options.encoding))
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), page)
@@ -392,7 +393,8 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
     from transpiler.verify.evidence import mutation_evidence
     from transpiler.verify.html_report import render_page
     return render_page(mutation_evidence(mutation.result, mutation.st_text, project.program, project.main.parent,
-                                         f"Mutation check of {project.main.name}", min_score))
+                                         f"Mutation check of {project.main.name}", min_score,
+                                         project.options.encoding))
 
 
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,

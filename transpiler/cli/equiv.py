@@ -11,7 +11,6 @@ from transpiler import api
 from transpiler.atomic import write_files_atomically
 from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
 from transpiler.cli.progress import ProgressLine
-from transpiler.verify.html_report import PAGE_FILE
 from transpiler.diagnostics import NO_SPAN
 
 
@@ -81,8 +80,13 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         except ValueError as exc:           # SOURCE_DATE_EPOCH that is not a number
             raise UsageError(str(exc)) from None
     if args.html is not None and check.html_page is not None:
+        from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = check.html_page
-    write_files_atomically(files)
+    try:
+        write_files_atomically(files)
+    except OSError as exc:
+        print(f"{NO_SPAN}: error[E-TOOL]: cannot write the reports: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if files:
         print("reports: " + ", ".join(str(path) for path in files))
     print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "

@@ -9,9 +9,9 @@ from pathlib import Path
 
 from transpiler import api
 from transpiler.atomic import write_files_atomically
-from transpiler.cli.common import EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
 from transpiler.cli.progress import ProgressLine
-from transpiler.verify.html_report import PAGE_FILE
+from transpiler.diagnostics import NO_SPAN
 
 DEFAULT_MIN_SCORE = 0.9
 
@@ -110,8 +110,13 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         from transpiler.verify.mutation_report import mutation_report
         files[args.mutation_report] = mutation_report(result, run.st_text, args.min_score)
     if args.html is not None:
+        from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = api.mutation_page(project, run, args.min_score)
-    write_files_atomically(files)
+    try:
+        write_files_atomically(files)
+    except OSError as exc:
+        print(f"{NO_SPAN}: error[E-TOOL]: cannot write the reports: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if files:
         print("reports: " + ", ".join(str(path) for path in files))
     print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "

@@ -3,6 +3,7 @@ with every cycle recorded, and the source files with their line coverage; decide
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
@@ -32,37 +33,36 @@ def _status(outcome) -> str:
 def divergence_traces(result: EquivalenceResult, program: Program, make_side: Callable[[], StSide], iomap: IoMap,
                       names: NameTable, scenarios: Sequence[Scenario], st_text: str,
                       base_mp: Mapping | None = None) -> list[DivergenceTrace]:
-    """Each divergent run replayed with every cycle recorded (its shrunk stimulus where there is one)."""
-    by_name = {s.name: s for s in scenarios}
+    """Each divergent run replayed with every cycle recorded (its shrunk stimulus where there is one). The outcomes
+    are the runs of `scenarios`, in order (two scenario files may share a name)."""
     traces = []
-    for outcome in result.outcomes:
+    for outcome, scenario in zip(result.outcomes, scenarios):
         r = outcome.result
-        if r.divergence is None or r.scenario not in by_name:
+        if r.divergence is None:
             continue
-        replay = outcome.shrunk if outcome.shrunk is not None else by_name[r.scenario]
+        replay = outcome.shrunk if outcome.shrunk is not None else scenario
         trace = trace_divergence(program, make_side, iomap, names, r.scenario, replay, st_text, base_mp)
-        if trace is None and replay is not by_name[r.scenario]:
-            trace = trace_divergence(program, make_side, iomap, names, r.scenario, by_name[r.scenario], st_text,
-                                     base_mp)
+        if trace is None and replay is not scenario:
+            trace = trace_divergence(program, make_side, iomap, names, r.scenario, scenario, st_text, base_mp)
         if trace is not None:
             traces.append(trace)
     return traces
 
 
-def source_texts(program: Program, main_dir: Path) -> dict[str, str]:
-    """Each .src file of the program (as its spans name it) -> its text."""
+def source_texts(program: Program, main_dir: Path, encoding: str | None = None) -> dict[str, str]:
+    """Each .src file of the program (as its spans name it) -> its text, decoded as the front end decoded it."""
     texts = {}
     for f in program.files:
         path = main_dir / f.path
         try:
-            texts[f.path] = decode_text(path.read_bytes())
-        except OSError:
+            texts[f.path] = decode_text(path.read_bytes(), encoding)
+        except (OSError, UnicodeDecodeError):
             texts[f.path] = ""
     return texts
 
 
 def equivalence_evidence(result: EquivalenceResult, program: Program, main_dir: Path, title: str,
-                         traces: Sequence[DivergenceTrace] = ()) -> Evidence:
+                         traces: Sequence[DivergenceTrace] = (), encoding: str | None = None) -> Evidence:
     c = result.coverage
     cycles = sum(o.result.cycles_run for o in result.outcomes)
     summary = [f"{len(result.outcomes)} runs, {cycles} cycles, backend {result.backend}.",
@@ -84,7 +84,7 @@ def equivalence_evidence(result: EquivalenceResult, program: Program, main_dir: 
     runs = [RunRow(o.result.scenario, _status(o), o.result.cycles_run, o.result.compared, o.result.seconds)
             for o in result.outcomes]
     return Evidence(title, result.verdict, result.equivalent, summary, runs, tuple(traces),
-                    source_files(source_texts(program, main_dir), coverage, notes))
+                    source_files(source_texts(program, main_dir, encoding), coverage, notes))
 
 
 def _file_line(where: str) -> tuple[str | None, int]:
@@ -96,7 +96,7 @@ def _file_line(where: str) -> tuple[str | None, int]:
 
 
 def mutation_evidence(result, st_text: str, program: Program, main_dir: Path, title: str,
-                      min_score: float) -> Evidence:
+                      min_score: float, encoding: str | None = None) -> Evidence:
     """The page of a mutation run: the score against `min_score`, the surviving mutants, each beside the source line
     its statement was translated from (the traceability tag above it in the ST)."""
     from transpiler.verify.mutate import EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, survivor_location
@@ -118,10 +118,11 @@ def mutation_evidence(result, st_text: str, program: Program, main_dir: Path, ti
             note = f"mutant survived: {v.mutant.description}"
         else:                               # no tag of its own: the lines its POU was translated from
             source = result.pou_sources.get(v.mutant.pou, "").split(", ")[0]
-            file, line = _file_line(source.split("-")[0] + ":1") if source else (None, 0)
+            first = re.fullmatch(r"(.+):(\d+)(?:-\d+)?", source)
+            file, line = (first.group(1), int(first.group(2))) if first else (None, 0)
             note = f"mutant survived (in {source}): {v.mutant.description}: {v.mutant.original}"
         survivors.append((source, where.split(", from ")[0], f"{v.mutant.description}: {v.mutant.original}"))
         if file is not None:
             notes.setdefault((file, line), []).append(note)
     return Evidence(title, f"score {100 * result.score:.1f}%", met, summary, survivors=survivors,
-                    sources=source_files(source_texts(program, main_dir), {}, notes))
+                    sources=source_files(source_texts(program, main_dir, encoding), {}, notes))

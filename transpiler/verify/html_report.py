@@ -8,11 +8,14 @@ from __future__ import annotations
 
 import dataclasses
 import html
+import re
 from typing import Iterable, Mapping, Sequence
 
 from transpiler.verify.divergence_trace import DivergenceTrace
 
 PAGE_FILE = "index.html"
+# Lines as the front end counts them (a form feed or a Unicode line separator is no line break there).
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 PLOT_WIDTH, PLOT_HEIGHT, PLOT_MARGIN = 720, 150, 40
 
 _STYLE = """
@@ -198,8 +201,11 @@ def source_files(texts: Mapping[str, str], coverage: Mapping[str, Mapping[int, t
     files = []
     for path, text in texts.items():
         lines = coverage.get(path, {})
+        parts = _LINE_BREAK.split(text)
+        if parts and parts[-1] == "":
+            parts.pop()                     # the break that ends the last line starts no line of its own
         files.append(SourceFile(path, tuple(
             SourceLine(n, line, lines[n][0] if n in lines else None, (lines[n][1], lines[n][2]) if n in lines
                        else (0, 0), tuple(notes.get((path, n), ())))
-            for n, line in enumerate(text.splitlines(), start=1))))
+            for n, line in enumerate(parts, start=1))))
     return tuple(files)

@@ -49,26 +49,33 @@ def how_to_load(target: TargetProject, file_names: Iterable[str], twincat: TcPro
     inputs, outputs = _io_counts(target)
     lines = ["", f"## How to load this on {title}", ""]
     tasks = _task_lines(project)
+    folder = f"{EDITOR_FOLDER}/plc.xml" in files
+    task = tasks[0] if tasks else "task"
     if name == "openplc":
+        upload = ("choose `project.st` as it is" if "project.st" in files else
+                  "choose the `project.st` of a translation with `--format st` (not written this time)")
         lines += [
             "OpenPLC runtime (web interface):",
             "",
-            "1. *Programs > Upload Program*: choose `project.st` as it is and launch the compilation. The runtime "
-            f"builds the CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` (the names its build expects); "
-            "nothing needs editing.",
-            "2. The runtime runs the " + (tasks[0] if tasks else "task") + " (as the ST declares it).",
+            f"1. *Programs > Upload Program*: {upload} and launch the compilation. The runtime builds the "
+            f"CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` (the names its build expects); nothing "
+            "needs editing.",
+            f"2. The runtime runs the {task} (as the ST declares it).",
             "3. Start the PLC. Outputs `%QXa.b` are Modbus coils 8a+b, inputs `%IXa.b` discrete inputs 8a+b "
             f"({inputs} inputs, {outputs} outputs; `io_map.csv` names each).",
-            "",
-            f"OpenPLC Editor: open the folder `{EDITOR_FOLDER}/` (*File > Open*), then *Generate program for OpenPLC "
-            "Runtime* writes the .st to upload as above.",
         ]
+        if folder:
+            lines += ["", f"OpenPLC Editor: open the folder `{EDITOR_FOLDER}/` (*File > Open*), then *Generate "
+                          "program for OpenPLC Runtime* writes the .st to upload as above."]
     elif name == "matiec":
+        if folder:
+            first = (f"1. Open the folder `{EDITOR_FOLDER}/` as a project (*File > Open*; `plc.xml` is "
+                     "`project.xml`), or import `project.xml` into a project of your own.")
+        else:
+            first = "1. Create a project and paste `project.st` into it (no PLCopen XML was written this time)."
         lines += [
-            f"1. Open the folder `{EDITOR_FOLDER}/` as a project (*File > Open*; `plc.xml` is `project.xml`), or "
-            "import `project.xml` into a project of your own.",
-            f"2. Build. The CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` holds the "
-            + (tasks[0] if tasks else "task") + ".",
+            first,
+            f"2. Build. The CONFIGURATION `{conf.name}` with RESOURCE `{conf.resource}` holds the {task}.",
             f"3. Map the located variables ({inputs} `%IX` inputs, {outputs} `%QX` outputs; `io_map.csv`) to your "
             "I/O.",
         ]

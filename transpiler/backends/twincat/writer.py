@@ -8,7 +8,7 @@ sections, which every XML reader joins back into the same text.
 from __future__ import annotations
 
 from pathlib import PurePosixPath
-from xml.sax.saxutils import quoteattr
+from xml.sax.saxutils import escape
 
 from transpiler.backends.plcopen.writer import xml_safe
 from transpiler.backends.templating import template_environment
@@ -30,7 +30,7 @@ def cdata(text: str | None) -> str:
 
 def attr(text: str) -> str:
     """`text` escaped for a double-quoted attribute or element text."""
-    return quoteattr(xml_safe(str(text)))[1:-1]
+    return escape(xml_safe(str(text)), {'"': "&quot;"})
 
 
 def winpath(path: PurePosixPath) -> str:
