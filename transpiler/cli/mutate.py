@@ -98,7 +98,7 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         what = ("judged equivalent, but a scenario killed it: the judgement is wrong" if why == KILLED_ANYWAY
                 else "judged equivalent, but the translation has no such mutant: the entry is stale")
         print(f"{e.span}: note: {what}: {e.pou}: {e.mutation}: {e.st}")
-    met = result.score >= args.min_score and result.denominator > 0
+    met = result.meets(args.min_score)
     files = {}
     if args.report:
         files[args.report] = report_json(result, run.st_text)

@@ -100,7 +100,7 @@ def mutation_evidence(result, st_text: str, program: Program, main_dir: Path, ti
     """The page of a mutation run: the score against `min_score`, the surviving mutants, each beside the source line
     its statement was translated from (the traceability tag above it in the ST)."""
     from transpiler.verify.mutate import EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, survivor_location
-    met = result.score >= min_score and result.denominator > 0
+    met = result.meets(min_score)
     summary = [f"{result.sites} mutation sites; {len(result.verdicts)} mutants judged on the {result.backend} "
                f"backend under {len(result.scenarios)} scenarios in {result.seconds:.0f} s.",
                f"{result.count(KILLED)} killed of {result.denominator} non-equivalent mutants; "

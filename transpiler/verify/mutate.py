@@ -402,6 +402,10 @@ class MutationResult:
     def score(self) -> float:
         return self.count(KILLED) / self.denominator if self.denominator else 0.0
 
+    def meets(self, min_score: float) -> bool:
+        """The score reaches `min_score`, with at least one mutant that counts (nothing judged proves nothing)."""
+        return self.denominator > 0 and self.score >= min_score
+
 
 KILLED_ANYWAY = "killed"     # a judged-equivalent mutant that a scenario told apart: the judgement was wrong
 NO_SUCH_MUTANT = "gone"      # the translation has no such mutant (any more): the entry is stale

@@ -124,19 +124,26 @@ def target_gvls(target: TargetProject) -> tuple[Gvl, ...]:
 # --- one object at a time: the pieces of project.st that a per-object project (TwinCAT) stores in files of their own
 
 
-def render_pou_head(pou: Pou) -> str:
-    """A POU's declaration part as project.st prints it: comments, header and variable sections, no body."""
-    return _environment().get_template("pou_head.st.j2").render(pou=pou).rstrip("\n") + "\n"
+class ObjectPrinter:
+    """Prints one object at a time as project.st prints it, from one template environment for all of them."""
 
+    def __init__(self) -> None:
+        self._env = _environment()
 
-def render_gvl(gvl: Gvl) -> str:
-    """A global variable list's declaration as project.st prints it under the list's name (attribute, VAR_GLOBAL)."""
-    return _environment().get_template("gvl.st.j2").render(gvl=gvl).rstrip("\n") + "\n"
+    def _render(self, template: str, **context: object) -> str:
+        return self._env.get_template(template).render(**context).rstrip("\n") + "\n"
 
+    def pou_head(self, pou: Pou) -> str:
+        """A POU's declaration part: comments, header and variable sections, no body."""
+        return self._render("pou_head.st.j2", pou=pou)
 
-def render_type(data_type: DataType) -> str:
-    """One named TYPE as project.st prints it."""
-    return _environment().get_template("type.st.j2").render(type=data_type).rstrip("\n") + "\n"
+    def gvl(self, gvl: Gvl) -> str:
+        """A global variable list's declaration under the list's name (attribute, VAR_GLOBAL)."""
+        return self._render("gvl.st.j2", gvl=gvl)
+
+    def data_type(self, data_type: DataType) -> str:
+        """One named TYPE."""
+        return self._render("type.st.j2", type=data_type)
 
 
 def _inline_array(var: IecVar, arrays: dict) -> IecVar:
