@@ -12,6 +12,7 @@ import pytest
 
 from tests import report_schema
 from transpiler import api
+from transpiler.backends.iec_model import SourceRange
 from transpiler.cli.app import main
 from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, MutationResult, Verdict,
                                       mutation_sites)
@@ -124,7 +125,7 @@ def _result(outcomes: list[tuple[str, str, int]]) -> MutationResult:
     verdicts = [Verdict(m, outcome, by, 0.25, runs) for m, (outcome, by, runs) in zip(mutation_sites(ST), outcomes)]
     return MutationResult(verdicts, len(mutation_sites(ST)), ["short", "long", "random_seed1"], "builtin", 1.0,
                           scenario_files=("scenarios/short.yaml", "scenarios/long.yaml", ""),
-                          pou_sources={"Main": "main.src:1-9"})
+                          pou_sources={"Main": (SourceRange("main.src", 1, 9),)})
 
 
 def test_each_outcome_has_its_status_and_the_report_validates(validator):

@@ -473,6 +473,5 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     files = {id(s): str(s.source) for s in users if s.source is not None}
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
                             listed_absent=absent, scenario_files=tuple(files.get(id(s), "") for s in judge.scenarios),
-                            pou_sources={p.name: ", ".join(r.tag() for r in p.source_map) for p in iec.pous
-                                         if p.source_map})
+                            pou_sources={p.name: p.source_map for p in iec.pous if p.source_map})
     return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))

@@ -77,3 +77,18 @@ def diagnostics_json(items: Iterable[Diagnostic]) -> list[dict]:
     """Every diagnostic as data for `--json`: code, severity, file, line, col, message and notes."""
     return [{"code": d.code, "severity": d.severity.value, "file": d.span.file, "line": d.span.line,
              "col": d.span.col, "message": d.message, "notes": list(d.notes)} for d in items]
+
+
+def write_reports(files: dict) -> bool:
+    """Write the report files of a command all-or-nothing and say where they went; False (after an E-TOOL message)
+    when they cannot be written."""
+    from transpiler.atomic import write_files_atomically
+    from transpiler.diagnostics import NO_SPAN
+    try:
+        write_files_atomically(files)
+    except OSError as exc:
+        print(f"{NO_SPAN}: error[E-TOOL]: cannot write the reports: {exc}", file=sys.stderr)
+        return False
+    if files:
+        print("reports: " + ", ".join(str(path) for path in files))
+    return True

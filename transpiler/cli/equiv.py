@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Callable
 
 from transpiler import api
-from transpiler.atomic import write_files_atomically
-from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
+                                   project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
 
@@ -82,13 +82,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     if args.html is not None and check.html_page is not None:
         from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = check.html_page
-    try:
-        write_files_atomically(files)
-    except OSError as exc:
-        print(f"{NO_SPAN}: error[E-TOOL]: cannot write the reports: {exc}", file=sys.stderr)
+    if not write_reports(files):
         return EXIT_BAD_INPUT
-    if files:
-        print("reports: " + ", ".join(str(path) for path in files))
     print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "
           f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:

@@ -8,10 +8,9 @@ import sys
 from pathlib import Path
 
 from transpiler import api
-from transpiler.atomic import write_files_atomically
-from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
+                                   project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
-from transpiler.diagnostics import NO_SPAN
 
 DEFAULT_MIN_SCORE = 0.9
 
@@ -112,13 +111,8 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     if args.html is not None:
         from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = api.mutation_page(project, run, args.min_score)
-    try:
-        write_files_atomically(files)
-    except OSError as exc:
-        print(f"{NO_SPAN}: error[E-TOOL]: cannot write the reports: {exc}", file=sys.stderr)
+    if not write_reports(files):
         return EXIT_BAD_INPUT
-    if files:
-        print("reports: " + ", ".join(str(path) for path in files))
     print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
           f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
           f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")

@@ -3,7 +3,6 @@ with every cycle recorded, and the source files with their line coverage; decide
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
@@ -117,9 +116,9 @@ def mutation_evidence(result, st_text: str, program: Program, main_dir: Path, ti
             file, line = _file_line(source + ":1")
             note = f"mutant survived: {v.mutant.description}"
         else:                               # no tag of its own: the lines its POU was translated from
-            source = result.pou_sources.get(v.mutant.pou, "").split(", ")[0]
-            first = re.fullmatch(r"(.+):(\d+)(?:-\d+)?", source)
-            file, line = (first.group(1), int(first.group(2))) if first else (None, 0)
+            ranges = result.pou_sources.get(v.mutant.pou, ())
+            source = ranges[0].tag() if ranges else ""
+            file, line = (ranges[0].file, ranges[0].first_line) if ranges else (None, 0)
             note = f"mutant survived (in {source}): {v.mutant.description}: {v.mutant.original}"
         survivors.append((source, where.split(", from ")[0], f"{v.mutant.description}: {v.mutant.original}"))
         if file is not None:

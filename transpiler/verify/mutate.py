@@ -25,6 +25,7 @@ from xml.sax.saxutils import quoteattr
 
 import yaml
 
+from transpiler.backends.iec_model import SourceRange
 from transpiler.backends.report.iomap import IoMap
 from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram
@@ -388,7 +389,8 @@ class MutationResult:
     unmatched_equivalents: list[tuple[JudgedEquivalent, str]] = dataclasses.field(default_factory=list)
     listed_absent: int = 0                      # mutants the --mutants file lists that the translation has not
     scenario_files: tuple[str, ...] = ()        # the file of each of `scenarios` ("" for generated stimulus)
-    pou_sources: Mapping[str, str] = dataclasses.field(default_factory=dict)   # POU -> its lines: `main.src:3-40`
+    # POU -> the source lines it was translated from
+    pou_sources: Mapping[str, tuple[SourceRange, ...]] = dataclasses.field(default_factory=dict)
 
     def count(self, outcome: str) -> int:
         return sum(1 for v in self.verdicts if v.outcome == outcome)

@@ -11,6 +11,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 import transpiler
+from transpiler.backends.iec_model import SourceRange
 from transpiler.exec.st_lines import st_origin
 from transpiler.verify.mutate import EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, Mutant, MutationResult, Verdict
 
@@ -91,11 +92,11 @@ def _test_ids(names: list[str]) -> list[str]:
     return ids
 
 
-def origin(st_text: str, mutant: Mutant, pou_sources: Mapping[str, str]) -> str:
+def origin(st_text: str, mutant: Mutant, pou_sources: Mapping[str, tuple[SourceRange, ...]]) -> str:
     """`POU X, ST line N, from file:line` (the nearest tag above it); without a tag, the lines of its POU."""
     where = st_origin(st_text, mutant.line)
     if " from " not in where and mutant.pou in pou_sources:
-        where += f", in {pou_sources[mutant.pou]}"
+        where += f", in {', '.join(r.tag() for r in pou_sources[mutant.pou])}"
     return where
 
 
@@ -107,7 +108,8 @@ def _reason(v: Verdict) -> str:
     return v.by
 
 
-def _mutant(v: Verdict, st_text: str, ids: list[str], pou_sources: Mapping[str, str]) -> dict:
+def _mutant(v: Verdict, st_text: str, ids: list[str],
+            pou_sources: Mapping[str, tuple[SourceRange, ...]]) -> dict:
     change = change_of(st_text, v.mutant)
     entry = {"id": mutant_id(v.mutant), "mutatorName": v.mutant.operator, "replacement": change.replacement,
              "location": {"start": dict(zip(("line", "column"), change.start)),

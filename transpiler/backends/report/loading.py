@@ -11,17 +11,17 @@ from transpiler.backends.iec_model import IecProject
 from transpiler.backends.plcopen.project_folder import FOLDER as EDITOR_FOLDER
 from transpiler.backends.readme import render_loading
 from transpiler.backends.st.dialect import TargetProject
+from transpiler.backends.st.task_setup import task_setups
 from transpiler.backends.twincat.layout import TcProject
 
 
 def _task_lines(project: IecProject) -> list[str]:
     """One line per task: its name, cycle, priority and the program instances it calls, in order."""
-    conf = project.configuration
     lines = []
-    for task in conf.tasks:
-        calls = [f"`{inst.name}` (PROGRAM `{inst.type_name}`)" for inst in conf.instances if inst.task == task.name]
+    for setup in task_setups(project):
+        calls = [f"`{inst}` (PROGRAM `{typ}`)" for inst, typ in zip(setup.instances, setup.programs)]
         order = " then ".join(calls) if calls else "no program"
-        lines.append(f"task `{task.name}`: cyclic, every {task.interval_ms} ms, priority {task.priority}; calls "
+        lines.append(f"task `{setup.name}`: cyclic, every {setup.interval_ms} ms, priority {setup.priority}; calls "
                      f"{order}{', in this order, in the same task' if len(calls) > 1 else ''}")
     return lines
 

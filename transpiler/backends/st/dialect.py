@@ -31,14 +31,17 @@ class Dialect:
     inline_initialised_arrays: bool = False
     # Bit access `w.3` on integer variables (matiec has none: there the HH_BIT helper reads a bit).
     bit_access: bool = False
-    # The target's PLCopen import creates no task (CODESYS, TwinCAT): the XML carries no configuration and the
-    # output's README.md and project.st say which task to create (task_setup.py).
-    task_by_hand: bool = False
     # The priority the target's own project template gives its PLC task, used for the translation's single task
     # (whose priority carries nothing from the control); None keeps the back end's.
     task_priority: int | None = None
     # A native project folder written beside project.st (backends/twincat for "twincat").
     project_folder: str | None = None
+
+    @property
+    def task_by_hand(self) -> bool:
+        """The target's PLCopen import creates no task (CODESYS, TwinCAT: the GVLs live in addData and the XML carries
+        no configuration): the output's README.md and project.st say which task to create (task_setup.py)."""
+        return self.xml_globals != "configuration"
 
     def reference(self, name: str, title: str | None) -> str:
         """How a POU body names the global `name` of the group titled `title`."""
@@ -54,10 +57,10 @@ TARGETS = MappingProxyType({
     # OpenPLC v3 runs matiec (with -f -l -p -r -R -a): the same text is right for it.
     "openplc": Dialect("openplc", externals=True, st_template="project.st.j2", xml_globals="configuration"),
     "codesys": Dialect("codesys", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True, bit_access=True, task_by_hand=True),
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True),
     # TwinCAT's PLC project template gives its PlcTask priority 20 (as its .TcTTO and .tsproj files show).
     "twincat": Dialect("twincat", externals=False, st_template="project_gvl.st.j2", xml_globals="3s_addData",
-                       qualified_only=True, inline_initialised_arrays=True, bit_access=True, task_by_hand=True,
+                       qualified_only=True, inline_initialised_arrays=True, bit_access=True,
                        task_priority=20, project_folder="twincat"),
 })
 

@@ -21,6 +21,7 @@ class TaskSetup:
     interval_ms: int
     priority: int
     programs: tuple[str, ...]       # the PROGRAM POUs it calls each cycle, in this order
+    instances: tuple[str, ...] = () # their program instances, in the same order
 
     @property
     def interval(self) -> str:
@@ -30,8 +31,11 @@ class TaskSetup:
 def task_setups(project: IecProject) -> tuple[TaskSetup, ...]:
     """The tasks of the project's configuration with the programs each calls (a library has none)."""
     conf = project.configuration
+    def called(task: str) -> list:
+        return [inst for inst in conf.instances if inst.task == task]
     return tuple(TaskSetup(task.name, task.interval_ms, task.priority,
-                           tuple(inst.type_name for inst in conf.instances if inst.task == task.name))
+                           tuple(inst.type_name for inst in called(task.name)),
+                           tuple(inst.name for inst in called(task.name)))
                  for task in conf.tasks)
 
 
