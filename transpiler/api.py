@@ -320,9 +320,9 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                       progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
                       allow_untranslated: bool = False, html: bool = False) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
-    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
-    as written, with the presets of the machine parameters it was made with; a scenario whose own machine
-    parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST's shipped
+    machine-parameter values must be the project's (else E-MP-TRANSLATION); a scenario's own machine parameters
+    are written into its globals as run-time data (values it cannot hold: E-MP-UNREPRESENTABLE, NO VERDICT). With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
     one self-contained HTML page (each divergent run replayed once more with every cycle recorded)."""
     from transpiler.exec.compiled.shim import ShimUnavailable
@@ -354,21 +354,23 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
+    base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
     loaded = _load_scenarios(project, scenarios, names, diags)
     if random_cycles > 0:
         # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
         loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                           base_mp=mp)
+                           base_mp=base_mp)
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
-                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
+                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=base_mp,
                                  untranslated=tuple(transpiled.result.untranslated),
                                  pipelined=pipeline.worthwhile())
         page = None
         if html:
             from transpiler.verify.evidence import divergence_traces, equivalence_evidence
             from transpiler.verify.html_report import render_page
-            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text, mp)
+            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text,
+                                       base_mp)
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
                                                     f"Equivalence of {project.main.name}", traces,
                                                     project.options.encoding))
@@ -439,9 +441,11 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
-    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
+    base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
+    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
+                       base_mp=base_mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), mp)
+                  st_text, side_factory, compile_program(project.program), base_mp)
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.

@@ -69,6 +69,13 @@ CODES: dict[str, CodeInfo] = {
         _c("E-MP-VALUE", "error", "malformed machine-parameter line or value", "MP4110.0 : fast"),
         _c("E-MP-AMBIGUOUS", "error", "more than one machine-parameter file beside the main program: name the one "
            "the translation is made with (--mp)", "; Main.src beside MP_mill.mp and MP_lathe.mp"),
+        _c("E-MP-TRANSLATION", "error", "the translated program's machine-parameter values (the initial values of its "
+           "preset variables) differ from the project's machine parameters: the ST was made without the project's MP "
+           "file or from another one; co-simulation refuses it whatever the scenario sets",
+           "; project.st made without --mp, then `hh2iec equiv Main.src --st project.st` beside MP_mill.mp"),
+        _c("E-MP-UNREPRESENTABLE", "error", "a scenario's machine data (machine parameters, data-table rows) that the "
+           "emitted ST cannot hold, so it cannot be written into the translated program: the run gives NO VERDICT",
+           'mp: {"4110.0": 50000000}     # 2.5e9 cycles: more than a DINT preset holds'),
         _c("E-MP-NONE", "warning", "the program uses timers or counters but no machine-parameter file was found: "
            "every preset is 0 in the translation", "; Main.src uses T0, and no *.mp file is beside it"),
         # files
