@@ -67,11 +67,13 @@ def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | 
 
 def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str, str] | None = None,
                     include_dirs: Iterable[Path] = (), extra_defs: Iterable[Path] = (), encoding: str | None = None,
-                    werror: bool = False) -> ProjectOptions:
+                    werror: bool = False, mp_data: Path | None = None, mp_config: Path | None = None
+                    ) -> ProjectOptions:
     """Where the project is and how to configure it; DEFINE values are written as in OEM.cfg. `main` may be the
     project folder when exactly one .src file in it can be the main program. `encoding` forces one encoding for
-    every file (default: detected per file); `werror` makes warnings fail the run. Raises HH2IECError (E-USAGE)
-    when a named file or folder does not exist."""
+    every file (default: detected per file); `werror` makes warnings fail the run. `mp_data` / `mp_config` name
+    the PLC data tables (default: MP_Data.tab / MP_Config.tab in the folder MP beside the main program, or beside
+    it). Raises HH2IECError (E-USAGE) when a named file or folder does not exist."""
     main = Path(main)
     if main.is_dir():
         candidates = main_candidates(main)
@@ -93,10 +95,16 @@ def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str
     for d in include_dirs:
         if not d.is_dir():
             raise _usage(f"-I folder '{d}' does not exist")
+    tables = {}
+    for name, flag, path in (("MP_Data.tab", "--mp-data", mp_data), ("MP_Config.tab", "--mp-config", mp_config)):
+        if path is not None:
+            if not Path(path).is_file():
+                raise _usage(f"{flag} file '{path}' does not exist")
+            tables[name] = Path(path)
     values = {name.strip(): parse_define_value(str(value)) for name, value in (defines or {}).items()}
     return ProjectOptions(main=main, cfg=Path(cfg) if cfg is not None else None, defines=values,
                           include_dirs=include_dirs, extra_global_defs=tuple(Path(p) for p in extra_defs),
-                          encoding=encoding, werror=werror)
+                          encoding=encoding, werror=werror, data_tables=tables)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -19,7 +19,7 @@ from transpiler.verify.rundata import DataWrite, run_data, write_data
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
-                                       program_operands)
+                                       program_operands, table_values)
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations
 
 
@@ -438,7 +438,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
     comparison = comparison_for(program, names, iomap)
-    data = run_data(side.get, iomap, program, parameters[0], cycle_time, base_mp)
+    data = run_data(side.get, iomap, program, parameters[0], cycle_time, base_mp, table_values(program, scenario))
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs, data.writes)
     translated = _TranslatedHalf(side, driver, stimulus, accessors)

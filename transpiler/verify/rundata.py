@@ -39,7 +39,7 @@ class RunData:
     def refusal(self) -> tuple[str, str] | None:
         """(code, message) of the reason the run must not start, or None."""
         if self.shipped:
-            return SHIPPED, (f"the translated program's machine parameters differ from {self.shipped_against}: "
+            return SHIPPED, (f"the translated program's machine data differ from {self.shipped_against}: "
                              + "; ".join(self.shipped))
         if self.unrepresentable:
             return UNREPRESENTABLE, ("the scenario's machine data cannot be written into the translated program: "
@@ -71,29 +71,41 @@ def _fits(row: MapRow, value: int) -> bool:
 
 
 def run_data(read_shipped, iomap: IoMap, program: Program, run_mp: Mapping, cycle_time_ms: int,
-             base_mp: Mapping | None) -> RunData:
+             base_mp: Mapping | None, table: Mapping[str, int | str] | None = None) -> RunData:
     """The checks and writes of one run. `read_shipped(path)` reads an ST variable as emitted (before any write).
 
     (a) The shipped preset variables must hold the presets of the project's machine parameters (`base_mp`,
     converted with the translation's cycle time). A project without an MP file (`base_mp` None) has no machine
     data of its own: the run's machine parameters are then the machine's, and the ST must hold them as shipped.
     (b) The run's machine parameters (`run_mp`: the scenario's file or the project's, with the scenario's inline
-    values over them), converted with the run's cycle time, are written into the preset variables."""
+    values over them), converted with the run's cycle time, are written into the preset variables.
+    The PLC data tables alike: the globals holding their rows must hold the tables' values as shipped, and the
+    run's values (`table`, symbol -> value: the scenario's `mp_data` over the tables) are written into them."""
     translation_cycle = int(program.semantics["cycle_time_ms"])
     rows = preset_rows(iomap)
     run = _presets(run_mp, program, cycle_time_ms)
     if base_mp is None:
         wanted, source = run, "the scenario's machine parameters"
-        against = "the scenario's (the project has no machine-parameter file, so the scenario's are the machine's)"
+        against = ("the scenario's machine parameters (the project has no machine-parameter file, so the "
+                   "scenario's are the machine's) and the project's data tables")
     else:
         wanted, source = _presets(base_mp, program, translation_cycle), "the project's machine parameters"
-        against = "the project's machine-parameter file (made without it, or from another one?)"
+        against = ("the project's machine-parameter file and data tables (made without them, or from other "
+                   "ones?)")
     shipped = []
     for row, number, index in rows:
         held, want = read_shipped(row.iec), wanted.get((number, index), 0)
         if int(held) != want:
             shipped.append(f"MP{number}.{index}: {want} cycles from {source}, {held} cycles in the translated "
                            f"program ({row.iec})")
+    for row in program.data_rows:
+        accessor = iomap.accessor(row.key)
+        held = accessor.read(_Reader(read_shipped)) if accessor is not None else None
+        if held is None:
+            shipped.append(f"{row.key}: the translated program holds no value of this data-table row")
+        elif held != row.value:
+            shipped.append(f"{row.key}: {row.value!r} in the data table ({row.table}:{row.span.line}), {held!r} in "
+                           f"the translated program ({accessor.place.path})")
     writes, unrepresentable = [], []
     for row, number, index in rows:
         value = run.get((number, index), 0)
@@ -102,7 +114,16 @@ def run_data(read_shipped, iomap: IoMap, program: Program, run_mp: Mapping, cycl
                                    f"{row.iec_type} {row.iec}")
             continue
         writes.append(DataWrite(row.operand, value))
+    for row in program.data_rows:
+        writes.append(DataWrite(row.key, (table or {}).get(row.symbol, row.value)))
     return RunData(tuple(writes), tuple(shipped), tuple(unrepresentable), against)
+
+
+class _Reader:
+    """`get` over a plain read function, for the io map's accessors."""
+
+    def __init__(self, read):
+        self.get = read
 
 
 def write_data(side, iomap: IoMap, writes: Iterable[DataWrite]) -> None:

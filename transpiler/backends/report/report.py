@@ -50,6 +50,9 @@ def io_map_of(result: StResult, mp_file: str | None = None, program: Program | N
     for (number, index), name in sorted(result.preset_vars.items()):
         source = f"from {mp_file}" if mp_file else "no machine-parameter file: 0"
         rows.append(MapRow("", f"MP{number}.{index}", name, "DINT", "parameter", f"preset in PLC cycles ({source})"))
+    for name, typ, row in result.data_vars.values():
+        rows.append(MapRow(row.symbol, row.key, name, typ, "parameter",
+                           f"data-table value of {row.operand_text} ({row.table}:{row.span.line})"))
     if program is not None:
         rows.append(MapRow("", "CONFIG", "", "", "configuration", configuration_text(program)))
     return IoMap(rows)
@@ -182,6 +185,17 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines.append(f"- `{name}` = {cycles} cycles")
     if not result.presets:
         lines.append("none")
+    if result.data_vars:
+        lines += ["", "## PLC data tables", "",
+                  "Each row's value is the initial value of a retained global; the program loads it into the "
+                  "operand before its first cycle and in a cycle that sees M4174 (MP restart). Commissioning "
+                  "changes the global.", "",
+                  "| table | NR | symbol | operand | value | IEC variable | loaded into |", "|---|---|---|---|---|---|---|"]
+        operand_vars = {r.operand: r.iec for r in result.layout.rows}
+        for name, typ, row in result.data_vars.values():
+            nr = "" if row.nr is None else str(row.nr)
+            lines.append(f"| {row.table}:{row.span.line} | {nr} | {row.symbol} | {row.operand_text} | {row.value!r} | "
+                         f"`{name}` ({typ}) | `{operand_vars.get(row.operand_text, '(byte memory)')}` |")
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
