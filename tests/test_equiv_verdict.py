@@ -143,8 +143,11 @@ def test_a_wrong_conversion_of_the_scenario_machine_parameters_is_a_divergence(t
 def test_machine_parameters_the_translation_cannot_hold_give_no_verdict(tmp_path, capsys):
     # 50,000,000 s are 2.5e9 cycles of 20 ms: more than the DINT preset variable holds.
     main_src, scenario = _timers_project(tmp_path, "50000000")
-    code, out, err = _run(["equiv", main_src, "--scenario", scenario, "--backend", "builtin", "-v"], capsys)
+    code, out, err = _run(["equiv", main_src, "--scenario", scenario, "--backend", "builtin", "-v",
+                           "--report", tmp_path / "r.json"], capsys)
     assert code == 2 and "hh2iec equiv: NO VERDICT (1 runs, 0 cycles" in out
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["verdict"] == "NO VERDICT" and report["runs"][0]["error_code"] == "E-MP-UNREPRESENTABLE"
     assert "error[E-MP-UNREPRESENTABLE]" in err and "MP4110.0: 2500000000 cycles" in err and "MP4110_0" in err
     assert "NOT EQUIVALENT" not in out and "not covered" not in out and "coverage: none (no run started)" in out
 

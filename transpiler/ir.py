@@ -138,7 +138,8 @@ class DataRow:
     @property
     def key(self) -> str:
         """How the io map names the row's stored value: `MP_Data.tab:DG_TC_pos_X_manual`."""
-        return f"{self.table.replace(chr(92), '/').rsplit('/', 1)[-1]}:{self.symbol}"
+        file = self.table.replace("\\", "/").rsplit("/", 1)[-1]
+        return f"{file}:{self.symbol}"
 
 
 @dataclasses.dataclass(frozen=True)

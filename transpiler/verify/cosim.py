@@ -438,7 +438,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
     comparison = comparison_for(program, names, iomap)
-    data = run_data(side.get, iomap, program, parameters[0], cycle_time, base_mp, table_values(program, scenario))
+    data = run_data(side, iomap, program, parameters[0], cycle_time, base_mp, table_values(program, scenario))
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs, data.writes)
     translated = _TranslatedHalf(side, driver, stimulus, accessors)

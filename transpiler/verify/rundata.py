@@ -70,9 +70,9 @@ def _fits(row: MapRow, value: int) -> bool:
     return -(1 << (8 * size - 1)) <= value < (1 << (8 * size - 1))
 
 
-def run_data(read_shipped, iomap: IoMap, program: Program, run_mp: Mapping, cycle_time_ms: int,
+def run_data(side, iomap: IoMap, program: Program, run_mp: Mapping, cycle_time_ms: int,
              base_mp: Mapping | None, table: Mapping[str, int | str] | None = None) -> RunData:
-    """The checks and writes of one run. `read_shipped(path)` reads an ST variable as emitted (before any write).
+    """The checks and writes of one run; `side` (cosim.StSide) is read as emitted, before anything is written.
 
     (a) The shipped preset variables must hold the presets of the project's machine parameters (`base_mp`,
     converted with the translation's cycle time). A project without an MP file (`base_mp` None) has no machine
@@ -94,13 +94,13 @@ def run_data(read_shipped, iomap: IoMap, program: Program, run_mp: Mapping, cycl
                    "ones?)")
     shipped = []
     for row, number, index in rows:
-        held, want = read_shipped(row.iec), wanted.get((number, index), 0)
+        held, want = side.get(row.iec), wanted.get((number, index), 0)
         if int(held) != want:
             shipped.append(f"MP{number}.{index}: {want} cycles from {source}, {held} cycles in the translated "
                            f"program ({row.iec})")
     for row in program.data_rows:
         accessor = iomap.accessor(row.key)
-        held = accessor.read(_Reader(read_shipped)) if accessor is not None else None
+        held = accessor.read(side) if accessor is not None else None
         if held is None:
             shipped.append(f"{row.key}: the translated program holds no value of this data-table row")
         elif held != row.value:
@@ -117,13 +117,6 @@ def run_data(read_shipped, iomap: IoMap, program: Program, run_mp: Mapping, cycl
     for row in program.data_rows:
         writes.append(DataWrite(row.key, (table or {}).get(row.symbol, row.value)))
     return RunData(tuple(writes), tuple(shipped), tuple(unrepresentable), against)
-
-
-class _Reader:
-    """`get` over a plain read function, for the io map's accessors."""
-
-    def __init__(self, read):
-        self.get = read
 
 
 def write_data(side, iomap: IoMap, writes: Iterable[DataWrite]) -> None:
