@@ -187,3 +187,15 @@ def test_an_st_shipped_with_other_table_values_is_refused(tmp_path, capsys):
     assert code == 2 and "error[E-MP-TRANSLATION]" in err
     assert "MP_Data.tab:DG_limit: 500 in the data table (MP/MP_Data.tab:3), 501 in the translated program" in err
     assert "EQUIVALENT" not in out.replace("NOT EQUIVALENT", "")
+
+
+def test_an_st_made_before_the_tables_existed_is_refused_without_a_traceback(tmp_path, capsys):
+    main_src = _project(tmp_path, folder="later")
+    code, _, _ = _run(["transpile", main_src, "--out", tmp_path / "out", "--format", "st"], capsys)
+    assert code == 0
+    (tmp_path / "later").rename(tmp_path / "MP")
+    (tmp_path / "out" / "io_map.csv").unlink()          # the fresh translation's map names the tables' globals
+    code, out, err = _run(["equiv", main_src, "--scenario", tmp_path / "scenario.yaml", "--backend", "builtin",
+                           "--st", tmp_path / "out" / "project.st"], capsys)
+    assert code == 2 and "error[E-MP-TRANSLATION]" in err and "E-TOOL" not in err
+    assert "MP_Data.tab:DG_limit: the translated program holds no value of this data-table row" in err

@@ -94,13 +94,16 @@ def run_data(side, iomap: IoMap, program: Program, run_mp: Mapping, cycle_time_m
                    "ones?)")
     shipped = []
     for row, number, index in rows:
-        held, want = side.get(row.iec), wanted.get((number, index), 0)
-        if int(held) != want:
+        held, want = _shipped(lambda: side.get(row.iec)), wanted.get((number, index), 0)
+        if held is None:
+            shipped.append(f"MP{number}.{index}: {want} cycles from {source}, the translated program has no "
+                           f"variable {row.iec}")
+        elif int(held) != want:
             shipped.append(f"MP{number}.{index}: {want} cycles from {source}, {held} cycles in the translated "
                            f"program ({row.iec})")
     for row in program.data_rows:
         accessor = iomap.accessor(row.key)
-        held = accessor.read(side) if accessor is not None else None
+        held = _shipped(lambda: accessor.read(side)) if accessor is not None else None
         if held is None:
             shipped.append(f"{row.key}: the translated program holds no value of this data-table row")
         elif held != row.value:
@@ -117,6 +120,14 @@ def run_data(side, iomap: IoMap, program: Program, run_mp: Mapping, cycle_time_m
     for row in program.data_rows:
         writes.append(DataWrite(row.key, (table or {}).get(row.symbol, row.value)))
     return RunData(tuple(writes), tuple(shipped), tuple(unrepresentable), against)
+
+
+def _shipped(read):
+    """A value as the ST holds it, or None when the ST has no such variable (an io map of another translation)."""
+    try:
+        return read()
+    except (LookupError, ValueError):
+        return None
 
 
 def write_data(side, iomap: IoMap, writes: Iterable[DataWrite]) -> None:
