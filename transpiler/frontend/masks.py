@@ -29,7 +29,11 @@ MAX_WIDTH = 255                           # a field wider than a screen line is 
 MAX_DECIMALS = 9
 MAX_QUEUE_LINES = 99
 CONVERSIONS = "dDsF"
-_FIELD = re.compile(r"%([-+0 #]*)([0-9]*)(?:\.([0-9]*))?(.?)", re.DOTALL)
+_FIELD = re.compile(r"%([-+0 #]*)([0-9]{0,4})(?:\.([0-9]{0,4}))?(.?)", re.DOTALL)   # (longer numbers: no field)
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_NUMBER = re.compile(r"[0-9]+")
+_MODIFIER = re.compile(r"/([A-Za-z]+)(?:=([0-9]{1,9}))?")
+_SYMBOL = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*")
 _ESCAPES = {"n": "\n", "t": "\t", "\\": "\\", '"': '"'}
 
 
@@ -68,6 +72,7 @@ class _Token:
     kind: str           # STRING REF WORD NUMBER MOD ; , = + - EOF
     value: str
     span: Span
+    bad: bool = False   # a string whose faults were reported: its statement is read, then dropped
 
 
 class _Tokenizer:
@@ -102,7 +107,7 @@ class _Tokenizer:
                 elif ch == "$":
                     end = line.find("$", col + 1)
                     name = line[col + 1:end] if end > 0 else ""
-                    if end < 0 or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", name):
+                    if end < 0 or not _SYMBOL.fullmatch(name):
                         self.diags.report("E-MASK-SYNTAX", at, "a reference is a symbol name between dollar signs, "
                                           "like $WG_tc_status$")
                         col = end + 1 if end > 0 else len(line)
@@ -110,19 +115,19 @@ class _Tokenizer:
                     yield _Token("REF", name, at)
                     col = end + 1
                 elif ch == "/":
-                    m = re.compile(r"/([A-Za-z]+)(?:=([0-9]+))?").match(line, col)
+                    m = _MODIFIER.match(line, col)
                     if m is None:
                         self.diags.report("E-MASK-SYNTAX", at, "'/' starts a modifier (/c, /n=3) or a comment (/* */)")
                         col += 1
                         continue
                     yield _Token("MOD", m.group(1).lower() + (f"={m.group(2)}" if m.group(2) is not None else ""), at)
                     col = m.end()
-                elif ch.isalpha() or ch == "_":
-                    m = re.compile(r"[A-Za-z_][A-Za-z0-9_]*").match(line, col)
+                elif ch.isascii() and (ch.isalpha() or ch == "_"):
+                    m = _WORD.match(line, col)
                     yield _Token("WORD", m.group(0), at)
                     col = m.end()
-                elif ch.isdigit():
-                    m = re.compile(r"[0-9]+").match(line, col)
+                elif ch in "0123456789":
+                    m = _NUMBER.match(line, col)
                     yield _Token("NUMBER", m.group(0), at)
                     col = m.end()
                 elif ch in ";,=+-":
@@ -138,16 +143,18 @@ class _Tokenizer:
     def _string(self, line: str, col: int, at: Span) -> tuple[_Token | None, int]:
         """A string literal on one line; escapes \\n \\t \\\\ \\" (a `%` stays for the format reader)."""
         out = []
+        bad = False
         i = col + 1
         while i < len(line):
             ch = line[i]
             if ch == '"':
-                return _Token("STRING", "".join(out), at), i + 1
+                return _Token("STRING", "".join(out), at, bad), i + 1
             if ch == "\\":
                 nxt = line[i + 1] if i + 1 < len(line) else ""
                 if nxt not in _ESCAPES:
                     self.diags.report("E-MASK-SYNTAX", Span(self.file, at.line, i + 1),
                                       f"unknown escape '\\{nxt}' (\\n, \\t, \\\\ and \\\" are known)")
+                    bad = True
                     i += 2
                     continue
                 out.append(_ESCAPES[nxt])
@@ -211,7 +218,7 @@ class _Parser:
     def _text(self, string: _Token) -> MaskStatement | None:
         if self.peek().kind == ";":
             self.take()
-            pieces = _format_pieces(string, [], self.diags, static=True)
+            pieces = None if string.bad else _format_pieces(string, [], self.diags, static=True)
             return None if pieces is None else MaskStatement("text", string.span, pieces)
         if self.peek().kind != ",":
             self.fail(self.peek(), f"expected ';' or ',' after the string, found {_what(self.peek())}")
@@ -225,7 +232,7 @@ class _Parser:
             refs.append(ref)
         if not self._end("the references"):
             return None
-        pieces = _format_pieces(string, refs, self.diags, static=False)
+        pieces = None if string.bad else _format_pieces(string, refs, self.diags, static=False)
         return None if pieces is None else MaskStatement("line", string.span, pieces)
 
     def _reference(self) -> MaskRef | None:
@@ -263,7 +270,7 @@ class _Parser:
         self.take()
         if key.value.upper() == "ERRQUE":
             count = self.take()
-            if count.kind != "NUMBER" or not 1 <= int(count.value) <= MAX_QUEUE_LINES:
+            if count.kind != "NUMBER" or len(count.value) > 3 or not 1 <= int(count.value) <= MAX_QUEUE_LINES:
                 self.fail(count, f"ERRQUE= takes the number of lines, 1 ... {MAX_QUEUE_LINES}")
                 return None
             modifiers = self._modifiers(("c", "l", "s"), allow_decimals=False)
