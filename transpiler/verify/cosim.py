@@ -420,9 +420,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False,
-               inspect: Callable[[int, Callable[[str, int], object], Callable[[str, int], object]], None] | None = None
-               ) -> CosimResult:
+               pipelined: bool = False, inspect: Callable[[int, Callable, Callable], None] | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -467,8 +465,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
     if inspect is not None:
-        translated_lookup = st_lookup(side, iomap)
-        record = _with_inspection(record, inspect, machine.read, translated_lookup)
+        record = _with_inspection(record, inspect, machine.read, st_lookup(side, iomap))
     pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
     reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
     try:
