@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import re
 from pathlib import Path
+from types import MappingProxyType
 from typing import Iterator
 
 from transpiler.diagnostics import Diagnostics, Span
@@ -34,7 +35,7 @@ _WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _NUMBER = re.compile(r"[0-9]+")
 _MODIFIER = re.compile(r"/([A-Za-z]+)(?:=([0-9]{1,9}))?")
 _SYMBOL = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*")
-_ESCAPES = {"n": "\n", "t": "\t", "\\": "\\", '"': '"'}
+_ESCAPES = MappingProxyType({"n": "\n", "t": "\t", "\\": "\\", '"': '"'})
 
 
 def mask_files(main: Path) -> list[Path]:
