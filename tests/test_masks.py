@@ -319,3 +319,25 @@ def test_structured_mask_fuzz_gives_only_diagnostics(fuzz_folder, parts):
 @given(data=st.binary(max_size=300))
 def test_byte_mask_fuzz_gives_only_diagnostics(fuzz_folder, data):
     _only_diagnostics(fuzz_folder, data)
+
+
+def test_equiv_fails_when_the_screens_differ_though_every_compared_operand_agrees(tmp_path, capsys):
+    # The mask shows WG_shown, which the program never writes: no compared operand tells the two sides apart. An io
+    # map without its row leaves the translated side no place to read it from, so its screen differs.
+    (tmp_path / "Main.src").write_text("#define /g d.def\nL I_a\n= O_b\nEM\n")
+    (tmp_path / "d.def").write_text("I_a I 1\nO_b O 2\nWG_shown W 100\n")
+    (tmp_path / "screen.msk").write_text('"IN %d OUT %d\\n", $I_a$/c, $O_b$/c;\n"VALUE %5D\\n", $WG_shown$/c;\n')
+    (tmp_path / "s.yaml").write_text("name: s\ncycles: 4\nevents:\n  - cycle: 1\n    set: {I_a: 1}\n")
+    out = tmp_path / "out"
+    assert hh2iec(["transpile", str(tmp_path / "Main.src"), "--out", str(out), "--format", "st"]) == 0
+    assert "masks/ (1 files)" in capsys.readouterr().out
+    args = ["equiv", str(tmp_path / "Main.src"), "--scenario", str(tmp_path / "s.yaml"), "--backend", "builtin",
+            "--st", str(out / "project.st"), "--show-mask", "screen@2"]
+    assert hh2iec(args) == 0
+    assert "(original and translation draw the same screen):\n  |IN 1 OUT 1\n  |VALUE     0\n" in capsys.readouterr().out
+    rows = (out / "io_map.csv").read_text().splitlines()
+    (out / "io_map.csv").write_text("\n".join(r for r in rows if ",W100," not in r) + "\n")
+    assert hh2iec(args) == 1
+    text = capsys.readouterr().out
+    assert " original:\n  |IN 1 OUT 1\n  |VALUE     0\n translated:\n  |IN 1 OUT 1\n  |VALUE ?????\n" in text
+    assert "hh2iec equiv: SCREENS DIFFER: screen.msk after cycle 2 of s; compared operands: EQUIVALENT (1 runs" in text

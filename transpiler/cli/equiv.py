@@ -88,11 +88,14 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         files[args.html / PAGE_FILE] = check.html_page
     if not write_reports(files):
         return EXIT_BAD_INPUT
-    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "
-          f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
+    headline = result.verdict
     if check.screens_differ:
+        # The screens are a finding of their own: the headline must not read as a pass when the operator's view
+        # differs, whatever the compared operands say.
         differing = sorted({f"{s.mask} after cycle {s.cycle} of {s.scenario}" for s in check.screens if s.differs})
-        print(f"hh2iec equiv: SCREENS DIFFER: {'; '.join(differing)}")
+        headline = f"SCREENS DIFFER: {'; '.join(differing)}; compared operands: {result.verdict}"
+    print(f"hh2iec equiv: {headline} ({len(result.outcomes)} runs, "
+          f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
     return EXIT_OK if result.equivalent and not check.screens_differ else EXIT_FAILED
