@@ -411,7 +411,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False) -> CosimResult:
+               pipelined: bool = False, inspect: Callable[[int, Callable, Callable], None] | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -425,11 +425,12 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     (pipeline.py), where the platform can fork and no `record` wants every cycle's values; the result is the same
     as in lockstep. It pays where a second CPU is free (pipeline.worthwhile).
 
-    `base_mp` are the project's machine parameters (None: the project has no MP file); the ST's preset variables
-    must hold them as shipped, else the run is refused (rundata.SHIPPED). The scenario's own override them on both
-    sides: written into the ST's globals before cycle 0 and at an MP restart (rundata.run_data); values the ST
-    cannot hold refuse the run (rundata.UNREPRESENTABLE).
-    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures)."""
+    `base_mp` are the project's machine parameters (None: it has no MP file), which the ST must hold as shipped
+    (else rundata.SHIPPED); the scenario's own are written into its globals before cycle 0 and at an MP restart
+    (rundata.run_data; what it cannot hold: rundata.UNREPRESENTABLE). `expect` is checked on the original.
+
+    `inspect(cycle, original, translated)` is called after each cycle both sides ran, with a lookup `(kind, addr) ->
+    value` into each side (None where the translation holds no such operand); it runs the halves in lockstep."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
@@ -454,6 +455,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     start = time.perf_counter()
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
+    if inspect is not None:
+        record = _with_inspection(record, inspect, machine.read, st_lookup(side, iomap))
     pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
     reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
     try:
@@ -482,6 +485,23 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.coverage = half.coverage()
             result.machine = machine
     return result
+
+
+def st_lookup(side: StSide, iomap: IoMap) -> Callable[[str, int], object]:
+    """`(kind, addr) -> value` of an operand in the ST side through the io map's accessors, None where the map has
+    no place for it."""
+    def read(kind: str, addr: int):
+        acc = iomap.accessor(f"{kind}{addr}")
+        return acc.read(side) if acc is not None else None
+    return read
+
+
+def _with_inspection(record, inspect, original, translated):
+    def both(cycle: int, a: list, b: list) -> None:
+        if record is not None:
+            record(cycle, a, b)
+        inspect(cycle, original, translated)
+    return both
 
 
 def _swept_divergence(cycle: int, refs: tuple[OperandRef, ...], a_values: list, b_values: list,
