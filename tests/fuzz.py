@@ -39,7 +39,7 @@ from transpiler.frontend.load import Parsers, ProjectOptions  # noqa: E402
 from transpiler.frontend.pipeline import CompileResult, compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
-SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp", ".msk", ".a")     # .msk, .a: screen masks
+SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp", ".msk", ".a", ".tab")   # .msk, .a: screen masks; .tab: PLC data tables
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,12 +101,18 @@ VOCAB_LINES = [
     b"LB M9999", b"L X", b"= X", b"L- M1", b"=N O1", b"NOTL", b"PSW", b"PLL", b"* star", b";;;X9.7a",
     b"MG_new M", b"/c I_x M &MG_nothing", b"M12 M", b"#TYPEDEF Api", b"#type x", b"MP4110.0 : x",
     b"\x00\x01\x02", b"\xff\xfe", b"\"", b"L \x96 W2", b"L\xe2\x80\x93 W2",
+    # PLC data tables
+    b"BEGIN MP_DATA.TAB", b"BEGIN", b"[END]", b"NR   NAME                 VALUE", b"NAME VALUE NAME", b"NR NAMES VALUE",
+    b"0    DG_S1_max_torque     99", b"1    MG_marker_one        2", b"2    I_key_NC_start       1",
+    b"3    DG_nothing           5", b"x    DG_S1_min_torque     $FFFFFFFFF", b"4    SL_tool_message      \"text\"",
 ]
 VOCAB_TOKENS = [
     b"L", b"LN", b"A", b"=", b"S", b"R", b"EM", b"LBL", b"CM", b"JP", b"CASE", b"ENDC", b"A[", b"]", b"IFT", b"ENDI",
     b"M0", b"M4172", b"M99999", b"I 3", b"W3", b"W4", b"D8", b"B0", b"K0", b"K-2147483648", b"K2147483648",
     b"K$FFFFFFFFF", b"K%1", b"S0", b"S#D4095", b"X", b"[X]", b"KF", b"MG_x", b"#if", b"#else", b"#endif",
     b"USES", b"GLOBAL", b"EXTERN", b"&", b"/c", b"/g", b";", b"\"", b"*", b"9032", b"-1", b"",
+    # PLC data tables
+    b"[END]", b"BEGIN", b"NR", b"NAME", b"VALUE", b"UNIT", b"$7FFFFFFF", b"%102", b"4294967296",
     # screen masks
     b"$", b"$WG_tc_status$", b"$nope$", b"/*", b"*/", b"%", b"%%", b"%999D", b"%+5.0F", b"%s", b"\\n", b"\\",
     b",", b"/n=3", b"/n=99", b"/x", b"ERRQUE=10/c/l/s;", b"ERRQUE=0;", b"CHARSIZE=AUTO;", b"S1/c", b"S99999",
@@ -212,10 +218,11 @@ MUTATORS: tuple[Callable[[random.Random, bytes, list[bytes]], bytes], ...] = (
 )
 
 
-def mutate(seed: Seed, rng: random.Random) -> tuple[dict[str, bytes], str]:
-    """One mutant of the seed: 1-3 mutations of one of its files. Returns the files and a description."""
+def mutate(seed: Seed, rng: random.Random, targets: list[str] | None = None) -> tuple[dict[str, bytes], str]:
+    """One mutant of the seed: 1-3 mutations of one of its files (one of `targets` when given). Returns the files
+    and a description."""
     files = dict(seed.files)
-    target = rng.choice(seed.targets)
+    target = rng.choice(targets or seed.targets)
     pool = [line for text in files.values() for line in _lines(text) if line.strip()]
     data = files[target]
     steps = []

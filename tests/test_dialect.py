@@ -142,7 +142,9 @@ def test_gvl_target_xml_validates_and_holds_the_lists(sample, target):
     lists = root.findall(f"{{{NS}}}addData/{{{NS}}}data[@name='{GVL_DATA_NAME}']/{{{NS}}}globalVars")
     assert [g.get("name") for g in lists] == ["GVL_IO", "GVL_NC", "GVL_Markers", "GVL_TimersCounters", "GVL_Words",
                                               "GVL_Strings", "GVL_MachineParams", "GVL_Constants", "GVL_Registers",
-                                              "GVL_Jobs"]
+                                              "GVL_Jobs", "GVL_MachineData"]
+    # the PLC data tables are kept over a power cycle: only their list is retained
+    assert [g.get("name") for g in lists if g.get("retain") == "true"] == ["GVL_MachineData"]
     assert all(g.find(f".//{{{NS}}}Attribute[@Name='qualified_only']") is not None for g in lists)
 
 

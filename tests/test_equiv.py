@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from transpiler.diagnostics import Diagnostics
+from transpiler.frontend.mpfile import read_mp_file
 from transpiler.verify.cosim import builtin_side_factory, cosimulate
 from transpiler.verify.equiv import random_scenario, shrink
 from transpiler.verify.scenario import load_scenario
@@ -33,7 +35,9 @@ def sample():
 @pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
 def test_sample_scenario_is_equivalent(sample, path):
     program, out, factory, iomap, names = sample
-    result = cosimulate(program, factory, iomap, load_scenario(path, names), names)
+    # the project's machine parameters: a scenario's own are written into the ST as run-time data
+    result = cosimulate(program, factory, iomap, load_scenario(path, names), names,
+                        base_mp=read_mp_file(SAMPLE / "MP_data.mp", Diagnostics()))
     assert result.error is None
     assert result.divergence is None
     assert result.compared > 100 and result.cycles_run > 0

@@ -107,6 +107,71 @@ def test_scenario_machine_parameters_that_differ_from_the_translations_fail_with
     assert "MP4110.0: 3 cycles from the scenario's machine parameters, 0 cycles in the translated program" in err
 
 
+def _timers_project(tmp_path: Path, timer0: str) -> tuple[Path, Path]:
+    """The timers example with its MP file, and a scenario that sets MP4110.0 to `timer0` seconds."""
+    folder = CONSTRUCTS / "timers"
+    for name in ("main.src", "timers.mp"):
+        shutil.copy(folder / name, tmp_path / name)
+    text = (folder / "scenario.yaml").read_text()
+    text = text.replace('"4110.0": 0.06', f'"4110.0": {timer0}').split("\nexpect:")[0] + "\n"
+    assert f'"4110.0": {timer0}' in text
+    (tmp_path / "other.yaml").write_text(text)
+    return tmp_path / "main.src", tmp_path / "other.yaml"
+
+
+@pytest.mark.parametrize("backend", ["builtin", pytest.param("matiec", marks=pytest.mark.skipif(
+    find_iec2c() is None, reason="iec2c not found ($MATIEC_HOME/iec2c or PATH): the matiec backend is skipped"))])
+def test_scenario_machine_parameters_are_written_into_the_translation_as_run_time_data(tmp_path, capsys, backend):
+    # The project's MP file gives T0 3 cycles; the scenario's 0.2 s (10 cycles) reach both sides.
+    main_src, scenario = _timers_project(tmp_path, "0.2")
+    code, out, err = _run(["equiv", main_src, "--scenario", scenario, "--backend", backend], capsys)
+    assert code == 0 and f"hh2iec equiv: EQUIVALENT (1 runs, 50 cycles, backend {backend})" in out, out + err
+
+
+def test_a_wrong_conversion_of_the_scenario_machine_parameters_is_a_divergence(tmp_path, capsys, monkeypatch):
+    from transpiler.verify import cosim, rundata
+
+    def off_by_one(side, iomap, writes):
+        rundata.write_data(side, iomap, [rundata.DataWrite(w.operand, w.value + 1) for w in writes])
+
+    monkeypatch.setattr(cosim, "write_data", off_by_one)
+    main_src, scenario = _timers_project(tmp_path, "0.2")
+    code, out, _ = _run(["equiv", main_src, "--scenario", scenario, "--backend", "builtin", "--no-shrink"], capsys)
+    assert code == 1 and "DIVERGENCE in timers" in out and "NOT EQUIVALENT" in out
+
+
+def test_machine_parameters_the_translation_cannot_hold_give_no_verdict(tmp_path, capsys):
+    # 50,000,000 s are 2.5e9 cycles of 20 ms: more than the DINT preset variable holds.
+    main_src, scenario = _timers_project(tmp_path, "50000000")
+    code, out, err = _run(["equiv", main_src, "--scenario", scenario, "--backend", "builtin", "-v",
+                           "--report", tmp_path / "r.json"], capsys)
+    assert code == 2 and "hh2iec equiv: NO VERDICT (1 runs, 0 cycles" in out
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["verdict"] == "NO VERDICT" and report["runs"][0]["error_code"] == "E-MP-UNREPRESENTABLE"
+    assert "error[E-MP-UNREPRESENTABLE]" in err and "MP4110.0: 2500000000 cycles" in err and "MP4110_0" in err
+    assert "NOT EQUIVALENT" not in out and "not covered" not in out and "coverage: none (no run started)" in out
+
+
+def test_an_st_made_from_other_machine_parameters_fails_whatever_the_scenario_sets(tmp_path, capsys):
+    main_src, scenario = _timers_project(tmp_path, "0.2")
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "stale.mp").write_text("MP4110.1 : 0.3\n")
+    code, _, _ = _run(["transpile", main_src, "--out", tmp_path / "out", "--mp", tmp_path / "old" / "stale.mp"],
+                      capsys)
+    assert code == 0
+    original = scenario.read_text()
+    # The scenario as it was, and one that sets the stale file's value itself: neither makes the ST right.
+    for overrides in ('"4110.1": 0.1', '"4110.1": 0.3'):
+        scenario.write_text(original.replace('"4110.1": 0.1', overrides))
+        code, out, err = _run(["equiv", main_src, "--scenario", scenario, "--backend", "builtin",
+                               "--st", tmp_path / "out" / "project.st"], capsys)
+        assert code == 2 and "EQUIVALENT" not in out.replace("NOT EQUIVALENT", ""), out
+        assert "error[E-MP-TRANSLATION]" in err
+        assert "MP4110.0: 3 cycles from the project's machine parameters, 0 cycles in the translated program" in err
+        assert "MP4110.1: 5 cycles from the project's machine parameters, 15 cycles in the translated program" in err
+        assert "not covered" not in out
+
+
 def test_two_machine_parameter_files_need_a_choice(tmp_path, capsys):
     folder = CONSTRUCTS / "timers"
     shutil.copy(folder / "main.src", tmp_path / "main.src")

@@ -165,6 +165,20 @@ ERROR_CASES = [
      [("E-CALL-RECURSION", "main.src", 5, 1)]),
     ("call-depth", {"main.src": "CM F0\nEM\n" + "".join(f"LBL F{i}\nCM F{i + 1}\nEM\n" for i in range(32)) + "LBL F32\nEM\n"},
      [("E-CALL-DEPTH", "main.src", 1, 1)]),
+    # PLC data tables (docs/language.md#plc-data-tables): found beside the main program here
+    ("tab-no-end", {"main.src": "#define /g a.def\nEM\n", "a.def": "DG_x D 8\n",
+                    "MP_Data.tab": "BEGIN MP_DATA.TAB\nNR NAME VALUE\n0  DG_x 1\n"},
+     [("E-TAB-SYNTAX", "MP_Data.tab", 3, 1)]),
+    ("tab-symbol", {"main.src": "#define /g a.def\nEM\n", "a.def": "DG_x D 8\nI_y I 1\n",
+                    "MP_Config.tab": "BEGIN MP_CONFIG.TAB\nNR NAME VALUE\n0  DG_z 1\n1  I_y  1\n[END]\n"},
+     [("E-TAB-SYMBOL", "MP_Config.tab", 3, 4), ("E-TAB-SYMBOL", "MP_Config.tab", 4, 4)]),
+    ("tab-value", {"main.src": "#define /g a.def\nEM\n", "a.def": "MG_x M 8\nWG_y W 2\n",
+                   "MP_Data.tab": "BEGIN MP_DATA.TAB\nNAME  VALUE\nMG_x  2\nWG_y  70000\n[END]\n"},
+     [("E-TAB-VALUE", "MP_Data.tab", 3, 7), ("E-TAB-VALUE", "MP_Data.tab", 4, 7)]),
+    ("tab-dup", {"main.src": "#define /g a.def\nEM\n", "a.def": "MG_x M 8\n",
+                 "MP_Data.tab": "BEGIN MP_DATA.TAB\nNAME  VALUE\nMG_x  1\n[END]\n",
+                 "MP_Config.tab": "BEGIN MP_CONFIG.TAB\nNAME  VALUE\nMG_x  0\n[END]\n"},
+     [("E-TAB-DUP", "MP_Config.tab", 3, 1)]),
 ]
 
 # (id, files, profile, expected errors) for behaviour that depends on the profile
@@ -235,7 +249,9 @@ def test_every_compile_time_code_of_the_spec_is_exercised():
     # E-DEF-UNUSED, E-WERROR and E-ENCODING need command-line options: tests/test_stranger_frontend.py
     front_end -= {"E-DEF-UNUSED", "E-WERROR", "E-ENCODING"}
     # E-MP-AMBIGUOUS and E-MP-NONE belong to transpile (machine parameters chosen for the translation):
-    # tests/test_equiv_verdict.py exercises both.
+    # tests/test_equiv_verdict.py exercises both. E-MP-TRANSLATION and E-MP-UNREPRESENTABLE are co-simulation's
+    # (tests/test_equiv_verdict.py, tests/test_data_tables.py).
+    front_end -= {"E-MP-TRANSLATION", "E-MP-UNREPRESENTABLE"}
     assert front_end - covered - {"E-BRACKET-DEPTH"} == set()
 
 

@@ -236,3 +236,41 @@ def test_fuzz_command_line(tmp_path):
                           cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "crashes: 0, hangs: 0" in proc.stdout and "12 mutations" in proc.stdout
+
+
+# ------------------------------------------------------------------------------------ PLC data tables
+
+TABLE_SEEDS = [s for s in SAMPLE_SEEDS if any(n.lower().endswith(".tab") for n in s.files)]
+
+
+@pytest.mark.skipif(not TABLE_SEEDS, reason="no sample project with PLC data tables")
+@HYPOTHESIS
+@given(index=st.integers(min_value=0, max_value=2 ** 40))
+def test_mutated_data_tables_give_only_diagnostics(tmp_path, index):
+    rng = random.Random(f"tables:{index}")
+    project = TABLE_SEEDS[rng.randrange(len(TABLE_SEEDS))]
+    files, _ = fuzz.mutate(project, rng, [n for n in project.files if n.lower().endswith(".tab")])
+    fuzz.check_project(tmp_path / "p", files, project.main, project.profile, LIMIT)
+
+
+TABLE_LINE_PARTS = ["BEGIN", "MP_DATA.TAB", "[END]", "NR", "NAME", "VALUE", "UNIT", "COMMENT", "0", "-1", "$FF",
+                    "%101", "4294967296", '"text"', '"', "DG_x", "MG_y", "I_z", "SG_s", "K_c", "x", "\t", "\x00", "é"]
+
+
+@HYPOTHESIS
+@given(lines=st.lists(st.lists(st.sampled_from(TABLE_LINE_PARTS), max_size=6).map(lambda ws: "   ".join(ws)),
+                      max_size=12))
+def test_the_table_reader_answers_any_text_with_diagnostics_at_real_places(lines):
+    from transpiler.diagnostics import Diagnostics
+    from transpiler.frontend.datatables import bind_rows, parse_table
+    from transpiler.ir import Symbol
+    from transpiler.diagnostics import Span
+    at = Span("defs.def", 1, 1)
+    symbols = {"DG_x": Symbol("DG_x", "D", 100, at), "MG_y": Symbol("MG_y", "M", 5, at),
+               "I_z": Symbol("I_z", "I", 1, at), "SG_s": Symbol("SG_s", "S", 2, at), "K_c": Symbol("K_c", "K", 3, at)}
+    diags = Diagnostics()
+    rows = bind_rows("MP_Data.tab", parse_table("MP_Data.tab", lines, diags), symbols, 16, diags)
+    for d in diags.items:
+        assert d.span.file == "MP_Data.tab" and 1 <= d.span.line <= max(len(lines), 1) and d.span.col >= 1, d.render()
+    for row in rows:
+        assert row.symbol in symbols and row.kind in "MBWDS"

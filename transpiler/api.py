@@ -68,11 +68,13 @@ def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | 
 
 def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str, str] | None = None,
                     include_dirs: Iterable[Path] = (), extra_defs: Iterable[Path] = (), encoding: str | None = None,
-                    werror: bool = False) -> ProjectOptions:
+                    werror: bool = False, mp_data: Path | None = None, mp_config: Path | None = None
+                    ) -> ProjectOptions:
     """Where the project is and how to configure it; DEFINE values are written as in OEM.cfg. `main` may be the
     project folder when exactly one .src file in it can be the main program. `encoding` forces one encoding for
-    every file (default: detected per file); `werror` makes warnings fail the run. Raises HH2IECError (E-USAGE)
-    when a named file or folder does not exist."""
+    every file (default: detected per file); `werror` makes warnings fail the run. `mp_data` / `mp_config` name
+    the PLC data tables (default: MP_Data.tab / MP_Config.tab in the folder MP beside the main program, or beside
+    it). Raises HH2IECError (E-USAGE) when a named file or folder does not exist."""
     main = Path(main)
     if main.is_dir():
         candidates = main_candidates(main)
@@ -94,10 +96,16 @@ def project_options(main: Path, *, cfg: Path | None = None, defines: Mapping[str
     for d in include_dirs:
         if not d.is_dir():
             raise _usage(f"-I folder '{d}' does not exist")
+    tables = {}
+    for name, flag, path in (("MP_Data.tab", "--mp-data", mp_data), ("MP_Config.tab", "--mp-config", mp_config)):
+        if path is not None:
+            if not Path(path).is_file():
+                raise _usage(f"{flag} file '{path}' does not exist")
+            tables[name] = Path(path)
     values = {name.strip(): parse_define_value(str(value)) for name, value in (defines or {}).items()}
     return ProjectOptions(main=main, cfg=Path(cfg) if cfg is not None else None, defines=values,
                           include_dirs=include_dirs, extra_global_defs=tuple(Path(p) for p in extra_defs),
-                          encoding=encoding, werror=werror)
+                          encoding=encoding, werror=werror, data_tables=tables)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -351,9 +359,9 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                       allow_untranslated: bool = False, html: bool = False,
                       show_masks: Iterable[str] = ()) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
-    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
-    as written, with the presets of the machine parameters it was made with; a scenario whose own machine
-    parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST's shipped
+    machine-parameter values must be the project's (else E-MP-TRANSLATION); a scenario's own machine parameters
+    are written into its globals as run-time data (values it cannot hold: E-MP-UNREPRESENTABLE, NO VERDICT). With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
     one self-contained HTML page (each divergent run replayed once more with every cycle recorded). `show_masks`
     (`NAME@CYCLE`) replays each scenario once more and draws those masks from both sides after those cycles
@@ -390,29 +398,31 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
+    base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
     loaded = _load_scenarios(project, scenarios, names, diags)
     user_scenarios = list(loaded)
     if random_cycles > 0:
         # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
         loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                           base_mp=mp)
+                           base_mp=base_mp)
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
-                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
+                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=base_mp,
                                  untranslated=tuple(transpiled.result.untranslated),
                                  pipelined=pipeline.worthwhile())
         page = None
         if html:
             from transpiler.verify.evidence import divergence_traces, equivalence_evidence
             from transpiler.verify.html_report import render_page
-            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text, mp)
+            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text,
+                                       base_mp)
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
                                                     f"Equivalence of {project.main.name}", traces,
                                                     project.options.encoding))
         screens: tuple = ()
         if requests:
             from transpiler.verify.screens import draw_both_sides
-            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, mp)
+            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, base_mp)
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), page, screens)
@@ -480,9 +490,11 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
-    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
+    base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
+    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
+                       base_mp=base_mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), mp)
+                  st_text, side_factory, compile_program(project.program), base_mp)
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.

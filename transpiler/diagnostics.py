@@ -69,8 +69,25 @@ CODES: dict[str, CodeInfo] = {
         _c("E-MP-VALUE", "error", "malformed machine-parameter line or value", "MP4110.0 : fast"),
         _c("E-MP-AMBIGUOUS", "error", "more than one machine-parameter file beside the main program: name the one "
            "the translation is made with (--mp)", "; Main.src beside MP_mill.mp and MP_lathe.mp"),
+        _c("E-MP-TRANSLATION", "error", "the translated program's machine-parameter values (the initial values of its "
+           "preset variables) differ from the project's machine parameters: the ST was made without the project's MP "
+           "file or from another one; co-simulation refuses it whatever the scenario sets",
+           "; project.st made without --mp, then `hh2iec equiv Main.src --st project.st` beside MP_mill.mp"),
+        _c("E-MP-UNREPRESENTABLE", "error", "a scenario's machine data (machine parameters, data-table rows) that the "
+           "emitted ST cannot hold, so it cannot be written into the translated program: the run gives NO VERDICT",
+           'mp: {"4110.0": 50000000}     # 2.5e9 cycles: more than a DINT preset holds'),
         _c("E-MP-NONE", "warning", "the program uses timers or counters but no machine-parameter file was found: "
            "every preset is 0 in the translation", "; Main.src uses T0, and no *.mp file is beside it"),
+        # PLC data tables (MP_Data.tab, MP_Config.tab)
+        _c("E-TAB-SYNTAX", "error", "malformed PLC data table: no BEGIN line, column header or [END], an unknown "
+           "column, a row without NAME or VALUE, a row number that is not a whole number",
+           "BEGIN MP_DATA.TAB\nNR NAME VALUE\n0  DG_x\n; no [END]"),
+        _c("E-TAB-SYMBOL", "error", "a data-table row names a symbol the .def files do not define, or one that is "
+           "not a marker, byte, word, double word or string", "0  DG_TC_pos_X_manul  1000"),
+        _c("E-TAB-VALUE", "error", "a data-table value does not fit its operand (a marker 0/1, a byte, word or "
+           "double word in its width, a string in quotes and within the string length)", "0  MG_option  2"),
+        _c("E-TAB-DUP", "error", "two data-table rows set the same symbol, or two rows of a table share a row number",
+           "0  DG_x  1\n1  DG_x  2"),
         # files
         _c("E-FILE-NOT-FOUND", "error", "a file named by the command line, USES, #define or INCLUDE does not exist",
            "USES missing_module.src"),

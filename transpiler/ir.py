@@ -192,6 +192,30 @@ class Mask:
 
 
 @dataclasses.dataclass(frozen=True)
+class DataRow:
+    """One row of a PLC data table (MP_Data.tab, MP_Config.tab): the operand of a .def symbol and the value it holds
+    from power-on and after each machine-parameter restart (M4174)."""
+
+    table: str                              # the table's display path
+    nr: int | None                          # the row's NR column, when the table has one
+    symbol: str
+    kind: str                               # M B W D S
+    addr: int
+    value: int | str                        # bits 0/1, B/W/D signed in their width, S text
+    span: Span                              # of the row's value
+
+    @property
+    def operand_text(self) -> str:
+        return f"{self.kind}{self.addr}"
+
+    @property
+    def key(self) -> str:
+        """How the io map names the row's stored value: `MP_Data.tab:DG_TC_pos_X_manual`."""
+        file = self.table.replace("\\", "/").rsplit("/", 1)[-1]
+        return f"{file}:{self.symbol}"
+
+
+@dataclasses.dataclass(frozen=True)
 class Program:
     """The resolved program: per-file code, symbols, call graph facts; the single source of truth for backends."""
 
@@ -209,6 +233,7 @@ class Program:
     config_file: str | None = None                      # the configuration read (display path), if any
     command_line_defines: tuple[tuple[str, object], ...] = ()   # the -D values, in name order
     masks: tuple[Mask, ...] = ()            # the project's screen masks, references resolved
+    data_rows: tuple[DataRow, ...] = ()                 # rows of the PLC data tables, in file and line order
 
     @property
     def main(self) -> FileCode:

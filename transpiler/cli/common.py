@@ -39,6 +39,10 @@ def add_project_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--werror", action="store_true", help="warnings fail the run (exit 2)")
     p.add_argument("--defs", dest="extra_defs", action="append", default=[], type=Path, metavar="FILE",
                    help="extra global definition file (as if loaded with #define /g)")
+    p.add_argument("--mp-data", type=Path, metavar="FILE", help="PLC data table MP_Data.tab (default: MP/MP_Data.tab "
+                   "or MP_Data.tab beside MAIN)")
+    p.add_argument("--mp-config", type=Path, metavar="FILE", help="PLC configuration table MP_Config.tab (default: "
+                   "MP/MP_Config.tab or MP_Config.tab beside MAIN)")
 
 
 def _pairs(items: Iterable[str], flag: str) -> dict[str, str]:
@@ -54,7 +58,8 @@ def _pairs(items: Iterable[str], flag: str) -> dict[str, str]:
 def options_from_args(args: argparse.Namespace):
     return api.project_options(args.main, cfg=args.cfg, defines=_pairs(args.defines, "-D"),
                                include_dirs=args.include_dirs, extra_defs=args.extra_defs,
-                               encoding=args.encoding, werror=args.werror)
+                               encoding=args.encoding, werror=args.werror, mp_data=args.mp_data,
+                               mp_config=args.mp_config)
 
 
 def semantics_from_args(args: argparse.Namespace, scenario: Path | None = None):

@@ -131,7 +131,7 @@ def _print_outcomes(result, verbose: bool) -> None:
         if r.error and r.error_side == "translated":
             print(f"FAULT OF THE TRANSLATION in {r.scenario}: {r.error}")
         elif r.error:
-            print(f"{NO_SPAN}: error[E-TOOL]: {r.scenario}: {r.error}", file=sys.stderr)
+            print(f"{NO_SPAN}: error[{r.error_code or 'E-TOOL'}]: {r.scenario}: {r.error}", file=sys.stderr)
         elif r.divergence:
             d = r.divergence
             print(f"DIVERGENCE in {r.scenario} at cycle {d.cycle}: {d.name} ({d.operand}): original {d.original!r}, "
@@ -153,6 +153,9 @@ def _print_outcomes(result, verbose: bool) -> None:
                   f"actual {f.actual!r}", file=sys.stderr)
     for span, text in result.untranslated:
         print(f"NOT TRANSLATED: {span}: {text}")
+    if not result.started:
+        print("coverage: none (no run started)")
+        return
     c = result.coverage
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "

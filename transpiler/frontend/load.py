@@ -55,6 +55,9 @@ class ProjectOptions:
     extra_global_defs: tuple[Path, ...] = ()
     encoding: str | None = None          # None: each file's own (UTF-8 when it decodes as UTF-8, else cp1252)
     werror: bool = False                 # warnings fail the run (E-WERROR)
+    # PLC data tables given on the command line, by table name (MP_Data.tab, MP_Config.tab); the others are looked
+    # for beside the main program (frontend/datatables.py)
+    data_tables: Mapping[str, Path] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)

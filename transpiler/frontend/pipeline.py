@@ -7,6 +7,7 @@ import dataclasses
 import gc
 
 from transpiler.diagnostics import NO_SPAN, Diagnostics
+from transpiler.frontend.datatables import read_tables
 from transpiler.frontend.load import ParsedProject, Parsers, ProjectOptions, load_project
 from transpiler.ir import Program
 from transpiler.frontend.resolve import resolve
@@ -48,6 +49,10 @@ def compile_project(options: ProjectOptions, semantics: Semantics, diags: Diagno
         if not parsed.src_files:
             return CompileResult(None, diags)
         program = resolve(parsed, project_semantics(semantics, parsed), diags, options.defines)
+        rows = read_tables(options.main, options.data_tables, program.symbols, program.semantics.profile.string_len,
+                           diags, options.encoding)
+        if rows:
+            program = dataclasses.replace(program, data_rows=rows)
     if options.werror and diags.warnings and not diags.has_errors():
         diags.report("E-WERROR", NO_SPAN, f"{len(diags.warnings)} warning(s) and --werror")
     return CompileResult(program, diags)

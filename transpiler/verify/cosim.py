@@ -11,15 +11,15 @@ from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.interp.machine import Coverage, Machine
 from transpiler.exec.interp.state import byte_cells
 from transpiler.exec.st_lines import st_origin
-from transpiler.language.presets import load_presets
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify import pipeline
+from transpiler.verify.rundata import DataWrite, run_data, write_data
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
-                                       program_operands)
+                                       program_operands, table_values)
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations
 
 
@@ -69,7 +69,9 @@ class CosimResult:
     divergence: Divergence | None
     compared: int                       # operands compared each cycle (the static columns of comparison_for)
     error: str | None = None            # runtime fault or harness problem (not a divergence)
-    error_side: str | None = None       # "original" (reference interpreter) or "translated": where `error` arose
+    error_side: str | None = None       # "original" (reference interpreter), "translated", or "machine data": the
+                                        # run was refused before cycle 0 (verify/rundata.py), `error_code` says why
+    error_code: str | None = None       # the diagnostic code of `error` where it has one of its own
     seconds: float = 0.0
     machine: Machine | None = None
     compared_indexed: int = 0           # addresses added because the program stored to them through the index
@@ -148,8 +150,10 @@ class _StDriver:
     """Applies stimulus, NC model writes and the input latch to an ST side through the io map."""
 
     def __init__(self, side: StSide, iomap: IoMap, program: Program, cycle_time_ms: int,
-                 inputs: Iterable[OperandRef]):
+                 inputs: Iterable[OperandRef], data: Sequence[DataWrite] = ()):
         self.side = side
+        self.data = tuple(data)
+        self.mp_restart = program.semantics.profile.interface.mp_restart
         self.iomap = iomap
         self.program = program
         self.nc = NcModel(cycle_time_ms, program.semantics.profile.name,
@@ -204,6 +208,9 @@ class _StDriver:
             self.nc.enqueue(action)
         for kind, addr, value in self.nc.phase(cycle, lambda m: int(self.read(f"M{m}") or 0)):
             self.write(f"{kind}{addr}", value)
+            if kind == "M" and addr == self.mp_restart and value:
+                # The NC reads the machine data again before the cycle that sees M4174 (as on the reference).
+                write_data(self.side, self.iomap, self.data)
         self._latch()
         self.side.run_cycle()
 
@@ -399,22 +406,6 @@ def side_reader(side: StSide, accessors: list[Accessor]) -> Callable[[], list]:
     return lambda: [acc.read(side) for acc in accessors]
 
 
-def preset_mismatches(side: StSide, iomap: IoMap, program: Program, mp: Mapping, cycle_time_ms: int) -> list[str]:
-    """Timer and counter presets the scenario's machine parameters give that differ from the ones the translated
-    program holds as written (its preset variables' initial values): the ST is tested as written, never patched."""
-    timers, counters = load_presets(mp, program.semantics, cycle_time_ms, Diagnostics())
-    problems = []
-    for number, presets in ((4110, timers), (4120, counters)):
-        for row in iomap.rows:
-            if row.operand.startswith(f"MP{number}."):
-                index = int(row.operand.split(".")[1])
-                wanted, held = presets.get(index, 0), side.get(row.iec)
-                if int(held) != int(wanted):
-                    problems.append(f"{row.operand}: {wanted} cycles from the scenario's machine parameters, "
-                                    f"{held} cycles in the translated program ({row.iec})")
-    return problems
-
-
 def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, scenario: Scenario, names: NameTable,
                stimulus: Stimulus | None = None, *, cycles: int | None = None, coverage: bool = False,
                progress: Callable[[int, int], None] | None = None,
@@ -434,9 +425,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     (pipeline.py), where the platform can fork and no `record` wants every cycle's values; the result is the same
     as in lockstep. It pays where a second CPU is free (pipeline.worthwhile).
 
-    `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
-    reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
-    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures).
+    `base_mp` are the project's machine parameters (None: it has no MP file), which the ST must hold as shipped
+    (else rundata.SHIPPED); the scenario's own are written into its globals before cycle 0 and at an MP restart
+    (rundata.run_data; what it cannot hold: rundata.UNREPRESENTABLE). `expect` is checked on the original.
 
     `inspect(cycle, original, translated)` is called after each cycle both sides ran, with a lookup `(kind, addr) ->
     value` into each side (None where the translation holds no such operand); it runs the halves in lockstep."""
@@ -448,19 +439,19 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
     comparison = comparison_for(program, names, iomap)
-    mismatches = preset_mismatches(side, iomap, program, parameters[0], cycle_time)
+    data = run_data(side, iomap, program, parameters[0], cycle_time, base_mp, table_values(program, scenario))
     accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
-    driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
+    driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs, data.writes)
     translated = _TranslatedHalf(side, driver, stimulus, accessors)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
     result = CosimResult(scenario.name or "scenario", side.name, 0, None, len(comparison.columns), machine=machine,
                          compared_operands=tuple(str(ref) for _, ref in comparison.columns),
                          missing=comparison.missing, excluded=comparison.excluded)
-    if mismatches:
-        result.error = ("the scenario's machine parameters differ from those the translation was made with: "
-                        + "; ".join(mismatches))
-        result.error_side = "scenario"
+    if data.refusal is not None:
+        result.error_code, result.error = data.refusal
+        result.error_side = "machine data"
         return result
+    write_data(side, iomap, data.writes)        # power-on: the run's machine data, before cycle 0
     start = time.perf_counter()
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)

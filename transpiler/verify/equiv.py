@@ -14,6 +14,7 @@ from transpiler.backends.report.iomap import IoMap
 from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
+from transpiler.verify.rundata import UNREPRESENTABLE
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
@@ -213,8 +214,19 @@ class EquivalenceResult:
 
     @property
     def errors(self) -> list[Outcome]:
-        """Runs that could not be carried out (bad scenario, a fault of the original, a missing tool)."""
+        """Runs that could not be carried out (bad scenario, a fault of the original, a missing tool, machine data
+        refused before cycle 0)."""
         return [o for o in self.outcomes if o.result.error and not _translation_fault(o.result)]
+
+    @property
+    def refused(self) -> list[Outcome]:
+        """Runs that never started because the scenario's machine data cannot be written into the emitted ST."""
+        return [o for o in self.outcomes if o.result.error_code == UNREPRESENTABLE]
+
+    @property
+    def started(self) -> bool:
+        """Whether any run got as far as cycle 0 (else there is no coverage to speak of)."""
+        return any(o.result.error_side != "machine data" for o in self.outcomes)
 
     @property
     def divergent(self) -> list[Outcome]:
@@ -224,10 +236,15 @@ class EquivalenceResult:
 
     @property
     def verdict(self) -> str:
-        """NOT EQUIVALENT (a divergence, an operand missing, or a run that failed), EXPECTATION FAILED (the original
-        does not meet the scenario), NOT PROVEN (code was left untranslated), else EQUIVALENT."""
-        if self.divergent or self.errors or not self.outcomes:
+        """NOT EQUIVALENT (a divergence, an operand missing, a run that failed, or a translation shipped with other
+        machine parameters than the project's), NO VERDICT (nothing else wrong, but a run's machine data could not
+        be written into the ST, so that run compared nothing), EXPECTATION FAILED (the original does not meet the
+        scenario), NOT PROVEN (code was left untranslated), else EQUIVALENT."""
+        refused = self.refused
+        if self.divergent or len(self.errors) > len(refused) or not self.outcomes:
             return "NOT EQUIVALENT"
+        if refused:
+            return "NO VERDICT"
         if self.expectation_failures:
             return "EXPECTATION FAILED"
         if self.untranslated:
@@ -283,7 +300,8 @@ def report_json(result: EquivalenceResult) -> str:
         runs.append({"scenario": r.scenario, "cycles": r.cycles_run, "compared_operands": r.compared,
                      "compared_indexed_addresses": r.compared_indexed,
                      "compared_after_last_cycle": r.swept,
-                     "equivalent": r.equivalent, "error": r.error, "seconds": round(r.seconds, 3),
+                     "equivalent": r.equivalent, "error": r.error, "error_code": r.error_code,
+                     "seconds": round(r.seconds, 3),
                      "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
                      "compared": list(r.compared_operands),
                      "excluded": [{"operand": operand, "reason": reason} for operand, reason in r.excluded],

@@ -32,6 +32,7 @@ from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
 from transpiler.verify import pipeline
+from transpiler.verify.rundata import SHIPPED
 from transpiler.verify.cosim import StSide, cosimulate
 from transpiler.verify.scenario import NameTable, Scenario
 
@@ -316,6 +317,8 @@ class Judge:
                 how = f"{len(result.missing)} operands missing in the translation"
             elif result.error is not None and result.error_side == "translated":
                 how = f"fault of the translation: {result.error}"
+            elif result.error_code == SHIPPED:
+                how = "its machine-parameter values differ from the project's"
             if how is not None:
                 return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, runs)
             if result.error is not None:

@@ -96,6 +96,8 @@ class NameTable:
     ranges_ok: whether an operand address exists on the profile (for B/W/D: the byte address).
     non_toggle: names of aliases (&) and constants; random stimulus never toggles them.
     constants: names of constant symbols (K); they cannot be set, expected or observed.
+    table_rows: the symbols the project's PLC data tables set (MP_Data.tab, MP_Config.tab), which a scenario's
+        `mp_data` may give other values.
     """
 
     symbols: Mapping[str, OperandRef]
@@ -103,11 +105,13 @@ class NameTable:
     ranges_ok: Callable[[str, int], bool]
     non_toggle: frozenset[str] = frozenset()
     constants: frozenset[str] = frozenset()
+    table_rows: Mapping[str, OperandRef] = dataclasses.field(default_factory=dict)   # data-table row symbols
 
     @classmethod
     def for_profile(cls, symbols: Mapping[str, OperandRef], profile: str = "itnc530", *,
                     writable_inputs: frozenset[str] = frozenset(), non_toggle: frozenset[str] = frozenset(),
-                    constants: frozenset[str] = frozenset()) -> NameTable:
+                    constants: frozenset[str] = frozenset(),
+                    table_rows: Mapping[str, OperandRef] | None = None) -> NameTable:
         """A table whose range check is the address ranges of a profile of the language spec."""
         ranges = PROFILES[profile].ranges
 
@@ -116,7 +120,7 @@ class NameTable:
                 return all(ranges.contains("B", a) for a in range(addr, addr + WIDTHS[kind] // 8))
             return ranges.contains(kind, addr)
 
-        return cls(symbols, writable_inputs, ranges_ok, non_toggle, constants)
+        return cls(symbols, writable_inputs, ranges_ok, non_toggle, constants, MappingProxyType(dict(table_rows or {})))
 
     def resolve(self, name: str) -> OperandRef:
         """The operand a scenario name denotes; raises NameProblem with a user-facing message."""
@@ -332,6 +336,7 @@ class Scenario(_Model):
     profile: str = "itnc530"
     machine_parameters: Annotated[Path | None, Field(strict=False)] = None
     mp: dict[MpKey, Decimal] = {}
+    mp_data: dict[str, Annotated[Any, AfterValidator(_scalar)]] = {}    # data-table rows: symbol -> value
     initial: dict[str, Any] = {}
     events: list[Event] = []
     random: RandomStimulus | None = None
@@ -664,6 +669,19 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
                         f"{what} at cycle {cycle} never happens: the scenario runs cycles 0..{cycles - 1}")
 
     assignments(data.get("initial"), ("initial",))
+    for name, value in _items(data.get("mp_data")):
+        path = ("mp_data", name)
+        if not isinstance(name, str):
+            continue
+        ref = names.table_rows.get(name)
+        if ref is None:
+            near = difflib.get_close_matches(name, list(names.table_rows), n=1)
+            hint = f" (did you mean '{near[0]}'?)" if near else ""
+            where = "no row of the project's data tables sets it" if names.table_rows else \
+                "the project has no data tables (MP_Data.tab, MP_Config.tab)"
+            diags.report("E-SCENARIO", key_spans.get(path) or at(path), f"mp_data: unknown row '{name}': {where}{hint}")
+        elif (problem := check_value(ref, value)) is not None:
+            diags.report("E-SCENARIO", at(path), f"mp_data: {label(name, ref)}: {problem}")
     for i, event in _entries(data.get("events")):
         cycle_in_range(event, ("events", i), "event")
         if isinstance(event, dict):

@@ -15,7 +15,7 @@ from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError,
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario
+from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario, normalize_value
 from transpiler.language.semantics import PROFILES
 from transpiler.exec.compiled.shim import NcActionError, UnknownModule
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
@@ -76,8 +76,9 @@ def project_names(program: Program) -> NameTable:
     used, _, _ = program_operands(program)
     for ref in used:
         symbols.setdefault(str(ref), ref)
+    rows = {row.symbol: OperandRef(row.kind, row.addr) for row in program.data_rows}
     return NameTable.for_profile(symbols, program.semantics.profile.name, non_toggle=frozenset(non_toggle),
-                                 constants=frozenset(constants))
+                                 constants=frozenset(constants), table_rows=rows)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -155,7 +156,8 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
     cycle_time = scenario.cycle_time_ms if "cycle_time_ms" in scenario.model_fields_set else None
     try:
         machine = Machine(program, mp, cycle_time, coverage=coverage, module_results=scenario.module_results,
-                          mp_spans=spans, compiled=compiled, number_mp4111=int(program.semantics["number_mp4111"]))
+                          mp_spans=spans, compiled=compiled, number_mp4111=int(program.semantics["number_mp4111"]),
+                          data=table_values(program, scenario))
         if scenario.machine is not None:
             apply_machine_data(machine.sys, scenario.machine)
         return machine
@@ -164,6 +166,16 @@ def build_machine(program: Program, scenario: Scenario, diags: Diagnostics, *, c
     except (UnknownModule, ValueError) as exc:
         diags.report("E-SCENARIO", scenario.span_of("module_results"), str(exc))
         raise CompileFailed(diags.items) from None
+
+
+def table_values(program: Program, scenario: Scenario) -> dict[str, int | str]:
+    """The value of every data-table row in a run: the table's, or the scenario's `mp_data` (normalised to the
+    operand's width as the interpreter holds it)."""
+    values: dict[str, int | str] = {}
+    for row in program.data_rows:
+        value = scenario.mp_data.get(row.symbol, row.value)
+        values[row.symbol] = normalize_value(row.kind, value)
+    return values
 
 
 def apply_machine_data(sys, data: MachineData) -> None:

@@ -243,6 +243,8 @@ def _scenario_data(scenario: Scenario, base_dir: Path | None) -> dict[str, Any]:
         data["machine_parameters"] = os.path.relpath(path, base_dir) if base_dir is not None else str(path.resolve())
     if scenario.mp:
         data["mp"] = {mp_key_text(k): _mp_number(v) for k, v in scenario.mp.items()}
+    if scenario.mp_data:
+        data["mp_data"] = dict(scenario.mp_data)
     if scenario.initial:
         data["initial"] = dict(scenario.initial)
     if scenario.events:

@@ -51,6 +51,9 @@ def io_map_of(result: StResult, mp_file: str | None = None, program: Program | N
     for (number, index), name in sorted(result.preset_vars.items()):
         source = f"from {mp_file}" if mp_file else "no machine-parameter file: 0"
         rows.append(MapRow("", f"MP{number}.{index}", name, "DINT", "parameter", f"preset in PLC cycles ({source})"))
+    for name, typ, row in result.data_vars.values():
+        rows.append(MapRow(row.symbol, row.key, name, typ, "parameter",
+                           f"data-table value of {row.operand_text} ({row.table}:{row.span.line})"))
     if program is not None:
         rows.append(MapRow("", "CONFIG", "", "", "configuration", configuration_text(program)))
     return IoMap(rows)
@@ -180,10 +183,8 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += screens_section(program, io_map_of(result))
     lines += ["", "## What the target must provide", ""] + target_must_provide(program, result) + _library_files(result)
     lines += ["", "## Timers and counters", ""]
-    for name, cycles in sorted(result.presets.items()):
-        lines.append(f"- `{name}` = {cycles} cycles")
-    if not result.presets:
-        lines.append("none")
+    lines += [f"- `{name}` = {cycles} cycles" for name, cycles in sorted(result.presets.items())] or ["none"]
+    lines += _data_tables(result)
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
@@ -211,6 +212,22 @@ _CONFIRM_BY_USE = (
     ("word loads and stores", ("A-06", "A-08", "A-42")),
 )
 
+
+
+def _data_tables(result: StResult) -> list[str]:
+    """The section of the PLC data tables: every row with the global holding it and the operand it loads."""
+    if not result.data_vars:
+        return []
+    lines = ["", "## PLC data tables", "",
+             "Each row's value is the initial value of a retained global; the program loads it into the operand "
+             "before its first cycle and in a cycle that sees M4174 (MP restart). Commissioning changes the global.",
+             "", "| table | NR | symbol | operand | value | IEC variable | loaded into |", "|---|---|---|---|---|---|---|"]
+    operand_vars = {r.operand: r.iec for r in result.layout.rows}
+    for name, typ, row in result.data_vars.values():
+        nr = "" if row.nr is None else str(row.nr)
+        lines.append(f"| {row.table}:{row.span.line} | {nr} | {row.symbol} | {row.operand_text} | {row.value!r} | "
+                     f"`{name}` ({typ}) | `{operand_vars.get(row.operand_text, '(byte memory)')}` |")
+    return lines
 
 def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list[str]:
     """What a porting engineer does with this output: wire the I/O, provide the NC interface and the PLC task,

@@ -10,13 +10,13 @@ from typing import Mapping
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
                          Task, VarSection)
-from transpiler.ir import CallTarget, Operand, Program
+from transpiler.ir import CallTarget, DataRow, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.resolve import routine_body
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
-from transpiler.backends.st.layout import GROUP_TITLES, GlobalVar, Layout, group_title
+from transpiler.backends.st.layout import GROUP_TITLES, MEM_TYPE, GlobalVar, Layout, group_title
 from transpiler.backends.st.liveness import Liveness
 from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes, printer, simplify
@@ -56,6 +56,8 @@ class StResult:
     # Submit jobs: (job number, POU of the job subprogram, where its label is), and the POU that runs them
     submit_jobs: tuple[tuple[int, str, Span], ...] = ()
     jobs_program: str | None = None
+    # PLC data tables: row key (`MP_Data.tab:DG_x`) -> (global holding the row's value, its IEC type, the row)
+    data_vars: Mapping[str, tuple[str, str, DataRow]] = dataclasses.field(default_factory=dict)
 
 
 class StBackend:
@@ -125,7 +127,7 @@ class StBackend:
             pous[key] = self._routine(key, entries_by_file.get(key[0], {}))
         presets = self._presets(layout)
         main = pous.pop((0, 0))
-        main = self._with_services(main, layout)
+        main = self._with_services(main, layout, self._data_load(layout))
         user_pous = [self._bit_accessor_pou(kind) for kind in sorted(layout.bit_access)] + self._order(pous)
         lib = [p for name, p in helpers.items() if name in self._helper_closure()]
         lib += modcalls.library_pous(self.modules_used, self.semantics.profile.string_len)
@@ -152,7 +154,7 @@ class StBackend:
                         {**self.pou_names, (0, 0): self.main_pou},
                         tuple(layout.timers), tuple(layout.counters), presets, self.preset_vars,
                         self._dynamic_stack(), self._submit_jobs(),
-                        job_program.name if job_program is not None else None)
+                        job_program.name if job_program is not None else None, self.data_vars)
 
     def _submit_jobs(self) -> tuple[tuple[int, str, Span], ...]:
         files = self.program.files
@@ -447,9 +449,46 @@ class StBackend:
                 self.preset_vars[(number, n)] = name
         return presets
 
-    def _with_services(self, main: Pou, layout: Layout) -> Pou:
+    def _data_load(self, layout: Layout) -> list[S.Stmt]:
+        """The PLC data tables as a list of retained globals with the tables' values as initial values (what a
+        commissioning engineer edits on the target), and the statement that loads them into their operands before
+        the program of the first cycle and of every cycle that sees the MP-restart marker (M4174), as the
+        reference interpreter does (Machine.data_phase)."""
+        rows = self.program.data_rows
+        self.data_vars: dict[str, tuple[str, str, DataRow]] = {}
+        if not rows:
+            return []
+        loaded = layout.add_register("data:loaded", "HH_data_loaded", "BOOL",
+                                     "the data tables were loaded since the PLC started")
+        condition = E.Expr(f"NOT {layout.ref(loaded)}", "BOOL", frozenset([loaded.upper()]))
+        restart = self.semantics.profile.interface.mp_restart
+        if restart is not None:
+            marker = layout.bit_lvalue(Operand("M", restart))
+            condition = E.Expr(f"{condition.text} OR {marker.text}", "BOOL", condition.deps | marker.deps)
+        body: list[S.Stmt] = []
+        for row in rows:
+            typ = {"M": "BOOL", "S": "STRING"}.get(row.kind) or MEM_TYPE[row.kind]
+            initial = ("TRUE" if row.value else "FALSE") if row.kind == "M" else \
+                "'" + str(row.value).replace("$", "$$").replace("'", "$'") + "'" if row.kind == "S" else str(row.value)
+            name = self.names.name(f"data:{row.symbol}", f"{row.symbol}_table")
+            layout.add_data(name, typ, initial, f"{row.key} row {row.nr if row.nr is not None else '-'} "
+                            f"({row.table}:{row.span.line}) -> {row.operand_text}")
+            self.data_vars[row.key] = (name, typ, row)
+            value = E.var(layout.ref(name), typ)
+            operand = Operand(row.kind, row.addr, symbol=row.symbol)
+            if row.kind == "M":
+                body.append(S.Assign(layout.bit_lvalue(operand).text, value))
+            elif row.kind == "S":
+                body.append(S.Assign(layout.string_lvalue(operand, None).text, value))
+            else:
+                body += [S.Assign(target, expr) for target, expr in layout.write_value(operand, None, value)]
+        body.append(S.Assign(layout.ref(loaded), E.Expr("TRUE", "BOOL", frozenset())))
+        return [S.Comment("PLC data tables: loaded at power-on and at an MP restart (M4174), see "
+                          "docs/language.md#plc-data-tables"), S.If(condition, tuple(body))]
+
+    def _with_services(self, main: Pou, layout: Layout, data_load: list[S.Stmt] = ()) -> Pou:
         prof = self.semantics.profile
-        service: list[S.Stmt] = []
+        service: list[S.Stmt] = list(data_load)
         local = list(main.sections[0].vars) if main.sections else []
         if layout.timers or layout.counters:
             service.append(S.Comment("phase 3: timer and counter service, see docs/language.md#timers-and-counters"))
@@ -562,7 +601,9 @@ class StBackend:
         sections = []
         for key, title in GROUP_TITLES.items():
             if key in groups:
-                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title))
+                # The data tables are kept over a power cycle like the table files on the control.
+                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title,
+                                           retain=key == "data" and self.dialect.retain))
         for key in groups:
             if key not in GROUP_TITLES:
                 sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=group_title(key)))

@@ -36,6 +36,9 @@ class Dialect:
     task_priority: int | None = None
     # A native project folder written beside project.st (backends/twincat for "twincat").
     project_folder: str | None = None
+    # VAR_GLOBAL RETAIN (kept over a power cycle): the PLC data tables are declared so, like the table files the
+    # control keeps; every target hh2iec writes for has it.
+    retain: bool = True
 
     @property
     def task_by_hand(self) -> bool:
@@ -80,6 +83,7 @@ GVL_BY_TITLE = MappingProxyType({
     "Constant fields (KFIELD tables)": "GVL_Constants",
     "Accumulators, index register, data stack": "GVL_Registers",
     "Submit-job queue": "GVL_Jobs",
+    "PLC data tables (MP_Data.tab, MP_Config.tab)": "GVL_MachineData",
 })
 # The lists the back end's globals land in: a qualifier in a reference is one of these (exprs.unqualified).
 GVL_NAMES = frozenset(GVL_BY_TITLE.values())

@@ -19,7 +19,8 @@ GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "O
                 "nc": "NC interface (NC <-> PLC operands)", "marker": "Markers", "timer": "Timer and counter operands",
                 "memory": "Byte memory: bytes, words, double words", "string": "Strings",
                 "mp": "Machine parameters (presets in PLC cycles)", "kfield": "Constant fields (KFIELD tables)",
-                "register": "Accumulators, index register, data stack", "jobs": "Submit-job queue"})
+                "register": "Accumulators, index register, data stack", "jobs": "Submit-job queue",
+                "data": "PLC data tables (MP_Data.tab, MP_Config.tab)"})
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
@@ -138,6 +139,17 @@ class Layout:
                         bits["M"].add(addr)
                     else:
                         mem.add((kind, addr))
+        # The operands of the PLC data tables are held (the tables load them) and so is the MP-restart marker,
+        # which makes the program load them again.
+        for row in self.program.data_rows:
+            if row.kind in BIT_KINDS:
+                bits[row.kind].add(row.addr)
+            elif row.kind == "S":
+                strings.add(row.addr)
+            else:
+                mem.add((row.kind, row.addr))
+        if self.program.data_rows and prof.interface.mp_restart is not None:
+            bits["M"].add(prof.interface.mp_restart)
         # What the screen masks show is declared as well, though the program may never name it: an HMI binds to it.
         for mask in self.program.masks:
             for field in mask.fields:
@@ -345,6 +357,10 @@ class Layout:
         if name not in self.globals:
             self._add_global(GlobalVar(name, typ, group, initial=initial, comment=comment))
         return name
+
+    def add_data(self, name: str, typ: str, initial: str, comment: str) -> None:
+        """A global of the PLC data tables (group `data`): the stored value of one table row."""
+        self._add_global(GlobalVar(name, typ, "data", initial=initial, comment=comment, retain=True))
 
     # ---- access
 

@@ -70,7 +70,8 @@ class Machine:
 
     def __init__(self, program: Program, mp: Mapping[Any, Any] | None = None, cycle_time_ms: int | None = None, *,
                  coverage: bool = False, number_mp4111: int = 0, module_results: Mapping[int, Iterable[int]] | None = None,
-                 mp_spans: Mapping[tuple[int, int], Span] | None = None, compiled: CompiledProgram | None = None):
+                 mp_spans: Mapping[tuple[int, int], Span] | None = None, compiled: CompiledProgram | None = None,
+                 data: Mapping[str, int | str] | None = None):
         sem = program.semantics
         self.program = program
         self.semantics = sem
@@ -118,6 +119,12 @@ class Machine:
         self._errors_seen: tuple[bytearray, int] | None = None
         self._report = CycleReport(-1)
         self._x_bits = int(sem["index_register_width"])
+        # The PLC data tables (program.data_rows, with `data` overriding values by symbol): loaded before the
+        # program of the first cycle and of every cycle that sees the MP-restart marker (data_phase).
+        overrides = dict(data or {})
+        self._data = tuple((row.kind, row.addr, overrides.get(row.symbol, row.value)) for row in program.data_rows)
+        self._data_loaded = False
+        self._mp_restart = self.profile.interface.mp_restart
 
     # ------------------------------------------------------------------ operand access
 
@@ -218,6 +225,7 @@ class Machine:
             self._record(report, RuntimeFault(exc.code, str(exc), exc.cycle))
         if not self.halted:
             self.input_latch()
+            self.data_phase()
             if self._timers_first:
                 self.timer_service()
             self.program_phase(cycle, report)
@@ -251,6 +259,15 @@ class Machine:
     def input_latch(self) -> None:
         """Phase 2: the input image is refreshed from the process; program writes to I are lost (A-33)."""
         self.state.I[:] = self.state.process_inputs
+
+    def data_phase(self) -> None:
+        """The PLC data tables' values into their operands: at power-on (the first cycle) and, as the control reads
+        the tables together with the machine parameters, in a cycle that sees the MP-restart marker (M4174)."""
+        if self._data and (not self._data_loaded
+                           or (self._mp_restart is not None and self._read_marker(self._mp_restart))):
+            for kind, addr, value in self._data:
+                self.state.write(kind, addr, value)
+            self._data_loaded = True
 
     def timer_service(self) -> None:
         """Phase 3: timers T0-T47 and counters (9.2, 10.2) here, T96-T999 of module 9006 in the shim."""
