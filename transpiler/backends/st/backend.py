@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import re
 from decimal import Decimal
 from typing import Mapping
@@ -76,6 +77,8 @@ class StBackend:
         self.untranslated: list[tuple[Span, str]] = []
         self.kfields: dict[str, str] = {}          # KFIELD key -> name of its constant array
         self.types: list[DataType] = []
+        self._taken_names: set[str] | None = None    # see _names_taken_by_globals_and_pous
+        self._taken_globals = 0
 
     # ---- naming
 
@@ -192,20 +195,35 @@ class StBackend:
         """VAR_INPUT and VAR_OUTPUT names: legal, distinct, and no global or POU name (a local would hide it)."""
         if key not in self.interface_names:
             iface = self._interface(key)
-            taken = {g.upper() for g in self.layout.globals} | RESERVED | {n.upper() for n in self.pou_names.values()}
-            taken |= {n.upper() for n in self.instance_names.values()} | {self.main_pou.upper()}
+            taken = self._names_taken_by_globals_and_pous()
+            chosen_upper: set[str] = set()
             chosen: list[str] = []
             for wanted, _ in iface.params + iface.results:
                 name = legalise(wanted)[0]
                 base, n = name, 2
-                while name.upper() in taken or name.upper().startswith(TEMP_PREFIX.upper()) and name[3:].isdigit():
+                while name.upper() in taken or name.upper() in chosen_upper \
+                        or name.upper().startswith(TEMP_PREFIX.upper()) and name[3:].isdigit():
                     name = f"{base}_{n}"
                     n += 1
-                taken.add(name.upper())
+                chosen_upper.add(name.upper())
                 chosen.append(name)
             k = len(iface.params)
             self.interface_names[key] = (tuple(chosen[:k]), tuple(chosen[k:]))
         return self.interface_names[key]
+
+    def _names_taken_by_globals_and_pous(self) -> set[str]:
+        """Upper-case names a VAR_INPUT or VAR_OUTPUT may not take: the reserved words, every POU and instance
+        name and every global declared so far. Globals are only ever added (in dict order), so the set grows
+        with the newest ones instead of being rebuilt for each routine (thousands of routines, as many globals)."""
+        if self._taken_names is None:
+            self._taken_names = set(RESERVED) | {n.upper() for n in self.pou_names.values()}
+            self._taken_names |= {n.upper() for n in self.instance_names.values()} | {self.main_pou.upper()}
+            self._taken_globals = 0
+        globals_ = self.layout.globals
+        if len(globals_) > self._taken_globals:
+            self._taken_names.update(g.upper() for g in itertools.islice(globals_, self._taken_globals, None))
+            self._taken_globals = len(globals_)
+        return self._taken_names
 
     def _header(self) -> str:
         p = self.program
@@ -272,7 +290,7 @@ class StBackend:
         # Kept whole (~80 lines): the closures below share this routine's temporaries, callees and accessors.
         program = self.program
         is_main = key == (0, 0)
-        entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)
+        entry = CallTarget(0, 0, "<main>") if is_main else file_entries[key[1]]
         file = program.files[key[0]]
         body = routine_body(program.files, entry)
         temps: list[tuple[str, str]] = []
