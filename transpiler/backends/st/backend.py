@@ -147,7 +147,8 @@ class StBackend:
         # Only the POUs translated from the program read globals: the library ones use their own variables
         # (and a FUNCTION may not declare VAR_EXTERNAL).
         globals_by_upper = {v.name.upper(): (v, s.comment) for s in config.globals for v in s.vars}
-        program_pous = [_with_externals(p, globals_by_upper)
+        area_order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
+        program_pous = [_with_externals(p, globals_by_upper, area_order)
                         for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
@@ -617,10 +618,11 @@ def _module_effect(number: int) -> Effect | None:
     return Effect(*effect) if effect is not None else None
 
 
-def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]]) -> Pou:
+def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],
+                    area_order: Mapping[str | None, int]) -> Pou:
     """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
-    one block per area of the configuration's globals, titled like it: matiec needs these declarations (a POU
-    sees no global without one), the blocks make the long lists readable."""
+    one block per area of the configuration's globals (`area_order`: their order), titled like it: matiec needs
+    these declarations (a POU sees no global without one), the blocks make the long lists readable."""
     used = {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
@@ -630,7 +632,6 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
             by_area.setdefault(area, []).append(IecVar(var.name, var.type))
     if not by_area:
         return pou
-    order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)
-                      for area, vars_ in sorted(by_area.items(), key=lambda item: order[item[0]]))
+                      for area, vars_ in sorted(by_area.items(), key=lambda item: area_order[item[0]]))
     return dataclasses.replace(pou, sections=pou.sections + externals)
