@@ -13,7 +13,7 @@ from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, Ie
                          Task, VarSection)
 from transpiler.ir import CallTarget, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
-from transpiler.frontend.resolve import routine_body
+from transpiler.frontend.flow import RoutineBodies
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
@@ -106,15 +106,16 @@ class StBackend:
         layout = Layout(self.program, self.names, self.helpers_used.add, self.dialect)
         self.layout = layout
         self._name_instances()
-        self.liveness = Liveness(self.program)
+        self.bodies = RoutineBodies(self.program.files)
+        self.liveness = Liveness(self.program, self.bodies)
         self.stack: tuple[str, str] | None = None
-        self.stack_analysis = StackAnalysis(self.program, _module_effect)
+        self.stack_analysis = StackAnalysis(self.program, _module_effect, bodies=self.bodies)
         self._stack_depth_read()
         self.modules_used: set[int] = set()
         self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
         self.real_stack_users: dict[str, tuple[int, int]] = {}
         self.current_key: tuple[int, int] = (0, 0)
-        self.job_plan = jobs.plan_jobs(self.program)
+        self.job_plan = jobs.plan_jobs(self.program, self.bodies)
         self.job_queue: str | None = None
         # Routine entries by file: op indices are per file, so one dict keyed by index alone let the routines of
         # different files that start at the same index overwrite each other.
@@ -293,7 +294,7 @@ class StBackend:
         is_main = key == (0, 0)
         entry = CallTarget(0, 0, "<main>") if is_main else file_entries[key[1]]
         file = program.files[key[0]]
-        body = routine_body(program.files, entry)
+        body = self.bodies(entry)
         temps: list[tuple[str, str]] = []
 
         def scratch(name: str) -> bool:

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from transpiler.ir import CallTarget, Op, Program
-from transpiler.frontend.flow import routines_entered
-from transpiler.frontend.resolve import routine_body, successors
+from transpiler.frontend.flow import RoutineBodies, routines_entered, successors
 
 REGS = ("LA", "WA", "SA", "X")
 _LA_USE = frozenset({"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",
@@ -63,11 +62,12 @@ def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
 class Liveness:
     """live_in[(routine key, op index)] for every routine body; exit sets solved to a fixed point."""
 
-    def __init__(self, program: Program):
+    def __init__(self, program: Program, bodies: RoutineBodies | None = None):
         self.program = program
+        bodies = bodies or RoutineBodies(program.files)
         self.main = CallTarget(0, 0, "<main>")
         roots = [self.main] + list(program.routines)
-        self.bodies = {r.key: routine_body(program.files, r) for r in roots}
+        self.bodies = {r.key: bodies(r) for r in roots}
         self.routines = {r.key: r for r in roots}
         self.entry_use: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
         self.exit_live: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
