@@ -48,9 +48,10 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
         if i in seen:
             continue
         seen.add(i)
-        if ops[i].code == "KFIELD":
+        code = ops[i].code
+        if code == "KFIELD" or code == "EM":      # (EM: no successor)
             continue
-        for s in successors(ops, i):
+        for s in ((i + 1,) if code not in ("JP", "JPT", "JPF") else successors(ops, i)):
             if s >= len(ops):
                 falls_off = True
             elif s not in seen:
