@@ -186,8 +186,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
-    lines += ["", "## Target limits", ""]
-    lines += _target_limits(program) or ["none"]
+    lines += ["", "## Target limits", ""] + ((limits := _target_limits(program)) or ["none"])
     lines += ["", "## Auto-assigned operands", ""]
     lines += [f"- `{s.name}` -> {s.operand_text}" for s in program.auto_assigned] or ["none"]
     lines += _names(program, result)
@@ -197,7 +196,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += [f"- {r.file}:{r.first_line}-{r.last_line} (`{r.condition}`)" for r in program.inactive_regions] or ["none"]
     lines += ["", "## Warnings", ""]
     lines += [f"- {d.render()}" for d in diags.warnings] or ["none"]
-    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file)
+    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file, bool(limits))
     return "\n".join(lines) + "\n"
 
 
@@ -211,9 +210,10 @@ _CONFIRM_BY_USE = (
 )
 
 
-def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list[str]:
+def _next_steps(program: Program, result: StResult, mp_file: str | None, limited: bool) -> list[str]:
     """What a porting engineer does with this output: wire the I/O, provide the NC interface and the PLC task,
-    confirm the assumptions the program depends on, and what is still open."""
+    confirm the assumptions the program depends on, and what is still open (`limited`: the program meets a
+    target limit)."""
     rows = result.layout.rows
     inputs = sum(1 for r in rows if r.operand[0] == "I")
     outputs = sum(1 for r in rows if r.operand[0] == "O")
@@ -240,7 +240,7 @@ def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list
         ids = ", ".join(sorted(set(confirm) | set(changed)))
         steps.append(f"- Confirm on the machine the assumptions this program depends on: {ids} (section Assumptions "
                      "applied; docs/assumptions.md says what each means and how to switch it with -S).")
-    if _target_limits(program):
+    if limited:
         steps.append("- Check the target limits above on the chosen target (string lengths).")
     if result.untranslated:
         steps.append(f"- Translate by hand the {len(result.untranslated)} places left out (section Not translated).")

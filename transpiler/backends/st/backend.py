@@ -619,12 +619,41 @@ def _module_effect(number: int) -> Effect | None:
     return Effect(*effect) if effect is not None else None
 
 
+def _names_used(pou: Pou) -> set[str]:
+    """Every name the POU's statements hold (upper case), from its statement tree: the lvalue, callee and input
+    names of its statements and the names its expressions were built from. A POU written as text alone is read
+    from its text (names in comments do not count)."""
+    if not pou.statements:
+        return {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
+    found: set[str] = set()
+    targets: set[str] = set()       # lvalue, callee and input texts, each looked at once
+    for s in S.walk(pou.statements):
+        kind = type(s)
+        if kind is S.Assign:
+            targets.add(s.target)
+            found |= E.names_of(s.value)
+        elif kind is S.Call:
+            targets.add(s.callee)
+            for name, value in s.args:
+                targets.add(name)
+                found |= E.names_of(value)
+        elif kind is S.If or kind is S.While:
+            found |= E.names_of(s.cond)
+        elif kind is S.Case:
+            found |= E.names_of(s.selector)
+        elif kind is S.Repeat:
+            found |= E.names_of(s.until)
+    for text in targets:
+        found |= E.text_names(text)
+    return found
+
+
 def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],
                     area_order: Mapping[str | None, int]) -> Pou:
     """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
     one block per area of the configuration's globals (`area_order`: their order), titled like it: matiec needs
     these declarations (a POU sees no global without one), the blocks make the long lists readable."""
-    used = {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
+    used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
     for u in sorted(used - local):

@@ -74,6 +74,7 @@ class Liveness:
         self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
         self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
         self.fall_into = self._fall_throughs(roots)
+        self._use_def: dict[tuple, tuple[frozenset[str], frozenset[str]]] = {}
         self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
         self._solve()
 
@@ -84,7 +85,13 @@ class Liveness:
         out = []
         for i in reversed(body):
             op = ops[i]
-            use, d = use_def(op)
+            # use_def reads only these facts of an op: worked out once per distinct combination
+            o = op.operand
+            facts = (op.code, op.bracket, None if o is None else (o.kind, o.indexed))
+            known = self._use_def.get(facts)
+            if known is None:
+                known = self._use_def[facts] = use_def(op)
+            use, d = known
             out.append((i, use, d, successors(ops, i), tuple(c.key for c in routines_entered(op)),
                         op.code in ("EM", "EMT", "EMF")))
         return out
