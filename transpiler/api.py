@@ -16,10 +16,6 @@ from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from transpiler.atomic import write_files_atomically
-from transpiler.backends.report.iomap import IoMap
-from transpiler.backends.report.report import io_map_of, user_pous
-from transpiler.backends.st.backend import StResult
-from transpiler.backends.transpile import transpile_program
 from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.mainfile import main_candidates
@@ -29,7 +25,9 @@ from transpiler.frontend.preprocess import parse_define_value
 from transpiler.ir import Program
 from transpiler.language.semantics import Semantics, SemanticsError, make_semantics
 
-if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
+if TYPE_CHECKING:   # the back ends and executors load only when a translation or simulation runs, not for `check`
+    from transpiler.backends.report.iomap import IoMap
+    from transpiler.backends.st.backend import StResult
     from transpiler.verify.screens import Screen, ScreenRequest
     from transpiler.verify.equiv import EquivalenceResult
     from transpiler.verify.mutate import MutationResult
@@ -53,8 +51,10 @@ def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | 
                   scenario: Path | None = None) -> Semantics:
     """The control profile and semantic choices: `scenario`'s `profile`/`semantics` keys, overridden by `profile`
     and `overrides`; the default profile is itnc530. Raises HH2IECError on an unknown profile or setting."""
-    from transpiler.verify.simulate import scenario_settings
-    scenario_profile, settings, where = scenario_settings(scenario) if scenario is not None else (None, {}, None)
+    scenario_profile, settings, where = None, {}, None
+    if scenario is not None:
+        from transpiler.verify.simulate import scenario_settings
+        scenario_profile, settings, where = scenario_settings(scenario)
     merged = {str(k): v for k, v in settings.items()}
     merged.update({str(k): v for k, v in (overrides or {}).items()})
     try:
@@ -153,10 +153,12 @@ class Transpilation:
 
     @property
     def io_map(self) -> IoMap:
+        from transpiler.backends.report.report import io_map_of
         return io_map_of(self.result, self.mp_file.name if self.mp_file is not None else None)
 
     @property
     def pou_count(self) -> int:
+        from transpiler.backends.report.report import user_pous
         return len(user_pous(self.result))
 
     def write(self, out_dir: Path) -> None:
@@ -223,6 +225,7 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
     path, mp, diags = machine_parameters_of(project, mp_file, allowed=allowed)
     diags.raise_if_errors()
+    from transpiler.backends.transpile import transpile_program
     out = transpile_program(project.program, diags, mp, formats, mp_file=path, target=target)
     if path is None and out.result.preset_vars:
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
@@ -384,6 +387,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         raise _usage(f"ST file '{st_file}' does not exist")
     mp_path, mp, transpiled, diags = _translate(project, {"st"}, mp_file, allow_untranslated)
     st_text, st_name = transpiled.st_text, "project.st"
+    from transpiler.backends.report.iomap import IoMap
+    from transpiler.backends.report.report import io_map_of
     iomap = io_map_of(transpiled.result)
     if st_file is not None:
         st_file = Path(st_file)
@@ -493,6 +498,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
     loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
                        base_mp=base_mp)
+    from transpiler.backends.report.report import io_map_of
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), base_mp)
     saved_cache = os.environ.get("HH2IEC_CACHE")

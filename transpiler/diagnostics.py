@@ -6,6 +6,8 @@ import dataclasses
 import enum
 from typing import Iterable
 
+from transpiler.records import quick_init
+
 
 class Severity(enum.Enum):
     ERROR = "error"
@@ -13,6 +15,7 @@ class Severity(enum.Enum):
     NOTE = "note"
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, order=True)
 class Span:
     """A position in an original source file (1-based line and column)."""
