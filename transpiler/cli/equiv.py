@@ -153,3 +153,16 @@ def _print_outcomes(result, verbose: bool) -> None:
             print(f"  not covered: {item['at']}: {item['what']}")
     elif never:
         print(f"  {len(never)} branch outcomes or CASE entries no run took (-v lists them)")
+    if "mcdc" in c:
+        from transpiler.verify.mcdc import figures
+        print(f"coverage: {figures(c)}")
+        missing = c["mcdc"]["not_shown"] + c["boundaries"]["not_reached"]
+        infeasible = c["mcdc"]["infeasible"] + c["boundaries"]["infeasible"]
+        if verbose:
+            for item in missing:
+                print(f"  not covered: {item['at']}: {item['what']}")
+            for item in infeasible:
+                print(f"  infeasible: {item['at']}: {item['what']}: {item['reason']}")
+        elif missing or infeasible:
+            print(f"  {len(missing)} conditions or boundary values not covered, {len(infeasible)} infeasible "
+                  "(-v lists them)")

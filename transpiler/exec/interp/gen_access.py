@@ -169,6 +169,11 @@ class AccessCode:
             self.out(ind, f"{self.bit(o)} = LA = {chain.text}", chain.opid)
         elif c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
             b = self.bit(o)
+            if opid in self.cond_slot:
+                # MC/DC: the condition is the operand's value, read once into the local its decision records
+                slot = self.cond_slot[opid]
+                self.out(ind, f"_q{slot} = {b}", opid)
+                b = f"_q{slot}"
             if c.endswith("N"):
                 b = f"({b} ^ 1)"
             sym = {"LD": "", "AND": "&", "OR": "|", "XOR": "^"}[c.rstrip("N")]
