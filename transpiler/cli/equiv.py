@@ -115,6 +115,7 @@ def _compared_text(r) -> str:
 
 def _print_outcomes(result, verbose: bool) -> None:
     """Everything that went wrong, always; a line per equivalent run and the uncovered places with `verbose`."""
+    from transpiler.verify.mcdc import figures
     from transpiler.verify.stimulus import scenario_to_yaml
     for o in result.outcomes:
         r = o.result
@@ -146,7 +147,8 @@ def _print_outcomes(result, verbose: bool) -> None:
     c = result.coverage
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
-          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
+          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}"
+          + (f", {figures(c)}" if "mcdc" in c else ""))
     never = c.get("never_taken", ())
     if verbose:
         for item in never:
@@ -154,8 +156,6 @@ def _print_outcomes(result, verbose: bool) -> None:
     elif never:
         print(f"  {len(never)} branch outcomes or CASE entries no run took (-v lists them)")
     if "mcdc" in c:
-        from transpiler.verify.mcdc import figures
-        print(f"coverage: {figures(c)}")
         missing = c["mcdc"]["not_shown"] + c["boundaries"]["not_reached"]
         infeasible = c["mcdc"]["infeasible"] + c["boundaries"]["infeasible"]
         if verbose:
@@ -164,5 +164,5 @@ def _print_outcomes(result, verbose: bool) -> None:
             for item in infeasible:
                 print(f"  infeasible: {item['at']}: {item['what']}: {item['reason']}")
         elif missing or infeasible:
-            print(f"  {len(missing)} conditions or boundary values not covered, {len(infeasible)} infeasible "
-                  "(-v lists them)")
+            print(f"  {len(missing)} MC/DC conditions or boundary values no run covered, {len(infeasible)} "
+                  "infeasible (-v lists them)")
