@@ -200,3 +200,20 @@ def test_equiv_prints_and_reports_mcdc_and_boundaries(tmp_path: Path, capsys) ->
     assert coverage["branches"] == 0 and "never_taken" in coverage          # existing keys stay
     assert coverage["mcdc"]["conditions"] == 3 and coverage["mcdc"]["conditions_shown"] == 2
     assert coverage["boundaries"]["values_reached"] == 1
+
+
+def test_marker_set_first_thing_in_every_cycle_is_constant(tmp_path: Path) -> None:
+    # The "always one" idiom: M10 = I0 OR NOT I0 is assigned before anything reads it, in every cycle, so no read
+    # sees its power-on 0; M11 = NOT M10 is always 0. A marker assigned after a read (M12) keeps its power-on value
+    # for that read: not constant.
+    program = _program(tmp_path, "L I0\nON I0\n= M10\nLN M10\n= M11\nL M12\nA I2\n= O3\nL I1\n= M12\n"
+                                 "LBL Go\nL M10\nA I1\n= O1\nL M11\nO I1\n= O2\nEM\n")
+    machine = _run(program, [{"I0": 0, "I1": 0}, {"I1": 1}])
+    items, _ = _status(program, [machine], driven={("M", 10)})     # a scenario setting it changes nothing
+    m10 = items[("M10", "O1", 0)]
+    assert m10.status == "infeasible" and "first thing in every cycle" in m10.reason and "always 1" in m10.reason
+    assert items[("I1", "O1", 1)].status == "shown"
+    assert items[("M11", "O2", 0)].status == "infeasible" and "always 0" in items[("M11", "O2", 0)].reason
+    assert items[("M12", "O3", 0)].status == "missing"
+    tautology = [i for key, i in items.items() if key[1] == "M10"]
+    assert {i.status for i in tautology} == {"infeasible"} and all("coupled" in i.reason for i in tautology)

@@ -166,6 +166,7 @@ class _Values:
     writers: dict[tuple[str, int], list[str]]
     free_kinds: set[str]                            # kinds written through an index: any address, any value
     start: Callable[[str, int], set[int]]           # the values an operand has without a write of the program
+    prefix: set[tuple[str, int]]                    # assigned first thing in every cycle (_written_first)
 
     def of(self, kind: str, addr: int) -> set[int]:
         if kind in self.free_kinds:
@@ -177,7 +178,8 @@ class _Values:
 def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str, int]]) -> _Values:
     """A fixpoint over the program's writes: every bit operand starts at its power-on value 0 (inputs, timers,
     counters, NC-interface operands and `driven` ones at anything), a store adds the values its chain can give, S
-    adds 1 and R adds 0 (where their chain can be 1), any other write both values."""
+    adds 1 and R adds 0 (where their chain can be 1), any other write both values. An operand the main program
+    assigns first thing in every cycle, before anything reads it, has no start value a read can see."""
     profile = program.semantics.profile
     values: dict[tuple[str, int], set[int]] = {}
     writers: dict[tuple[str, int], list[str]] = {}
@@ -186,11 +188,15 @@ def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str,
     by_consumer = {d.key: d for d in table.decisions}
     outside = {"I", "T", "C"}
 
+    prefix = _written_first(program)
+
     def start(kind: str, addr: int) -> set[int]:
-        if kind in outside or (kind, addr) in driven or (kind, addr) in NC_MODEL_OWNED or addr == first and kind == "M" \
+        if kind in outside or (kind, addr) in NC_MODEL_OWNED or addr == first and kind == "M" \
                 or profile.is_interface(kind, addr):
             return {0, 1}
-        return {0}
+        if (kind, addr) in prefix:
+            return set()            # no read sees the value it had before the cycle
+        return {0, 1} if (kind, addr) in driven else {0}
 
     stores: list[tuple[tuple[str, int], object, str]] = []      # (operand, op, span text)
     flag = program.semantics["add_overflow"] == "flag"
@@ -215,7 +221,7 @@ def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str,
     for key, _, span in stores:
         values.setdefault(key, start(*key))
         writers.setdefault(key, []).append(span)
-    state = _Values(values, writers, free_kinds, start)
+    state = _Values(values, writers, free_kinds, start, prefix)
     changed = True
     while changed:
         changed = False
@@ -240,6 +246,34 @@ def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str,
                 values[key] |= new
                 changed = True
     return state
+
+
+_PREFIX_END = frozenset({"LBL", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE", "EM", "EMT", "EMF", "SUBM",
+                         "RPLY", "CAN"})
+
+
+def _written_first(program: Program) -> set[tuple[str, int]]:
+    """Bit operands the main program assigns (= or =N) in its first straight-line stretch, which runs first in every
+    cycle, before any instruction reads them there (every other read comes later in the cycle)."""
+    read: set[tuple[str, int]] = set()
+    first: set[tuple[str, int]] = set()
+    indexed_read: set[str] = set()
+    for op in program.main.ops:
+        if op.code in _PREFIX_END:
+            break
+        o = op.operand
+        if o is None or not o.is_bit:
+            continue
+        if o.indexed:
+            indexed_read.add(o.kind)
+            continue
+        key = (o.kind, o.addr)
+        if op.code in ("ST", "STN"):
+            if key not in read and o.kind not in indexed_read:
+                first.add(key)
+        elif op.code not in ("SET", "RES", "SETN", "RESN"):
+            read.add(key)
+    return first
 
 
 def _fixed(decision: Decision, state: _Values) -> tuple[dict[int, int], list[list[int]]]:
@@ -291,6 +325,8 @@ def _infeasible_reason(decision: Decision, number: int, masking: bool, state: _V
         written = state.writers.get((o.kind, o.addr))
         why = (f"the program writes only {fixed[number]} to it ({', '.join(written[:3])})" if written else
                "nothing in the program writes it")
+        if (o.kind, o.addr) in state.prefix:
+            why += ", first thing in every cycle, before anything reads it"
         return (f"{o.display()} is always {fixed[number]}: {why}, and it is no input, timer, counter, NC-interface "
                 "operand or operand a scenario sets")
     function = decision.function()
