@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from transpiler.exec.interp.compile import CompiledProgram
 
 
@@ -88,6 +90,11 @@ class CoverageMarks:
 
     def vector_count(self) -> int:
         return len(self.vectors)
+
+    def vectors_since(self, count: int) -> list[tuple[int, int]]:
+        """(decision number, vector) of the vectors recorded after the first `count`, in recording order."""
+        mask = (1 << self.decision_shift) - 1
+        return [(key & mask, key >> self.decision_shift) for key in itertools.islice(self.vectors, count, None)]
 
     def forget_vectors_after(self, count: int) -> None:
         """Take out the vectors recorded after the first `count` (a cycle rolled back for its exact re-run)."""

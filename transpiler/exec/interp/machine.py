@@ -482,6 +482,11 @@ class Machine:
         marks = self.runtime.marks
         return 0 if marks is None else marks.vector_count()
 
+    def decision_vectors_since(self, count: int) -> list[tuple[int, int]]:
+        """(decision number, vector) of every vector recorded after the first `count` (see vector_count)."""
+        marks = self.runtime.marks
+        return [] if marks is None else marks.vectors_since(count)
+
     def decision_vectors(self) -> dict[int, frozenset[int]]:
         """Decision number (decisions.decision_table order) -> the distinct vectors recorded so far."""
         marks = self.runtime.marks
