@@ -156,7 +156,8 @@ def test_redundant_condition_is_infeasible_and_inputs_never_are(tmp_path: Path) 
 
 @pytest.mark.parametrize("semantics", [{}, {"accumulator_model": "shared_bit7"}, {"chain_model": "dynamic"}],
                          ids=["default", "shared_bit7", "dynamic"])
-@pytest.mark.parametrize("project", ["logic_chain", "brackets_logic", "chain_start", "compare", "edges", "stack"])
+@pytest.mark.parametrize("project", ["logic_chain", "brackets_logic", "chain_start", "compare", "edges", "stack",
+                                     "ift_while_repeat", "jumps_loop", "calls_cmt_cmf"])
 def test_recorded_outcome_is_the_function_of_the_recorded_conditions(project: str, semantics: dict) -> None:
     # The decision's formula (decisions.py) and the generated code agree on every vector recorded, in the fast and
     # the exact variant alike. Catches: a condition read at the wrong place, a negation lost, a bracket mis-modelled.
@@ -217,3 +218,14 @@ def test_marker_set_first_thing_in_every_cycle_is_constant(tmp_path: Path) -> No
     assert items[("M12", "O3", 0)].status == "missing"
     tautology = [i for key, i in items.items() if key[1] == "M10"]
     assert {i.status for i in tautology} == {"infeasible"} and all("coupled" in i.reason for i in tautology)
+
+
+def test_a_test_entered_by_a_jump_is_no_decision_of_the_chain_before_it(tmp_path: Path) -> None:
+    # ENDW jumps back to the WHILET test with the LA of the loop's last chain: the test consumes two chains, and
+    # recording it as a decision of the chain before WHILET paired that chain's values with another chain's outcome.
+    program = _program(tmp_path, "L K0\n= X\nL X\n< K3\nWHILET\nINCX\nL X\n< K2\nA I2\n= O1\nENDW\nEM\n")
+    table = decision_table(program)
+    assert [d.op.mnemonic for d in table.decisions] == ["="]
+    machine = _run(program, [{"I2": 0}, {"I2": 1}])
+    decision = table.decisions[0]
+    assert all(decision.function()(v & 3) == v >> 2 for v in machine.coverage.vectors[decision.key])

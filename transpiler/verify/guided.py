@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import random
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.exec.compiled.shim import NcActionError
@@ -88,6 +88,18 @@ class Search:
         function = decision.function()
         return {("mcdc", number, c) for c, coupled in enumerate(decision.coupled)
                 if (shown_masking(recorded, n, c, function) if coupled else shown_unique(recorded, n, c))}
+
+    def wanted(self, drivable: frozenset[str]) -> tuple[str, ...]:
+        """The `drivable` operands (scenario names) read by a condition not shown yet, sorted."""
+        found = set()
+        for number, decision in enumerate(self.decisions):
+            for c, cond in enumerate(decision.conditions):
+                if cond.operand is None or cond.operand.indexed or ("mcdc", number, c) in self.seen:
+                    continue
+                name = self.names.display_name(OperandRef(cond.operand.kind, cond.operand.addr))
+                if name in drivable:
+                    found.add(name)
+        return tuple(sorted(found))
 
     def probe(self, scenario: Scenario) -> Probe | None:
         """Run `scenario` on the reference interpreter; None when the scenario is unusable (bad NC job)."""
@@ -168,8 +180,10 @@ def _events_with(scenario: Scenario, extra: list[Event]) -> list[Event]:
     return sorted([*scenario.events, *extra], key=lambda e: e.cycle)
 
 
-def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTable, serial: int) -> Scenario:
-    """A child of `parent` with one to three mutations (see the module docstring)."""
+def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTable, serial: int,
+           wanted: Sequence[str] = ()) -> Scenario:
+    """A child of `parent` with one to three mutations (see the module docstring). `wanted`: inputs and foreign
+    markers read by conditions no run has shown yet (MC/DC), pulsed more often than the others."""
     events = list(parent.events)
     initial = dict(parent.initial)
     stimulus = parent.random
@@ -177,6 +191,14 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
     for _ in range(rng.randint(1, 3)):
         choice = rng.random()
         at = rng.randrange(cycles)
+        if wanted and rng.random() < 0.12:
+            # an operand of a condition not shown yet, flipped for a few cycles while the rest of the state stays:
+            # the pair of evaluations MC/DC asks for
+            name = rng.choice(wanted)
+            value = rng.randrange(2)
+            events.append(Event(cycle=at, set={name: value}))
+            events.append(Event(cycle=min(cycles - 1, at + rng.randint(1, 20)), set={name: 1 - value}))
+            continue
         numeric = [n for n, v in initial.items() if isinstance(v, int) and names.resolve(n).kind in "BWD"]
         if numeric and rng.random() < 0.1:
             # a word's start value moved arithmetically, as fuzzers do: a loop that halves or counts reaches a
@@ -305,11 +327,15 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     serial = 0
     stale = 0
     spent_on_values = 0
+    drivable = frozenset(corners.inputs) | frozenset(corners.foreign_markers)
+    wanted_at, wanted = -1, ()
     while spent < budget and search.interpreter_cycles < limit and stale < STALE_LIMIT:
         serial += 1
         # Short parents give short children, which leave more of the budget to the next find.
         parent = rng.choices(corpus, weights=[1.0 / max(50, min(s.cycles, CHILD_CYCLES)) for s in corpus])[0]
-        child = mutate(parent, rng, corners, names, serial)
+        if len(search.seen) != wanted_at:
+            wanted_at, wanted = len(search.seen), search.wanted(drivable)
+        child = mutate(parent, rng, corners, names, serial, wanted)
         probe = search.probe(child)
         if probe is None or not probe.new or probe.last_new >= budget - spent:
             stale += 1

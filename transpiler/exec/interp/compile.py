@@ -139,6 +139,7 @@ def branch_slots(program: Program) -> list[tuple[int, int]]:
 
 _GATES = frozenset({"AND", "ANDN", "OR", "ORN"})
 _LA_CONDITIONS = frozenset({"CMP", "SCMP", "BT", "PLL", "BCLOSE"})    # conditions whose value is the LA they make
+_PLAIN_CHAIN = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
 
 
 def boundary_slots(program: Program) -> list[tuple[int, int]]:
@@ -257,7 +258,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.block = 0                              # the block being generated
         # Bit logic folds into one expression of LA in the fast variant (gen_access._chain); the exact variant counts
         # and checks every op, and with the shared accumulator LA is a bit of WA.
-        self.fuse_la = not exact and not self.shared and not value_profile and not coverage
+        self.fuse_la = not exact and not self.shared and not value_profile
         self.la_chain = None
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
@@ -267,13 +268,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         # MC/DC (with coverage): op id of a condition read -> its slot `_q<slot>` in its chain; op id of a decision's
         # consumer -> (decision number, the slots of its conditions in order)
         self.cond_slot: dict[int, int] = {}
-        self.record: dict[int, tuple[int, tuple[int, ...]]] = {}
+        self.record: dict[int, tuple[int, tuple[str, ...]]] = {}
         self.decision_ops: list[int] = []
         if coverage:
-            table = decision_table(program)
-            self.cond_slot = {self.op_base[f] + i: slot for (f, i), slot in table.reads.items()}
-            self.record = {self.op_base[f] + i: rec for (f, i), rec in table.records.items()}
-            self.decision_ops = [self.op_base[d.file] + d.index for d in table.decisions]
+            self._decisions(program)
         self.decision_shift = max(1, len(self.decision_ops)).bit_length()
         self.branch_slots = branch_slots(program)
         self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
@@ -281,6 +279,27 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.value_slot = {key: slot for slot, key in enumerate(self.value_slots)}
         self.branch_ops: dict[int, tuple[int, ...]] = {}    # op id of a conditional exit -> its stretch's op ids
         self.stretch_ops: list[tuple[int, ...]] = []
+
+    def _decisions(self, program: Program) -> None:
+        """The MC/DC recording: per decision, the expressions of its condition values at its consumer. A chain of
+        named bit loads and gates alone (the common case) writes nothing between its reads and its consumer, so the
+        consumer reads its operands again (and the fast variant still folds it into one expression); any other
+        chain reads each condition into a local `_q<slot>` where the condition is evaluated."""
+        table = decision_table(program)
+        for d in table.decisions:
+            ops = program.files[d.file].ops
+            base = self.op_base[d.file]
+            first = min(c.index for c in d.conditions)
+            plain = all(op.code in _PLAIN_CHAIN and not op.operand.indexed for op in ops[first:d.index])
+            if plain:
+                values = tuple(self.bit(c.operand) for c in d.conditions)
+            else:
+                slots = table.records[d.key][1]
+                values = tuple(f"_q{slot}" for slot in slots)
+                for c, slot in zip(d.conditions, slots):
+                    self.cond_slot[base + c.index] = slot
+            self.record[base + d.index] = (len(self.decision_ops), values)
+            self.decision_ops.append(base + d.index)
 
     # ------------------------------------------------------------------ output
 
@@ -482,9 +501,9 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         o = op.operand
         if opid in self.record:
             # MC/DC: the chain's condition values and its outcome (LA), before the consumer acts on it
-            number, slots = self.record[opid]
-            bits = " | ".join([f"_q{slot}" + (f" << {n}" if n else "") for n, slot in enumerate(slots)]
-                              + [f"{self.la()} << {len(slots)}"])
+            number, values = self.record[opid]
+            bits = " | ".join([value + (f" << {n}" if n else "") for n, value in enumerate(values)]
+                              + [f"{self.la()} << {len(values)}"])
             self.out(ind, f"_mc[({bits}) << {self.decision_shift} | {number}] = 1", opid)
         handler = getattr(self, f"_op_{c}", None)
         if handler is not None:

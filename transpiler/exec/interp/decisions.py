@@ -9,8 +9,9 @@ decision's outcome is LA when the chain's first consumer runs; later consumers o
 assignments) are the same decision. The interpreter records, with coverage, each distinct vector of condition values
 and outcome of a decision (compile.py), and the verify side finds the MC/DC pairs in them (verify/mcdc.py).
 
-A chain is followed in op order within a block only: a label, a call, a CASE or an unconditional jump forgets it
-(LA may come from elsewhere there), and so does a word instruction when LA is bit 7 of WA (A-05 shared_bit7)."""
+A chain is followed in op order within a block only: a jump target, a label, a call, a CASE or an unconditional
+jump forgets it (LA may come from elsewhere there), and so does a word instruction when LA is bit 7 of WA (A-05
+shared_bit7)."""
 
 from __future__ import annotations
 
@@ -160,13 +161,29 @@ class DecisionTable:
 
 def decision_table(program: Program) -> DecisionTable:
     walk = _ChainWalk(program.semantics["accumulator_model"] == "shared_bit7")
+    entered = _entered(program)
     for f, code in enumerate(program.files):
         walk.file(f)
         for i, op in enumerate(code.ops):
+            if (f, i) in entered:
+                walk.la = None          # reached from elsewhere too (a structured loop jumps back to its test)
             if op.code == "CMP":
                 walk.compares.append(_compare(program, code.ops, f, i))
             walk.step(i, op)
     return DecisionTable(tuple(walk.decisions), tuple(walk.compares), walk.reads, walk.records)
+
+
+def _entered(program: Program) -> set[tuple[int, int]]:
+    """(file, op index) of every op that a jump, call, CASE entry or submitted job may enter by."""
+    entered = set()
+    for f, code in enumerate(program.files):
+        for op in code.ops:
+            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+                entered.add((f, op.target))
+            for target in (op.call, *op.case_targets):
+                if target is not None and not target.is_module and target.file >= 0:
+                    entered.add((target.file, target.index))
+    return entered
 
 
 class _ChainWalk:

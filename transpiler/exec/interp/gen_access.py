@@ -162,7 +162,7 @@ class AccessCode:
 
     def _bit_logic(self, c: str, o: Operand, opid: int, ind: int) -> None:
         """LD LDN AND ANDN OR ORN XOR XORN, ST STN, SET RES SETN RESN."""
-        if self.fuse_la and not o.indexed and c in _CHAIN_OPS:
+        if self.fuse_la and not o.indexed and c in _CHAIN_OPS and opid not in self.cond_slot:
             self._chain(c, o, opid, ind)
         elif self.fuse_la and not o.indexed and c == "ST" and self.la_chain is not None:
             chain, self.la_chain = self.la_chain, None
