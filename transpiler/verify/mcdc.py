@@ -151,10 +151,9 @@ def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
         for name in written:
             try:
                 ref = names.resolve(name)
-            except Exception:  # noqa: BLE001 - a glob or unknown name: it names nothing fixed
+            except ValueError:          # a glob of random inputs (inputs are driven anyway)
                 continue
-            if ref is not None:
-                driven.add((ref.kind, ref.addr))
+            driven.add((ref.kind, ref.addr))
     return driven
 
 
@@ -360,9 +359,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     vectors: dict[tuple[int, int], set[int]] = {}
     bounds: dict[tuple[int, int], set[int]] = {}
     for cov in sets:
-        for key, found in getattr(cov, "vectors", {}).items():
+        for key, found in cov.vectors.items():
             vectors.setdefault(key, set()).update(found)
-        for key, found in getattr(cov, "bounds", {}).items():
+        for key, found in cov.bounds.items():
             bounds.setdefault(key, set()).update(found)
     state: _Values | None = None
     conditions: list[ConditionItem] = []

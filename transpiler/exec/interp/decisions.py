@@ -16,12 +16,12 @@ shared_bit7)."""
 from __future__ import annotations
 
 import dataclasses
-from typing import Callable, Union
+from typing import Callable
 
 from transpiler.ir import Op, Operand, Program
 
-# The expression of a decision: ("c", i) is condition i, ("not", e), and (op, a, b) with op "and" | "or" | "xor".
-Expr = Union[tuple]
+# The expression of a decision is a tuple: ("c", i) is condition i, ("not", e), and (op, a, b) with op "and", "or"
+# or "xor".
 
 CONSUMERS = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF"})
 _GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "XORN": "xor"}
