@@ -92,3 +92,10 @@ def write_reports(files: dict) -> bool:
     if files:
         print("reports: " + ", ".join(str(path) for path in files))
     return True
+
+
+def print_screens(screens) -> None:
+    """The screen masks asked for with --show-mask, each framed under a title line (stdout)."""
+    from transpiler.verify.screens import render_text
+    for screen in screens:
+        print(render_text(screen), end="")

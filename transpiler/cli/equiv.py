@@ -9,7 +9,7 @@ from typing import Callable
 
 from transpiler import api
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
-                                   project_from_args, write_reports)
+                                   print_screens, project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
 
@@ -37,6 +37,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--html", type=Path, metavar="DIR",
                    help="write the evidence as one self-contained page, DIR/index.html: verdict, runs, each "
                         "divergence as a timeline, every source file with its coverage")
+    p.add_argument("--show-mask", action="append", default=[], metavar="NAME@CYCLE",
+                   help="replay each --scenario and print the screen mask NAME after CYCLE from both sides; screens "
+                   "that differ fail the run (exit 1; repeatable; docs/masks.md)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also a line for every equivalent run and the list of what no run covered")
     p.set_defaults(handler=cmd_equiv)
@@ -59,7 +62,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
                                       seed=args.seed, backend=args.backend, st_file=args.st, io_map_file=args.io_map,
                                       mp_file=args.mp, shrink=not args.no_shrink, vcd_dir=args.vcd,
                                       progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated,
-                                      html=args.html is not None)
+                                      html=args.html is not None, show_masks=args.show_mask)
     finally:
         line.close()
     print_diagnostics(check.diagnostics)
@@ -67,6 +70,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         print(f"note: {check.backend_note}", file=sys.stderr)
     result = check.result
     _print_outcomes(result, args.verbose)
+    print_screens(check.screens)
     files = {}
     if args.report:
         files[args.report] = report_json(result)
@@ -84,11 +88,17 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         files[args.html / PAGE_FILE] = check.html_page
     if not write_reports(files):
         return EXIT_BAD_INPUT
-    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "
+    headline = result.verdict
+    if check.screens_differ:
+        # The screens are a finding of their own: the headline must not read as a pass when the operator's view
+        # differs, whatever the compared operands say.
+        differing = sorted({f"{s.mask} after cycle {s.cycle} of {s.scenario}" for s in check.screens if s.differs})
+        headline = f"SCREENS DIFFER: {'; '.join(differing)}; compared operands: {result.verdict}"
+    print(f"hh2iec equiv: {headline} ({len(result.outcomes)} runs, "
           f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
-    return EXIT_OK if result.equivalent else EXIT_FAILED
+    return EXIT_OK if result.equivalent and not check.screens_differ else EXIT_FAILED
 
 
 def _cycle_progress(line: ProgressLine) -> Callable[[str, int, int], Callable[[int, int], None]]:
