@@ -229,3 +229,10 @@ def test_a_test_entered_by_a_jump_is_no_decision_of_the_chain_before_it(tmp_path
     machine = _run(program, [{"I2": 0}, {"I2": 1}])
     decision = table.decisions[0]
     assert all(decision.function()(v & 3) == v >> 2 for v in machine.coverage.vectors[decision.key])
+
+
+def test_an_indexed_marker_write_leaves_no_marker_constant(tmp_path: Path) -> None:
+    # M5 is never named by a write, but `= M100[X]` may reach it: claiming it constant would be unsound.
+    program = _program(tmp_path, "L I1\n= M100[X]\nL M5\nA I2\n= O1\nEM\n")
+    items, _ = _status(program, [_run(program, [{"I2": 1}])])
+    assert items[("M5", "O1", 0)].status == "missing" and items[("I2", "O1", 1)].status == "missing"
