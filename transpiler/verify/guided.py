@@ -10,8 +10,8 @@ one that reaches a branch outcome or CASE entry not seen before, a marker or out
 state (0 or 1) not seen before, a word compare whose operands come out equal or one apart in a way not seen
 before (its boundary values: a mutated compare or constant differs from the original only there), a condition of a
 logic chain shown to decide it on its own for the first time (an MC/DC pair: an AND that became an OR differs only
-on such inputs), or a bit gate or divisor value not seen before (the value profile), is kept, cut just after the last cycle that
-brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
+on such inputs), or a bit gate or divisor value not seen before (the value profile), is kept, cut just after the
+last cycle that brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
 budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
 
 A candidate in which the original program faults (an NC handshake that cannot finish, a runtime fault) is cut
@@ -87,7 +87,8 @@ class Search:
         n = len(decision.conditions)
         function = decision.function()
         return {("mcdc", number, c) for c, coupled in enumerate(decision.coupled)
-                if (shown_masking(recorded, n, c, function) if coupled else shown_unique(recorded, n, c))}
+                if ("mcdc", number, c) not in self.seen
+                and (shown_masking(recorded, n, c, function) if coupled else shown_unique(recorded, n, c))}
 
     def wanted(self, drivable: frozenset[str]) -> tuple[str, ...]:
         """The `drivable` operands (scenario names) read by a condition not shown yet, sorted."""

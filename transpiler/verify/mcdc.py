@@ -118,6 +118,8 @@ def shown_unique(vectors: Iterable[int], n: int, c: int) -> bool:
 
 def shown_masking(vectors: Iterable[int], n: int, c: int, function) -> bool:
     """A masking MC/DC pair for condition c among the recorded vectors (see the module docstring)."""
+    if shown_unique(vectors, n, c):
+        return True             # a pair that differs in c alone is a masking pair too (nothing else differs)
     mask = (1 << n) - 1
     rows = sorted({(v & mask, v >> n) for v in vectors})
     bit = 1 << c
