@@ -11,8 +11,9 @@ state (0 or 1) not seen before, a word compare whose operands come out equal or 
 before (its boundary values: a mutated compare or constant differs from the original only there), a condition of a
 logic chain shown to decide it on its own for the first time (an MC/DC pair: an AND that became an OR differs only
 on such inputs), or a bit gate or divisor value not seen before (the value profile), is kept, cut just after the
-last cycle that brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
-budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
+last cycle that brought something new, so that the co-simulation budget is spent on cycles that matter. What is
+left of the budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random
+cycles.
 
 A candidate in which the original program faults (an NC handshake that cannot finish, a runtime fault) is cut
 before the faulting cycle: the generated stimulus only asks what the original answers."""
