@@ -23,7 +23,7 @@ from __future__ import annotations
 import dataclasses
 import random
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping
 
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.exec.compiled.shim import NcActionError
@@ -60,6 +60,14 @@ class Probe:
                                    # ("bound", op id, difference), ("mcdc", decision, condition)
     last_new: int                  # the cycle in which the last of them first appeared (-1: none)
     vectors: tuple = ()            # (cycle, decision, vector) of the condition vectors the run recorded first
+    firsts: Mapping = dataclasses.field(default_factory=dict)   # feature -> the cycle it first appeared in
+
+    @property
+    def last_before_mcdc(self) -> int:
+        """The cycle of the last new feature other than an MC/DC pair (-1: none). MC/DC pairs keep turning up
+        late in a run (there are many more of them than branches): a run kept for other features is cut after
+        those, and the pairs it found later stay to be found again, rather than lengthening every kept run."""
+        return max((cycle for feature, cycle in self.firsts.items() if feature[0] != "mcdc"), default=-1)
 
 
 @dataclasses.dataclass
@@ -91,18 +99,6 @@ class Search:
                 if ("mcdc", number, c) not in self.seen
                 and (shown_masking(recorded, n, c, function) if coupled else shown_unique(recorded, n, c))}
 
-    def wanted(self, drivable: frozenset[str]) -> tuple[str, ...]:
-        """The `drivable` operands (scenario names) read by a condition not shown yet, sorted."""
-        found = set()
-        for number, decision in enumerate(self.decisions):
-            for c, cond in enumerate(decision.conditions):
-                if cond.operand is None or cond.operand.indexed or ("mcdc", number, c) in self.seen:
-                    continue
-                name = self.names.display_name(OperandRef(cond.operand.kind, cond.operand.addr))
-                if name in drivable:
-                    found.add(name)
-        return tuple(sorted(found))
-
     def probe(self, scenario: Scenario) -> Probe | None:
         """Run `scenario` on the reference interpreter; None when the scenario is unusable (bad NC job)."""
         try:
@@ -116,6 +112,7 @@ class Search:
         last_new, count, value_count, bound_count, vector_count, ok = -1, 0, 0, 0, 0, 0
         vectors: list[tuple[int, int, int]] = []
         run_vectors: dict[int, set[int]] = {}
+        firsts: dict = {}
         read_toggled = machine.reader([(ref.kind, ref.addr) for ref in self.toggled])
         # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
         # per-cycle check costs little once the common states were seen.
@@ -159,19 +156,22 @@ class Search:
                 fresh -= self.seen
                 if fresh:
                     new |= fresh
+                    firsts.update(dict.fromkeys(fresh, cycle))
                     last_new = cycle
             if unseen:
                 values = read_toggled()
                 reached = [(i, v) for i, v in unseen if values[i] == v]
                 if reached:
-                    new.update(("bit", str(self.toggled[i]), v) for i, v in reached)
+                    bits = [("bit", str(self.toggled[i]), v) for i, v in reached]
+                    new.update(bits)
+                    firsts.update(dict.fromkeys(bits, cycle))
                     last_new = cycle
                     unseen = [pair for pair in unseen if pair not in reached]
-        return Probe(ok, frozenset(new), last_new, tuple(vectors))
+        return Probe(ok, frozenset(new), last_new, tuple(vectors), firsts)
 
     def keep(self, probe: Probe, cycles: int | None = None) -> None:
-        """Take the run's features as seen, and its condition vectors of the first `cycles` cycles (all: None)."""
-        self.seen |= probe.new
+        """Take the run's features and condition vectors of its first `cycles` cycles (all: None) as seen."""
+        self.seen |= probe.new if cycles is None else {f for f in probe.new if probe.firsts.get(f, 0) < cycles}
         for cycle, number, vector in probe.vectors:
             if cycles is None or cycle < cycles:
                 self.vectors.setdefault(number, set()).add(vector)
@@ -182,10 +182,8 @@ def _events_with(scenario: Scenario, extra: list[Event]) -> list[Event]:
     return sorted([*scenario.events, *extra], key=lambda e: e.cycle)
 
 
-def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTable, serial: int,
-           wanted: Sequence[str] = ()) -> Scenario:
-    """A child of `parent` with one to three mutations (see the module docstring). `wanted`: inputs and foreign
-    markers read by conditions no run has shown yet (MC/DC), pulsed more often than the others."""
+def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTable, serial: int) -> Scenario:
+    """A child of `parent` with one to three mutations (see the module docstring)."""
     events = list(parent.events)
     initial = dict(parent.initial)
     stimulus = parent.random
@@ -193,14 +191,6 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
     for _ in range(rng.randint(1, 3)):
         choice = rng.random()
         at = rng.randrange(cycles)
-        if wanted and rng.random() < 0.12:
-            # an operand of a condition not shown yet, flipped for a few cycles while the rest of the state stays:
-            # the pair of evaluations MC/DC asks for
-            name = rng.choice(wanted)
-            value = rng.randrange(2)
-            events.append(Event(cycle=at, set={name: value}))
-            events.append(Event(cycle=min(cycles - 1, at + rng.randint(1, 20)), set={name: 1 - value}))
-            continue
         numeric = [n for n, v in initial.items() if isinstance(v, int) and names.resolve(n).kind in "BWD"]
         if numeric and rng.random() < 0.1:
             # a word's start value moved arithmetically, as fuzzers do: a loop that halves or counts reaches a
@@ -329,20 +319,17 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     serial = 0
     stale = 0
     spent_on_values = 0
-    drivable = frozenset(corners.inputs) | frozenset(corners.foreign_markers)
-    wanted_at, wanted = -1, ()
     while spent < budget and search.interpreter_cycles < limit and stale < STALE_LIMIT:
         serial += 1
         # Short parents give short children, which leave more of the budget to the next find.
         parent = rng.choices(corpus, weights=[1.0 / max(50, min(s.cycles, CHILD_CYCLES)) for s in corpus])[0]
-        if len(search.seen) != wanted_at:
-            wanted_at, wanted = len(search.seen), search.wanted(drivable)
-        child = mutate(parent, rng, corners, names, serial, wanted)
+        child = mutate(parent, rng, corners, names, serial)
         probe = search.probe(child)
         if probe is None or not probe.new or probe.last_new >= budget - spent:
             stale += 1
             continue
-        length = min(probe.cycles_ok, probe.last_new + 1 + MARGIN, budget - spent)
+        last = probe.last_before_mcdc
+        length = min(probe.cycles_ok, (probe.last_new if last < 0 else last) + 1 + MARGIN, budget - spent)
         value_only = all(feature[0] in _VALUE_FEATURES for feature in probe.new)
         if value_only and spent_on_values + length > VALUE_SHARE * budget:
             # the value profile has many more features than branches: it may not crowd them out of the budget
