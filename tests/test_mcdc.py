@@ -236,3 +236,13 @@ def test_an_indexed_marker_write_leaves_no_marker_constant(tmp_path: Path) -> No
     program = _program(tmp_path, "L I1\n= M100[X]\nL M5\nA I2\n= O1\nEM\n")
     items, _ = _status(program, [_run(program, [{"I2": 1}])])
     assert items[("M5", "O1", 0)].status == "missing" and items[("I2", "O1", 1)].status == "missing"
+
+
+def test_generated_stimulus_completes_mcdc_of_a_chain_without_branches(tmp_path: Path, capsys) -> None:
+    # No branch to take: only the MC/DC pairs (besides the output's two states) tell the search which inputs
+    # matter. Catches: MC/DC pairs not counted as features of the search (then this seed shows 4 of the 6).
+    (tmp_path / "main.src").write_text("L I1\nAN I2\nA I3\nAN I4\nA I5\nAN I6\n= O1\nEM\n")
+    args = ["equiv", str(tmp_path / "main.src"), "--random-cycles", "400", "--seed", "1", "--backend", "builtin"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "MC/DC 6/6 conditions" in out, out
