@@ -327,7 +327,8 @@ def _infeasible_reason(decision: Decision, number: int, masking: bool, state: _V
         why = (f"the program writes only {fixed[number]} to it ({', '.join(written[:3])})" if written else
                "nothing in the program writes it")
         if (o.kind, o.addr) in state.prefix:
-            return f"{o.display()} is always {fixed[number]}: {why}, first thing in every cycle, before anything reads it"
+            return (f"{o.display()} is always {fixed[number]}: {why}, first thing in every cycle, before anything "
+                    "reads it")
         return (f"{o.display()} is always {fixed[number]}: {why}, and it is no input, timer, counter, NC-interface "
                 "operand or operand a scenario sets")
     function = decision.function()
