@@ -125,6 +125,7 @@ def _compared_text(r) -> str:
 
 def _print_outcomes(result, verbose: bool) -> None:
     """Everything that went wrong, always; a line per equivalent run and the uncovered places with `verbose`."""
+    from transpiler.verify.mcdc import figures
     from transpiler.verify.stimulus import scenario_to_yaml
     for o in result.outcomes:
         r = o.result
@@ -159,10 +160,22 @@ def _print_outcomes(result, verbose: bool) -> None:
     c = result.coverage
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
-          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
+          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}"
+          + (f", {figures(c)}" if "mcdc" in c else ""))
     never = c.get("never_taken", ())
     if verbose:
         for item in never:
             print(f"  not covered: {item['at']}: {item['what']}")
     elif never:
         print(f"  {len(never)} branch outcomes or CASE entries no run took (-v lists them)")
+    if "mcdc" in c:
+        missing = c["mcdc"]["not_shown"] + c["boundaries"]["not_reached"]
+        infeasible = c["mcdc"]["infeasible"] + c["boundaries"]["infeasible"]
+        if verbose:
+            for item in missing:
+                print(f"  not covered: {item['at']}: {item['what']}")
+            for item in infeasible:
+                print(f"  infeasible: {item['at']}: {item['what']}: {item['reason']}")
+        elif missing or infeasible:
+            print(f"  {len(missing)} MC/DC conditions or boundary values no run covered, {len(infeasible)} "
+                  "infeasible (-v lists them)")

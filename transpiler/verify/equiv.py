@@ -1,5 +1,6 @@
 """Equivalence: co-simulates the original and the translated program under scenarios and random stimulus,
-shrinks divergent stimuli, and gives the verdict with coverage and JSON/JUnit reports."""
+shrinks divergent stimuli, and gives the verdict with coverage (instructions, branches, CASE entries, MC/DC and
+boundary values) and JSON/JUnit reports."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
 from transpiler.verify.rundata import UNREPRESENTABLE
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
+from transpiler.verify.mcdc import DecisionCoverage, decision_coverage, driven_operands
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
@@ -202,6 +204,7 @@ class EquivalenceResult:
     coverage: dict[str, Any]
     untranslated: tuple[tuple[Span, str], ...] = ()     # code the translation left out (allowed by the user)
     source: SourceCoverage | None = None                # the same coverage per source file and line
+    decisions: DecisionCoverage | None = None           # MC/DC and boundary values (verify/mcdc.py)
 
     @property
     def equivalent(self) -> bool:
@@ -287,8 +290,9 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
     ops = op_coverage(program, coverage_sets)
-    return EquivalenceResult(outcomes, backend, summarize_coverage(ops), tuple(untranslated),
-                             source_coverage(program, ops, len(coverage_sets)))
+    decisions = decision_coverage(program, coverage_sets, driven_operands(scenarios, names))
+    return EquivalenceResult(outcomes, backend, {**summarize_coverage(ops), **decisions.summary()},
+                             tuple(untranslated), source_coverage(program, ops, len(coverage_sets)), decisions)
 
 
 def report_json(result: EquivalenceResult) -> str:
