@@ -30,6 +30,7 @@ from transpiler.ir import Program
 from transpiler.language.semantics import Semantics, SemanticsError, make_semantics
 
 if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
+    from transpiler.verify.shard import ShardSpec
     from transpiler.verify.equiv import EquivalenceResult
     from transpiler.verify.mutate import MutationResult
     from transpiler.verify.scenario import Scenario
@@ -300,6 +301,97 @@ def simulate(project: Project, scenario: Path) -> Simulation:
 
 
 @dataclasses.dataclass(frozen=True)
+class Plan:
+    """The units of a check (equiv's runs, mutate's mutants) in plan order, each with a cost estimate (cycles to
+    co-simulate), and the digest of the inputs they follow from. Every shard of a check computes the same plan; a
+    unit's number (1-based) is its place in it. `generated` holds the runs the coverage-guided search chose (written
+    into a plan file, so that shards need not search again)."""
+
+    command: str
+    digest: str
+    names: tuple[str, ...]
+    costs: tuple[float, ...]
+    generated: tuple = ()
+    setup_seconds: float = 0.0              # what translating and loading the scenarios took in this process
+    search_seconds: float = 0.0             # what the coverage-guided search took (0 with a plan file)
+
+    def assignment(self, count: int) -> list[int]:
+        """The shard (1..count) of each unit (shard.partition over the costs)."""
+        from transpiler.verify.shard import partition
+        return partition(self.costs, count)
+
+    def selected(self, shard: "ShardSpec | None", only: int | None) -> list[int]:
+        """The numbers of the units to run: all, those of `shard`, or the one numbered `only`. Raises HH2IECError
+        (E-USAGE) for a number outside the plan."""
+        if only is not None:
+            if not 1 <= only <= len(self.names):
+                raise _usage(f"--only {only}: the plan has units 1 to {len(self.names)}")
+            return [only]
+        if shard is None:
+            return list(range(1, len(self.names) + 1))
+        return [i + 1 for i, k in enumerate(self.assignment(shard.count)) if k == shard.index]
+
+
+def _inputs_digest(command: str, project: Project, mp_path: Path | None, files: Iterable[tuple[str, Path | None]],
+                   settings: Mapping[str, object]) -> str:
+    """The digest of everything a check's result follows from (see verify/shard.inputs_digest): the project's
+    files, the machine parameters, the named input files, the semantics, defines and the settings given."""
+    from transpiler import __version__
+    from transpiler.verify.shard import inputs_digest
+    folder = project.main.parent
+    sources = [("source", folder / name) for name in project.program.source_files]
+    options = project.options
+    semantics = project.semantics
+    all_settings = {"profile": semantics.profile.name, "semantics": dict(semantics.values),
+                    "defines": {k: str(v) for k, v in options.defines.items()}, "encoding": options.encoding,
+                    "werror": options.werror, **settings}
+    return inputs_digest(command, __version__, [*sources, ("machine parameters", mp_path), *files], all_settings)
+
+
+def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
+    return CompileFailed([Diagnostic.of("E-SHARD", Span(str(at), 1, 1) if at is not None else NO_SPAN, message)])
+
+
+def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path | None = None) -> list:
+    """The generated runs of a plan file written by `--plan N --plan-file FILE` on the same inputs; raises
+    HH2IECError (E-SHARD) when the file is not a plan of `command` or was made from other inputs."""
+    import json
+    from transpiler.verify.scenario import ScenarioError, scenario_from_text
+    from transpiler.verify.shard import FORMAT
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise _shard_problem(f"cannot read the plan file: {exc}", path) from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT or data.get("kind") != "hh2iec-plan":
+        raise _shard_problem("not a plan file of this hh2iec (write one with --plan N --plan-file FILE)", path)
+    if data.get("command") != command:
+        raise _shard_problem(f"a plan file of `{data.get('command')}`, not of `{command}`", path)
+    if data.get("digest") != digest:
+        raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
+                             "version) than this run's: make it again with the same arguments", path)
+    out = []
+    for i, text in enumerate(data.get("generated", [])):
+        try:
+            out.append(scenario_from_text(text, f"{path}#generated{i + 1}", folder or Path.cwd(), names))
+        except ScenarioError as exc:
+            raise CompileFailed(list(exc.diagnostics)) from None
+    return out
+
+
+def plan_file_text(plan: Plan) -> str:
+    """The plan file (`--plan N --plan-file FILE`): the inputs' digest and the generated runs as scenario YAML
+    (machine-parameter files relative to the current folder, where every shard runs)."""
+    import json
+    from transpiler.verify.shard import FORMAT
+    from transpiler.verify.stimulus import scenario_to_yaml
+    return json.dumps({"kind": "hh2iec-plan", "format": FORMAT, "command": plan.command, "digest": plan.digest,
+                       "units": [{"unit": i + 1, "name": n, "cost": c} for i, (n, c) in
+                                 enumerate(zip(plan.names, plan.costs))],
+                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated]}, indent=1) + "\n"
+
+
+@dataclasses.dataclass(frozen=True)
 class Equivalence:
     """The equivalence check: every run's outcome, the verdict, and how the ST side was chosen."""
 
@@ -308,29 +400,37 @@ class Equivalence:
     backend_note: str
     diagnostics: tuple[Diagnostic, ...]
     html_page: bytes | None = None          # the evidence as one HTML page, when asked for
+    plan: "Plan | None" = None              # every run of the check, of which `result` holds the selected ones
 
     @property
     def equivalent(self) -> bool:
         return self.result.equivalent
 
 
-def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
-                      backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
-                      mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
-                      progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
-                      allow_untranslated: bool = False, html: bool = False) -> Equivalence:
-    """Co-simulate the original program and its translation (or `st_file`) under each scenario and
-    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
-    as written, with the presets of the machine parameters it was made with; a scenario whose own machine
-    parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
-    code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
-    one self-contained HTML page (each divergent run replayed once more with every cycle recorded)."""
-    from transpiler.exec.compiled.shim import ShimUnavailable
-    from transpiler.verify import pipeline
-    from transpiler.verify.equiv import choose_backend, run_equivalence
+@dataclasses.dataclass
+class _EquivSetup:
+    """What an equivalence check sets up before it runs anything: the translation, the executor and the runs."""
+
+    st_text: str
+    st_name: str
+    iomap: IoMap
+    chosen: object
+    names: object
+    mp: dict
+    runs: list
+    plan: Plan
+    diagnostics: Diagnostics
+    untranslated: tuple
+
+
+def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: int, seed: int, backend: str,
+                       st_file: Path | None, io_map_file: Path | None, mp_file: Path | None, shrink: bool,
+                       allow_untranslated: bool, plan_file: Path | None) -> _EquivSetup:
+    import time
+    from transpiler.verify.equiv import choose_backend
     from transpiler.verify.guided import generate
     from transpiler.verify.simulate import project_names
-    scenarios = [Path(p) for p in scenarios]
+    start = time.perf_counter()
     if not scenarios and random_cycles <= 0:
         raise _usage("equiv needs at least one --scenario or --random-cycles N")
     for path in scenarios:
@@ -350,31 +450,116 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                 iomap = IoMap.from_csv(map_path.read_text(encoding="utf-8"))
             except ValueError as exc:
                 raise CompileFailed([Diagnostic.of("E-USAGE", Span(str(map_path), 1, 1), str(exc))]) from None
+    digest = _equivalence_digest(project, mp_path, scenarios, random_cycles, seed, backend, st_file, io_map_file,
+                                 shrink, allow_untranslated)
     chosen = choose_backend(backend, st_text, st_name, transpiled.result.project)
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
-    if random_cycles > 0:
+    generated: list = []
+    searched = time.perf_counter()
+    if plan_file is not None:
+        generated = read_plan_file(plan_file, "equiv", digest, names)
+    elif random_cycles > 0:
         # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
-        loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                           base_mp=mp)
+        generated = generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
+                             base_mp=mp)
+    runs = loaded + generated
+    plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
+                tuple(generated), searched - start, time.perf_counter() - searched if plan_file is None else 0.0)
+    return _EquivSetup(st_text, st_name, iomap, chosen, names, mp, runs, plan, diags,
+                       tuple(transpiled.result.untranslated))
+
+
+def _equivalence_digest(project: Project, mp_path: Path | None, scenarios: list[Path], random_cycles: int, seed: int,
+                        backend: str, st_file: Path | None, io_map_file: Path | None, shrink: bool,
+                        allow_untranslated: bool) -> str:
+    map_path = None
+    if st_file is not None:
+        map_path = Path(io_map_file) if io_map_file is not None else Path(st_file).parent / "io_map.csv"
+        map_path = map_path if map_path.is_file() else None
+    return _inputs_digest("equiv", project, mp_path,
+                          [*(("scenario", path) for path in scenarios), ("st", st_file), ("io map", map_path)],
+                          {"random_cycles": random_cycles, "seed": seed, "backend": backend, "shrink": shrink,
+                           "allow_untranslated": allow_untranslated})
+
+
+def equivalence_digest(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                       mp_file: Path | None = None, shrink: bool = True, allow_untranslated: bool = False) -> str:
+    """The inputs' digest check_equivalence gives its plan with the same arguments, without running anything (the
+    merge of shard results checks that the sources it loads are the ones the shards ran on)."""
+    mp_path, _, diags = machine_parameters_of(project, mp_file)
+    diags.raise_if_errors()
+    return _equivalence_digest(project, mp_path, [Path(p) for p in scenarios], random_cycles, seed, backend,
+                               st_file, io_map_file, shrink, allow_untranslated)
+
+
+def plan_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                     backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                     mp_file: Path | None = None, shrink: bool = True, allow_untranslated: bool = False,
+                     plan_file: Path | None = None) -> tuple[Plan, float]:
+    """The runs check_equivalence would make with the same arguments (the coverage-guided search included), and
+    the seconds per co-simulated cycle measured on one run of about the mean length (the calibration run)."""
+    import time
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify.equiv import run_equivalence
+    setup = _equivalence_setup(project, [Path(p) for p in scenarios], random_cycles, seed, backend, st_file,
+                               io_map_file, mp_file, shrink, allow_untranslated, plan_file)
+    costs = setup.plan.costs
+    mean = sum(costs) / len(costs)
+    probe = min(range(len(costs)), key=lambda i: (abs(costs[i] - mean), i))
+    start = time.perf_counter()
+    try:
+        run_equivalence(project.program, setup.chosen.factory, setup.iomap, [setup.runs[probe]], setup.names,
+                        setup.chosen.name, shrink_divergences=False, base_mp=setup.mp)
+    except ShimUnavailable as exc:
+        raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
+    return setup.plan, (time.perf_counter() - start) / max(1.0, costs[probe])
+
+
+def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                      backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                      mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
+                      progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
+                      allow_untranslated: bool = False, html: bool = False, shard: "ShardSpec | None" = None,
+                      only: int | None = None, plan_file: Path | None = None) -> Equivalence:
+    """Co-simulate the original program and its translation (or `st_file`) under each scenario and
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
+    as written, with the presets of the machine parameters it was made with; a scenario whose own machine
+    parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
+    code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
+    one self-contained HTML page (each divergent run replayed once more with every cycle recorded).
+    `shard` runs only that shard's share of the runs (verify/shard.py), `only` the run with that number;
+    `plan_file` takes the generated runs from a plan file instead of searching for them again."""
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify import pipeline
+    from transpiler.verify.equiv import run_equivalence
+    setup = _equivalence_setup(project, [Path(p) for p in scenarios], random_cycles, seed, backend, st_file,
+                               io_map_file, mp_file, shrink, allow_untranslated, plan_file)
+    chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
+    selected = setup.plan.selected(shard, only)
+    loaded = [setup.runs[i - 1] for i in selected]
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
-                                 untranslated=tuple(transpiled.result.untranslated),
+                                 untranslated=setup.untranslated,
                                  pipelined=pipeline.worthwhile())
+        result.run_ids = tuple(selected)
         page = None
         if html:
             from transpiler.verify.evidence import divergence_traces, equivalence_evidence
             from transpiler.verify.html_report import render_page
-            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text, mp)
+            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, setup.st_text,
+                                       mp)
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
                                                     f"Equivalence of {project.main.name}", traces,
                                                     project.options.encoding))
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
-    return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), page)
+    return Equivalence(result, setup.st_name, chosen.note, tuple(setup.diagnostics.items) + tuple(chosen.diagnostics),
+                       page, setup.plan)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -385,6 +570,8 @@ class Mutation:
     st_text: str
     backend_note: str
     diagnostics: tuple[Diagnostic, ...]
+    plan: Plan | None = None                # every mutant of the check, of which `result` holds the judged ones
+    unit_ids: Mapping = dataclasses.field(default_factory=dict)     # judged mutant -> its number in the plan
 
 
 def mutation_page(project: Project, mutation: Mutation, min_score: float) -> bytes:
@@ -400,12 +587,16 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
-           progress: Callable[[int, int], None] | None = None) -> Mutation:
+           progress: Callable[[int, int], None] | None = None, shard: "ShardSpec | None" = None,
+           only: int | None = None, plan_file: Path | None = None, calibrate: int = 0) -> Mutation:
     """Mutants of the emitted ST judged by co-simulation under the scenarios and `random_cycles` of
     coverage-guided stimulus (see verify/mutate.py); `count` > 0 judges a seeded sample spread over the
     operators, `mutants_file` (the --survivors format) only the mutants it lists; `equivalent_file` lists mutants
     judged equivalent, which leave the denominator. Raises CompileFailed on bad input, or when the unmutated
-    translation is not equivalent under the stimulus."""
+    translation is not equivalent under the stimulus. `shard` judges only that shard's share of the mutants
+    (verify/shard.py), `only` the mutant with that number; `plan_file` takes the generated runs from a plan file
+    instead of searching again; `calibrate` > 0 judges only that many mutants spread over the plan (for an
+    estimate of the time per mutant)."""
     import os
     import tempfile
     import time
@@ -417,6 +608,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                                           judge_all, load_equivalents, mutation_sites)
     from transpiler.verify.simulate import project_names
     from transpiler.exec.interp import compile_program
+    setup_start = time.perf_counter()
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
         raise _usage("mutate needs at least one --scenario or --random-cycles N")
@@ -439,7 +631,19 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
-    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
+    digest = _inputs_digest("mutate", project, mp_path,
+                            [*(("scenario", path) for path in scenarios),
+                             ("equivalent", Path(equivalent_file) if equivalent_file else None),
+                             ("mutants", Path(mutants_file) if mutants_file else None)],
+                            {"random_cycles": random_cycles, "seed": seed, "backend": backend, "count": count})
+    setup_seconds = time.perf_counter() - setup_start
+    if plan_file is not None:
+        generated = read_plan_file(plan_file, "mutate", digest, names)
+    else:
+        generated = generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
+                             base_mp=mp)
+    search_seconds = time.perf_counter() - setup_start - setup_seconds if plan_file is None else 0.0
+    loaded += generated
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), mp)
     saved_cache = os.environ.get("HH2IEC_CACHE")
@@ -455,6 +659,16 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
             mutants = choose(sites, count, seed)
             if listed is not None:
                 mutants = [m for m in mutants if m.key in listed]
+            # A mutant's cost estimate is the cycles of every scenario: what it takes to survive (a kill stops early)
+            plan = Plan("mutate", digest, tuple(f"{m.pou}: {m.operator}: {m.description}" for m in mutants),
+                        (float(sum(s.cycles for s in judge.scenarios)),) * len(mutants), tuple(generated),
+                        time.perf_counter() - setup_start - search_seconds, search_seconds)
+            if calibrate > 0:
+                selected = sorted({1 + i * len(mutants) // calibrate for i in range(min(calibrate, len(mutants)))})
+            else:
+                selected = plan.selected(shard, only)
+            unit_ids = {mutants[i - 1]: i for i in selected}
+            mutants = [mutants[i - 1] for i in selected]
             start = time.perf_counter()
             verdicts = []
             for verdict in judge_all(judge, mutants, jobs):
@@ -474,4 +688,4 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
                             listed_absent=absent, scenario_files=tuple(files.get(id(s), "") for s in judge.scenarios),
                             pou_sources={p.name: p.source_map for p in iec.pous if p.source_map})
-    return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))
+    return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), plan, unit_ids)

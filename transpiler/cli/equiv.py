@@ -8,7 +8,8 @@ from pathlib import Path
 from typing import Callable
 
 from transpiler import api
-from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
+                                   check_shard_arguments, input_argv, print_diagnostics, print_plan,
                                    project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
@@ -39,7 +40,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
                         "divergence as a timeline, every source file with its coverage")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also a line for every equivalent run and the list of what no run covered")
-    p.set_defaults(handler=cmd_equiv)
+    add_shard_arguments(p, "runs")
+    p.set_defaults(handler=cmd_equiv, command_parser=p)
 
 
 def cmd_equiv(args: argparse.Namespace) -> int:
@@ -51,15 +53,19 @@ def cmd_equiv(args: argparse.Namespace) -> int:
             raise UsageError(f"scenario file '{path}' does not exist")
     if args.st is not None and not args.st.is_file():
         raise UsageError(f"ST file '{args.st}' does not exist")
+    check_shard_arguments(args)
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
+    inputs = dict(scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed, backend=args.backend,
+                  st_file=args.st, io_map_file=args.io_map, mp_file=args.mp, shrink=not args.no_shrink,
+                  allow_untranslated=args.allow_untranslated)
+    if args.plan is not None:
+        return _plan(project, args, inputs)
     line = ProgressLine("equiv", "cycles")
     try:
-        check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles,
-                                      seed=args.seed, backend=args.backend, st_file=args.st, io_map_file=args.io_map,
-                                      mp_file=args.mp, shrink=not args.no_shrink, vcd_dir=args.vcd,
-                                      progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated,
-                                      html=args.html is not None)
+        check = api.check_equivalence(project, **inputs, vcd_dir=args.vcd, progress=_cycle_progress(line),
+                                      html=args.html is not None, shard=args.shard, only=args.only,
+                                      plan_file=args.plan_file)
     finally:
         line.close()
     print_diagnostics(check.diagnostics)
@@ -69,7 +75,14 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     _print_outcomes(result, args.verbose)
     files = {}
     if args.report:
-        files[args.report] = report_json(result)
+        from transpiler import __version__
+        from transpiler.verify.shard import reproduce_command, shard_section
+        argv = input_argv(args)
+        plan_file = str(args.plan_file) if args.plan_file is not None else None
+        section = None if args.shard is None else shard_section(
+            "equiv", args.shard, check.plan.digest, __version__, argv, len(check.plan.names), result.run_ids,
+            plan_file=plan_file)
+        files[args.report] = report_json(result, lambda run: reproduce_command("equiv", argv, run, plan_file), section)
     if args.junit:
         files[args.junit] = report_junit(result)
     if args.cobertura or args.lcov:
@@ -84,11 +97,28 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         files[args.html / PAGE_FILE] = check.html_page
     if not write_reports(files):
         return EXIT_BAD_INPUT
-    print(f"hh2iec equiv: {result.verdict} ({len(result.outcomes)} runs, "
+    share = (f"shard {args.shard} ({len(result.outcomes)} of {len(check.plan.names)} runs): " if args.shard else
+             f"run {args.only} of {len(check.plan.names)}: " if args.only else "")
+    if args.shard is not None and not result.outcomes:
+        print(f"hh2iec equiv: {share}nothing to run; `hh2iec merge` gives the verdict of all shards")
+        return EXIT_OK
+    print(f"hh2iec equiv: {share}{result.verdict} ({len(result.outcomes)} runs, "
           f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
     return EXIT_OK if result.equivalent else EXIT_FAILED
+
+
+def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
+    """`--plan N`: the runs and the estimated time of each of N shards; `--plan-file` also writes the plan."""
+    plan, per_cycle = api.plan_equivalence(project, **inputs)
+    note = f"; {1000 * per_cycle:.2f} ms per co-simulated cycle (one calibration run)"
+    if plan.generated:
+        note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs once, "
+                 "here, else again in every shard")
+    print_plan("equiv", plan, args.plan, per_cycle, "runs", note)
+    files = {args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {}
+    return EXIT_OK if write_reports(files) else EXIT_BAD_INPUT
 
 
 def _cycle_progress(line: ProgressLine) -> Callable[[str, int, int], Callable[[int, int], None]]:
@@ -143,7 +173,11 @@ def _print_outcomes(result, verbose: bool) -> None:
                   f"actual {f.actual!r}", file=sys.stderr)
     for span, text in result.untranslated:
         print(f"NOT TRANSLATED: {span}: {text}")
-    c = result.coverage
+    print_coverage(result.coverage, verbose)
+
+
+def print_coverage(c: dict, verbose: bool) -> None:
+    """The coverage line (and with `verbose` every branch outcome and CASE entry no run took)."""
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
           f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
