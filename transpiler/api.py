@@ -320,16 +320,33 @@ class Plan:
         from transpiler.verify.shard import partition
         return partition(self.costs, count)
 
-    def selected(self, shard: "ShardSpec | None", only: int | None) -> list[int]:
-        """The numbers of the units to run: all, those of `shard`, or the one numbered `only`. Raises HH2IECError
-        (E-USAGE) for a number outside the plan."""
-        if only is not None:
-            if not 1 <= only <= len(self.names):
-                raise _usage(f"--only {only}: the plan has units 1 to {len(self.names)}")
-            return [only]
-        if shard is None:
-            return list(range(1, len(self.names) + 1))
-        return [i + 1 for i, k in enumerate(self.assignment(shard.count)) if k == shard.index]
+    def selected(self, share: "Share") -> list[int]:
+        """The numbers of the units `share` runs. Raises HH2IECError (E-USAGE) for a number outside the plan."""
+        count = len(self.names)
+        if share.sample > 0:
+            return sorted({1 + i * count // share.sample for i in range(min(share.sample, count))})
+        if share.only is not None:
+            if not 1 <= share.only <= count:
+                raise _usage(f"--only {share.only}: the plan has units 1 to {count}")
+            return [share.only]
+        if share.shard is None:
+            return list(range(1, count + 1))
+        return [i + 1 for i, k in enumerate(self.assignment(share.shard.count)) if k == share.shard.index]
+
+
+@dataclasses.dataclass(frozen=True)
+class Share:
+    """Which units of a check's plan this process runs and where its generated runs come from: the units of `shard`
+    (K of N), the one numbered `only`, or `sample` units spread evenly (to estimate the time of one); `plan_file`
+    holds the runs the coverage-guided search chose once for every shard. The default: every unit, searched here."""
+
+    shard: "ShardSpec | None" = None
+    only: int | None = None
+    plan_file: Path | None = None
+    sample: int = 0
+
+
+EVERYTHING = Share()
 
 
 def _inputs_digest(command: str, project: Project, mp_path: Path | None, files: Iterable[tuple[str, Path | None]],
@@ -346,6 +363,19 @@ def _inputs_digest(command: str, project: Project, mp_path: Path | None, files: 
                     "defines": {k: str(v) for k, v in options.defines.items()}, "encoding": options.encoding,
                     "werror": options.werror, **settings}
     return inputs_digest(command, __version__, [*sources, ("machine parameters", mp_path), *files], all_settings)
+
+
+def _generated_runs(command: str, project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping,
+                    random_cycles: int, seed: int, plan_file: Path | None, digest: str) -> tuple[list, float]:
+    """The runs of the coverage-guided search (verify/guided.py; the user's scenarios its seeds) and the seconds it
+    took; with `plan_file`, the runs it chose when the plan was made, read back instead of searching again."""
+    import time
+    from transpiler.verify.guided import generate
+    if plan_file is not None:
+        return read_plan_file(plan_file, command, digest, names), 0.0
+    start = time.perf_counter()
+    runs = generate(project.program, names, random_cycles, seed, seeds, machine_parameters=mp_path, base_mp=mp)
+    return runs, time.perf_counter() - start
 
 
 def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
@@ -428,7 +458,6 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
                        allow_untranslated: bool, plan_file: Path | None) -> _EquivSetup:
     import time
     from transpiler.verify.equiv import choose_backend
-    from transpiler.verify.guided import generate
     from transpiler.verify.simulate import project_names
     start = time.perf_counter()
     if not scenarios and random_cycles <= 0:
@@ -457,17 +486,12 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
-    generated: list = []
-    searched = time.perf_counter()
-    if plan_file is not None:
-        generated = read_plan_file(plan_file, "equiv", digest, names)
-    elif random_cycles > 0:
-        # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
-        generated = generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                             base_mp=mp)
+    setup_seconds = time.perf_counter() - start
+    generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, mp, random_cycles, seed,
+                                                plan_file, digest)
     runs = loaded + generated
     plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
-                tuple(generated), searched - start, time.perf_counter() - searched if plan_file is None else 0.0)
+                tuple(generated), setup_seconds, search_seconds)
     return _EquivSetup(st_text, st_name, iomap, chosen, names, mp, runs, plan, diags,
                        tuple(transpiled.result.untranslated))
 
@@ -523,23 +547,21 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
                       mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
                       progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
-                      allow_untranslated: bool = False, html: bool = False, shard: "ShardSpec | None" = None,
-                      only: int | None = None, plan_file: Path | None = None) -> Equivalence:
+                      allow_untranslated: bool = False, html: bool = False, share: Share = EVERYTHING) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
     `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
     as written, with the presets of the machine parameters it was made with; a scenario whose own machine
     parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
     one self-contained HTML page (each divergent run replayed once more with every cycle recorded).
-    `shard` runs only that shard's share of the runs (verify/shard.py), `only` the run with that number;
-    `plan_file` takes the generated runs from a plan file instead of searching for them again."""
+    `share` picks the runs of the plan to make (a shard's, one alone) and where the generated ones come from."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify import pipeline
     from transpiler.verify.equiv import run_equivalence
     setup = _equivalence_setup(project, [Path(p) for p in scenarios], random_cycles, seed, backend, st_file,
-                               io_map_file, mp_file, shrink, allow_untranslated, plan_file)
+                               io_map_file, mp_file, shrink, allow_untranslated, share.plan_file)
     chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
-    selected = setup.plan.selected(shard, only)
+    selected = setup.plan.selected(share)
     loaded = [setup.runs[i - 1] for i in selected]
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
@@ -584,31 +606,48 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
                                          project.options.encoding))
 
 
+def _mutation_runs(project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping, scenarios: list[Path],
+                   equivalent_file: Path | None, mutants_file: Path | None, settings: tuple[int, int, str, int],
+                   share: Share) -> tuple[str, list, float]:
+    """The inputs' digest of a mutation check (`settings`: random cycles, seed, backend choice and count) and its
+    generated runs with the seconds their search took."""
+    random_cycles, seed, backend, count = settings
+    digest = _inputs_digest("mutate", project, mp_path, [*(("scenario", path) for path in scenarios),
+                                                         ("equivalent", equivalent_file), ("mutants", mutants_file)],
+                            {"random_cycles": random_cycles, "seed": seed, "backend": backend, "count": count})
+    return (digest, *_generated_runs("mutate", project, names, seeds, mp_path, mp, random_cycles, seed,
+                                     share.plan_file, digest))
+
+
+def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list, search_seconds: float,
+                   share: Share) -> tuple[Plan, dict]:
+    """The mutants in plan order, and the ones `share` judges with their numbers. A mutant's cost estimate is the
+    cycles of every scenario, what it takes to survive (a kill stops early, at a place no estimate made before
+    judging knows). The set-up time is the caller's to measure."""
+    plan = Plan("mutate", digest, tuple(f"{m.pou}: {m.operator}: {m.description}" for m in mutants),
+                (float(sum(s.cycles for s in scenarios)),) * len(mutants), tuple(generated), 0.0, search_seconds)
+    return plan, {mutants[i - 1]: i for i in plan.selected(share)}
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
-           progress: Callable[[int, int], None] | None = None, shard: "ShardSpec | None" = None,
-           only: int | None = None, plan_file: Path | None = None, calibrate: int = 0) -> Mutation:
+           progress: Callable[[int, int], None] | None = None, share: Share = EVERYTHING) -> Mutation:
     """Mutants of the emitted ST judged by co-simulation under the scenarios and `random_cycles` of
     coverage-guided stimulus (see verify/mutate.py); `count` > 0 judges a seeded sample spread over the
     operators, `mutants_file` (the --survivors format) only the mutants it lists; `equivalent_file` lists mutants
     judged equivalent, which leave the denominator. Raises CompileFailed on bad input, or when the unmutated
-    translation is not equivalent under the stimulus. `shard` judges only that shard's share of the mutants
-    (verify/shard.py), `only` the mutant with that number; `plan_file` takes the generated runs from a plan file
-    instead of searching again; `calibrate` > 0 judges only that many mutants spread over the plan (for an
-    estimate of the time per mutant)."""
+    translation is not equivalent under the stimulus. `share`: as for check_equivalence, over the mutants."""
     import os
     import tempfile
     import time
     from transpiler.backends.st.check import find_iec2c
     from transpiler.verify.cosim import builtin_side_factory
     from transpiler.verify.equiv import choose_backend
-    from transpiler.verify.guided import generate
     from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
                                           judge_all, load_equivalents, mutation_sites)
     from transpiler.verify.simulate import project_names
     from transpiler.exec.interp import compile_program
-    setup_start = time.perf_counter()
     scenarios = [Path(p) for p in scenarios]
     if not scenarios and random_cycles <= 0:
         raise _usage("mutate needs at least one --scenario or --random-cycles N")
@@ -631,18 +670,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
-    digest = _inputs_digest("mutate", project, mp_path,
-                            [*(("scenario", path) for path in scenarios),
-                             ("equivalent", Path(equivalent_file) if equivalent_file else None),
-                             ("mutants", Path(mutants_file) if mutants_file else None)],
-                            {"random_cycles": random_cycles, "seed": seed, "backend": backend, "count": count})
-    setup_seconds = time.perf_counter() - setup_start
-    if plan_file is not None:
-        generated = read_plan_file(plan_file, "mutate", digest, names)
-    else:
-        generated = generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                             base_mp=mp)
-    search_seconds = time.perf_counter() - setup_start - setup_seconds if plan_file is None else 0.0
+    digest, generated, search_seconds = _mutation_runs(project, names, loaded, mp_path, mp, scenarios, equivalent_file,
+                                                       mutants_file, (random_cycles, seed, backend, count), share)
     loaded += generated
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), mp)
@@ -656,19 +685,9 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                 raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
                              "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
             sites = mutation_sites(st_text)
-            mutants = choose(sites, count, seed)
-            if listed is not None:
-                mutants = [m for m in mutants if m.key in listed]
-            # A mutant's cost estimate is the cycles of every scenario: what it takes to survive (a kill stops early)
-            plan = Plan("mutate", digest, tuple(f"{m.pou}: {m.operator}: {m.description}" for m in mutants),
-                        (float(sum(s.cycles for s in judge.scenarios)),) * len(mutants), tuple(generated),
-                        time.perf_counter() - setup_start - search_seconds, search_seconds)
-            if calibrate > 0:
-                selected = sorted({1 + i * len(mutants) // calibrate for i in range(min(calibrate, len(mutants)))})
-            else:
-                selected = plan.selected(shard, only)
-            unit_ids = {mutants[i - 1]: i for i in selected}
-            mutants = [mutants[i - 1] for i in selected]
+            mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
+            plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
+            mutants = list(unit_ids)
             start = time.perf_counter()
             verdicts = []
             for verdict in judge_all(judge, mutants, jobs):

@@ -64,8 +64,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     line = ProgressLine("equiv", "cycles")
     try:
         check = api.check_equivalence(project, **inputs, vcd_dir=args.vcd, progress=_cycle_progress(line),
-                                      html=args.html is not None, shard=args.shard, only=args.only,
-                                      plan_file=args.plan_file)
+                                      html=args.html is not None,
+                                      share=api.Share(args.shard, args.only, args.plan_file))
     finally:
         line.close()
     print_diagnostics(check.diagnostics)

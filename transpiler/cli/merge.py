@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--min-score", type=float, metavar="F",
                    help="mutate: the minimum score (default: the one the shards ran with)")
     p.add_argument("-v", "--verbose", action="store_true", help="also a line for every run or mutant that passed")
-    p.set_defaults(handler=cmd_merge, command_parser=p)
+    # the parsers of the other subcommands: merge reads the arguments the shards recorded as their command does
+    p.set_defaults(handler=cmd_merge, command_parser=p, command_parsers=sub.choices)
 
 
 def _refuse(problems: list[tuple[str | None, str]]) -> int:
@@ -61,12 +62,11 @@ def cmd_merge(args: argparse.Namespace) -> int:
     return _refuse([(None, f"shard results of `{section['command']}`, which merge does not know")])
 
 
-def _recorded_args(section) -> argparse.Namespace | None:
+def _recorded_args(args: argparse.Namespace, section) -> argparse.Namespace | None:
     """The command's arguments as the shards recorded them, parsed as the command parses them."""
-    from transpiler.cli.app import build_parser
     from transpiler.cli.common import UsageError
     try:
-        return build_parser().parse_args([section["command"], *section["argv"]])
+        return args.command_parsers[section["command"]].parse_args(section["argv"])
     except (UsageError, SystemExit):
         return None
 
@@ -74,7 +74,7 @@ def _recorded_args(section) -> argparse.Namespace | None:
 def _merge_equiv(args: argparse.Namespace, section, shards: list[dict]) -> int:
     from transpiler.cli.equiv import print_coverage
     from transpiler.verify.equiv import FAILED_RUN, AGREED, data_json, junit_of, merge_reports, run_state
-    recorded = _recorded_args(section)
+    recorded = _recorded_args(args, section)
     if recorded is None:
         return _refuse([(None, f"the shards' arguments cannot be read: {' '.join(section['argv'])}")])
     project = project_from_args(recorded, scenario=recorded.scenario[0] if recorded.scenario else None)
@@ -130,11 +130,12 @@ def _what(run: dict) -> str:
 
 def _merge_mutate(args: argparse.Namespace, section, shards: list[dict]) -> int:
     from transpiler.cli.mutate import DEFAULT_MIN_SCORE
-    from transpiler.verify.mutate import EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, data_json, junit_of, merge_reports
+    from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, SURVIVED, data_json, junit_of,
+                                          merge_reports)
     scores = {data["shard"].get("min_score", DEFAULT_MIN_SCORE) for data in shards}
     if args.min_score is None and len(scores) > 1:
-        return _refuse([(None, f"the shards ran with different --min-score values ({', '.join(map(str, sorted(scores)))}): "
-                               "give merge --min-score")])
+        values = ", ".join(map(str, sorted(scores)))
+        return _refuse([(None, f"the shards ran with different --min-score values ({values}): give merge --min-score")])
     min_score = args.min_score if args.min_score is not None else scores.pop()
     if not 0.0 <= min_score <= 1.0:
         return _refuse([(None, "--min-score is a fraction between 0 and 1")])

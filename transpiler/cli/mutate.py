@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
+import time
 import sys
 from pathlib import Path
 
@@ -52,7 +54,7 @@ def register(sub: argparse._SubParsersAction, common) -> None:
 
 def cmd_mutate(args: argparse.Namespace) -> int:
     from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, KILLED_ANYWAY, OPERATORS, OUTCOMES,
-                                          SURVIVED, equivalents_yaml, report_json, report_junit, survivor_location)
+                                          SURVIVED, survivor_location)
     if not args.scenario and args.random_cycles <= 0:
         raise UsageError("mutate needs at least one --scenario or --random-cycles N")
     if args.jobs < 1:
@@ -72,8 +74,8 @@ def cmd_mutate(args: argparse.Namespace) -> int:
         return _plan(project, args, inputs)
     line = ProgressLine("mutate", "mutants judged")
     try:
-        run = api.mutate(project, **inputs, progress=line.update, shard=args.shard, only=args.only,
-                         plan_file=args.plan_file)
+        run = api.mutate(project, **inputs, progress=line.update,
+                         share=api.Share(args.shard, args.only, args.plan_file))
     finally:
         line.close()
     print_diagnostics(run.diagnostics)
@@ -105,6 +107,22 @@ def cmd_mutate(args: argparse.Namespace) -> int:
                 else "judged equivalent, but the translation has no such mutant: the entry is stale")
         print(f"{e.span}: note: {what}: {e.pou}: {e.mutation}: {e.st}")
     met = result.meets(args.min_score)
+    if not write_reports(_report_files(args, project, run)):
+        return EXIT_BAD_INPUT
+    if args.shard is not None:
+        print(f"hh2iec mutate: shard {args.shard}: {len(result.verdicts)} of {len(run.plan.names)} mutants judged; "
+              "`hh2iec merge` gives the score of all shards")
+        return EXIT_OK          # the score is one of all mutants: the merge compares it with the minimum
+    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
+          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
+          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
+    return EXIT_OK if met else EXIT_FAILED
+
+
+def _report_files(args: argparse.Namespace, project, run) -> dict:
+    """The files the arguments ask for; a shard's report carries its `shard` section (verify/shard.py)."""
+    from transpiler.verify.mutate import equivalents_yaml, report_json, report_junit
+    result = run.result
     files = {}
     if args.report:
         from transpiler import __version__
@@ -126,16 +144,7 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     if args.html is not None:
         from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = api.mutation_page(project, run, args.min_score)
-    if not write_reports(files):
-        return EXIT_BAD_INPUT
-    if args.shard is not None:
-        print(f"hh2iec mutate: shard {args.shard}: {len(result.verdicts)} of {len(run.plan.names)} mutants judged; "
-              "`hh2iec merge` gives the score of all shards")
-        return EXIT_OK          # the score is one of all mutants: the merge compares it with the minimum
-    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
-          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
-          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
-    return EXIT_OK if met else EXIT_FAILED
+    return files
 
 
 CALIBRATION_MUTANTS = 6
@@ -144,9 +153,11 @@ CALIBRATION_MUTANTS = 6
 def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
     """`--plan N`: the mutants and the estimated time of each of N shards, from a few mutants judged as a sample;
     `--plan-file` also writes the plan."""
-    run = api.mutate(project, **inputs, calibrate=CALIBRATION_MUTANTS)
-    plan = run.plan
+    start = time.perf_counter()
+    run = api.mutate(project, **inputs, share=api.Share(sample=CALIBRATION_MUTANTS))
     judged = run.result.verdicts
+    plan = dataclasses.replace(run.plan, setup_seconds=time.perf_counter() - start - run.result.seconds
+                               - run.plan.search_seconds)
     per_mutant = sum(v.seconds for v in judged) / len(judged) / max(1, args.jobs) if judged else 0.0
     per_cost = per_mutant / plan.costs[0] if plan.costs and plan.costs[0] else 0.0
     note = (f" (translation, scenarios, the unmutated run); {per_mutant:.2f} s per mutant with --jobs {args.jobs} "

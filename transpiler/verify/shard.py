@@ -67,7 +67,7 @@ def shard_loads(costs: Sequence[float], assignment: Sequence[int], count: int) -
     return list(zip(units, loads))
 
 
-def inputs_digest(command: str, version: str, files: Iterable[tuple[str, Path | None]],
+def inputs_digest(command: str, version: str, files: Iterable[tuple[str, Path | str | None]],
                   settings: Mapping[str, Any]) -> str:
     """SHA-256 over everything a result depends on: the tool's version, the command, each input file's role and
     content (in order; a missing optional file counts as absent) and the settings that change results. Paths are
