@@ -16,6 +16,7 @@ import argparse
 import dataclasses
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -37,12 +38,14 @@ def sample_equiv_args() -> list[str]:
 @dataclasses.dataclass
 class ShardedRun:
     plan_seconds: float
-    shard_seconds: list[float]          # wall time of each shard process (they ran at the same time)
+    shard_seconds: list[float]          # wall time of each shard process (when parallel, from the common start)
     shard_codes: list[int]
     merge_code: int
     merged: Path                        # the merged report
     junit: Path
     output: str                         # what the merge printed
+    shard_cpu: list[float] = dataclasses.field(default_factory=list)   # CPU seconds of each (sequential) shard
+    plan_cpu: float = 0.0
 
 
 def run_sharded(command: str, args: list[str], shards: int, out: Path, cwd: Path | None = None,
@@ -50,10 +53,10 @@ def run_sharded(command: str, args: list[str], shards: int, out: Path, cwd: Path
     """Plan once, run the shards (in parallel, or one after the other for timing), merge."""
     out.mkdir(parents=True, exist_ok=True)
     plan = out / "plan.json"
-    start = time.perf_counter()
+    start, plan_used = time.perf_counter(), _children_cpu()
     subprocess.run([*HH2IEC, command, *args, "--plan", str(shards), "--plan-file", str(plan)], cwd=cwd, env=ENV,
                    check=True, stdout=subprocess.DEVNULL)
-    plan_seconds = time.perf_counter() - start
+    plan_seconds, plan_cpu = time.perf_counter() - start, _children_cpu() - plan_used
     reports = [out / f"shard-{k}.json" for k in range(1, shards + 1)]
     commands = [[*HH2IEC, command, *args, "--plan-file", str(plan), "--shard", f"{k}/{shards}",
                  "--report", str(reports[k - 1])] for k in range(1, shards + 1)]
@@ -67,15 +70,32 @@ def run_sharded(command: str, args: list[str], shards: int, out: Path, cwd: Path
             codes.append(p.wait())
             ended.append(time.perf_counter())
         seconds = [e - started for e in ended]
-    else:
+    cpu: list[float] = []
+    if not parallel:
         for c in commands:
-            t = time.perf_counter()
+            t, used = time.perf_counter(), _children_cpu()
             codes.append(subprocess.run(c, cwd=cwd, env=ENV, stdout=subprocess.DEVNULL).returncode)
             seconds.append(time.perf_counter() - t)
+            cpu.append(_children_cpu() - used)
     merged, junit = out / "merged.json", out / "merged.junit.xml"
     done = subprocess.run([*HH2IEC, "merge", *map(str, reports), "--report", str(merged), "--junit", str(junit)],
                           cwd=cwd, env=ENV, capture_output=True, text=True)
-    return ShardedRun(plan_seconds, seconds, codes, done.returncode, merged, junit, done.stdout + done.stderr)
+    return ShardedRun(plan_seconds, seconds, codes, done.returncode, merged, junit, done.stdout + done.stderr, cpu,
+                      plan_cpu)
+
+
+def _children_cpu() -> float:
+    """CPU seconds of every finished child process so far (its forked helpers included): a figure a machine shared
+    with other work disturbs less than wall time."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def timed(command: list[str], cwd: Path | None = None) -> tuple[float, float, int]:
+    """(wall seconds, CPU seconds, exit status) of one hh2iec command line."""
+    t, used = time.perf_counter(), _children_cpu()
+    code = subprocess.run([*HH2IEC, *command], cwd=cwd, env=ENV, stdout=subprocess.DEVNULL).returncode
+    return time.perf_counter() - t, _children_cpu() - used, code
 
 
 def comparable(report: Path) -> dict:

@@ -180,22 +180,32 @@ def test_a_divergence_is_named_with_the_command_that_reproduces_it_alone(tmp_pat
     args = [*EQUIV_ARGS, "--st", str(wrong), "--no-shrink"]
     whole = tmp_path / "whole.json"
     assert main(["equiv", *args, "--report", str(whole)]) == 1
-    reports = _shards("equiv", args, 3, tmp_path, None)
+    plan = tmp_path / "plan.json"
+    assert main(["equiv", *args, "--plan", "3", "--plan-file", str(plan)]) == 0
+    reports = _shards("equiv", args, 3, tmp_path, plan)
     merged = tmp_path / "merged.json"
     capsys.readouterr()
     assert main(["merge", *map(str, reports), "--report", str(merged)]) == 1
     assert "NOT EQUIVALENT" in capsys.readouterr().out
-    assert comparable(merged) == comparable(whole)
+    # the shards' reproduce lines name the plan file they took the generated runs from; the rest is the same
+    assert _unreproduced(merged) == _unreproduced(whole)
     data = json.loads(merged.read_text())
     failures = data["shard"]["failures"]
     assert failures and all(f["reproduce"].startswith("hh2iec equiv ") for f in failures)
     first = failures[0]
     words = shlex.split(first["reproduce"])
-    assert words[-2:] == ["--only", str(first["run"])] and "--shard" not in words
+    assert words[-4:] == ["--plan-file", str(plan), "--only", str(first["run"])] and "--shard" not in words
     alone = tmp_path / "alone.json"
     assert main([*words[1:], "--report", str(alone)]) == 1
-    (run,) = comparable(alone)["runs"]
-    assert run == next(r for r in comparable(whole)["runs"] if r["run"] == first["run"])
+    (run,) = _unreproduced(alone)["runs"]
+    assert run == next(r for r in _unreproduced(whole)["runs"] if r["run"] == first["run"])
+
+
+def _unreproduced(report: Path) -> dict:
+    data = comparable(report)
+    for run in data["runs"]:
+        run.pop("reproduce", None)
+    return data
 
 
 # ---------------------------------------------------------------------------------------------
@@ -231,21 +241,22 @@ def test_merged_mutate_shards_equal_the_unsharded_run(mutate_whole, n, capsys):
 
 
 def test_sample_equiv_and_mutate_shards_merge_to_the_unsharded_result(tmp_path):
-    scenarios = [SAMPLE / "scenarios" / name for name in ("coolant_m8_m9.yaml", "spindle_m3_m5.yaml",
-                                                          "chip_conveyor.yaml", "modes_all.yaml",
-                                                          "lubrication_minutes.yaml")]
+    # the sample's shortest scenarios: the set-up of each shard (reading and translating the sample) is the point
+    scenarios = [SAMPLE / "scenarios" / f"{name}.yaml" for name in (
+        "init_spindle_tool_negative", "init_first_cycle_m_strobe_held", "machine_data_startup",
+        "power_on_dirty_counters", "gear_code_invalid")]
     base = [str(SAMPLE / "Main_PGM.src"), *(a for s in scenarios for a in ("--scenario", str(s))),
             "--random-cycles", "0", "--backend", "builtin"]
     assert main(["equiv", *base, "--report", str(tmp_path / "whole.json")]) == 0
     reports = _shards("equiv", base, 4, tmp_path, None)
     assert main(["merge", *map(str, reports), "--report", str(tmp_path / "merged.json")]) == 0
     assert comparable(tmp_path / "merged.json") == comparable(tmp_path / "whole.json")
-    mutate = [*base, "--count", "8", "--jobs", "1", "--min-score", "0"]
+    mutate = [*base, "--count", "4", "--jobs", "1", "--min-score", "0"]
     assert main(["mutate", *mutate, "--report", str(tmp_path / "mwhole.json")]) == 0
     reports = _shards("mutate", mutate, 4, tmp_path, None)
     assert main(["merge", *map(str, reports), "--report", str(tmp_path / "mmerged.json")]) == 0
     whole = comparable(tmp_path / "mwhole.json")
-    assert whole["judged"] == 8 and comparable(tmp_path / "mmerged.json") == whole
+    assert whole["judged"] == 4 and comparable(tmp_path / "mmerged.json") == whole
 
 
 def test_the_make_shards_recipe_runs_parallel_processes_and_merges(tmp_path):
@@ -257,3 +268,15 @@ def test_the_make_shards_recipe_runs_parallel_processes_and_merges(tmp_path):
     assert "hh2iec merge: equiv EQUIVALENT" in run.output
     merged = json.loads(run.merged.read_text())
     assert merged["shard"]["merged"] == 2 and merged["verdict"] == "EQUIVALENT"
+
+
+def test_difftest_shards_deal_out_the_programs_once_each():
+    import argparse
+    from tests.difftest.run import jobs_for, main as difftest_main
+    base = dict(count=10, seed=3, size=20, cycles=50, backends="builtin", matiec_every=10, only=None)
+    whole = [job.program_seed for job in jobs_for(argparse.Namespace(**base, shard=None))]
+    shares = [[job.program_seed for job in jobs_for(argparse.Namespace(**base, shard=ShardSpec(k, 3)))]
+              for k in (1, 2, 3)]
+    assert sorted(s for share in shares for s in share) == whole and all(shares)
+    with pytest.raises(SystemExit):
+        difftest_main(["--count", "2", "--shard", "4/3"])

@@ -335,7 +335,9 @@ def report_data(result: EquivalenceResult, reproduce: Callable[[int], str] | Non
     data = _report(result.backend, runs, [{"at": str(span), "what": text} for span, text in result.untranslated],
                    result.coverage, result.source)
     if shard is not None:
-        data["shard"] = {**shard, "coverage": [[run_id, encode_coverage(o.result.coverage)]
+        # each run's sets as one compact JSON text: thousands of items per run, one line each in the indented report
+        data["shard"] = {**shard, "coverage": [[run_id, json.dumps(encode_coverage(o.result.coverage),
+                                                                   separators=(",", ":"))]
                                                for run_id, o in zip(ids, result.outcomes)
                                                if o.result.coverage is not None]}
     return data
@@ -412,7 +414,7 @@ def merge_reports(shards: list[Mapping[str, Any]], program: Program) -> dict[str
     """One report from the reports of every shard (checked with shard.check_shards first): the runs in plan order,
     the coverage recomputed from the runs' coverage sets as one process computes it, the verdict of all runs."""
     runs = sorted((run for data in shards for run in data["runs"]), key=lambda run: run["run"])
-    sets = [decode_coverage(encoded, Coverage)
+    sets = [decode_coverage(json.loads(encoded), Coverage)
             for _, encoded in sorted((item for data in shards for item in data["shard"]["coverage"]),
                                      key=lambda item: item[0])]
     summary, source = coverage_of(program, sets)
