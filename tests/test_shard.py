@@ -73,9 +73,9 @@ def test_coverage_sets_go_through_json_unchanged():
     assert decode_coverage(json.loads(json.dumps(encode_coverage(cov))), Coverage) == cov
 
 
-def _section(index, count=3, digest="d1", units=3, ran=None, command="equiv"):
+def _section(index, count=3, digest="d1", units=3, ran=None, command="equiv", plan="p1"):
     return {"shard": {"format": 1, "command": command, "index": index, "count": count, "digest": digest,
-                      "units": units, "ran": ran if ran is not None else [index], "argv": []}}
+                      "plan": plan, "units": units, "ran": ran if ran is not None else [index], "argv": []}}
 
 
 def test_check_shards_refuses_what_does_not_belong_together():
@@ -89,6 +89,7 @@ def test_check_shards_refuses_what_does_not_belong_together():
         "command": ([*good[:2], ("other.json", _section(3, command="mutate"))], "differ in their command"),
         "not a shard": ([*good, ("plain.json", {"runs": []})], "not a shard result"),
         "unit twice": ([*good[:2], ("s3.json", _section(3, ran=[2]))], "unit 2 was run by both"),
+        "plan": ([*good[:2], ("s3.json", _section(3, plan="p2"))], "differ in their plan"),
     }
     for name, (shards, message) in cases.items():
         with pytest.raises(MergeRefused) as refused:

@@ -80,8 +80,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         argv = input_argv(args)
         plan_file = str(args.plan_file) if args.plan_file is not None else None
         section = None if args.shard is None else shard_section(
-            "equiv", args.shard, check.plan.digest, __version__, argv, len(check.plan.names), result.run_ids,
-            plan_file=plan_file)
+            "equiv", args.shard, check.plan.digest, __version__, argv, (check.plan.names, check.plan.costs),
+            result.run_ids, plan_file=plan_file)
         files[args.report] = report_json(result, lambda run: reproduce_command("equiv", argv, run, plan_file), section)
     if args.junit:
         files[args.junit] = report_junit(result)

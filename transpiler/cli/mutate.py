@@ -130,7 +130,7 @@ def _report_files(args: argparse.Namespace, project, run) -> dict:
         argv = input_argv(args)
         plan_file = str(args.plan_file) if args.plan_file is not None else None
         section = None if args.shard is None else shard_section(
-            "mutate", args.shard, run.plan.digest, __version__, argv, len(run.plan.names),
+            "mutate", args.shard, run.plan.digest, __version__, argv, (run.plan.names, run.plan.costs),
             sorted(run.unit_ids.values()), plan_file=plan_file, min_score=args.min_score)
         files[args.report] = report_json(result, run.st_text, run.unit_ids,
                                          lambda unit: reproduce_command("mutate", argv, unit, plan_file), section)

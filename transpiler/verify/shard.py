@@ -147,11 +147,16 @@ def _item(value: Any) -> Any:
 # The shard section and its checks
 
 
-def shard_section(command: str, spec: ShardSpec, digest: str, version: str, argv: Sequence[str], units: int,
-                  ran: Sequence[int], **extra: Any) -> dict[str, Any]:
-    """The `shard` section of a shard's JSON result: enough to check a set of shards and to merge them."""
+def shard_section(command: str, spec: ShardSpec, digest: str, version: str, argv: Sequence[str],
+                  plan: tuple[Sequence[str], Sequence[float]], ran: Sequence[int], **extra: Any) -> dict[str, Any]:
+    """The `shard` section of a shard's JSON result: enough to check a set of shards and to merge them. `plan` is
+    the names and costs of every unit: shards that planned differently (another Python's generated runs, say) are
+    told apart by its fingerprint even where the inputs' digest agrees."""
+    names, costs = plan
+    fingerprint = hashlib.sha256(json.dumps([list(names), list(costs)]).encode("utf-8")).hexdigest()
     return {"format": FORMAT, "command": command, "index": spec.index, "count": spec.count, "digest": digest,
-            "version": version, "argv": list(argv), "units": units, "ran": list(ran), **extra}
+            "plan": fingerprint, "version": version, "argv": list(argv), "units": len(names), "ran": list(ran),
+            **extra}
 
 
 class MergeRefused(ValueError):
@@ -178,7 +183,8 @@ def check_shards(shards: Sequence[tuple[str, Mapping[str, Any]]]) -> Mapping[str
         raise MergeRefused(problems or ["no shard results given"])
     first_name, first = sections[0]
     for key, what in (("command", "command"), ("digest", "inputs (sources, scenarios, settings or hh2iec version)"),
-                      ("count", "shard count N")):
+                      ("count", "shard count N"),
+                      ("plan", "plan (the same inputs gave other runs: give every shard the same --plan-file)")):
         for name, section in sections[1:]:
             if section.get(key) != first.get(key):
                 problems.append(f"{name} and {first_name} differ in their {what}: "
