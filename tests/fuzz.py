@@ -39,7 +39,7 @@ from transpiler.frontend.load import Parsers, ProjectOptions  # noqa: E402
 from transpiler.frontend.pipeline import CompileResult, compile_project  # noqa: E402
 from transpiler.language.semantics import make_semantics  # noqa: E402
 
-SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp")
+SOURCE_SUFFIXES = (".src", ".def", ".cfg", ".inc", ".mp", ".msk", ".a")     # .msk, .a: screen masks
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,6 +107,9 @@ VOCAB_TOKENS = [
     b"M0", b"M4172", b"M99999", b"I 3", b"W3", b"W4", b"D8", b"B0", b"K0", b"K-2147483648", b"K2147483648",
     b"K$FFFFFFFFF", b"K%1", b"S0", b"S#D4095", b"X", b"[X]", b"KF", b"MG_x", b"#if", b"#else", b"#endif",
     b"USES", b"GLOBAL", b"EXTERN", b"&", b"/c", b"/g", b";", b"\"", b"*", b"9032", b"-1", b"",
+    # screen masks
+    b"$", b"$WG_tc_status$", b"$nope$", b"/*", b"*/", b"%", b"%%", b"%999D", b"%+5.0F", b"%s", b"\\n", b"\\",
+    b",", b"/n=3", b"/n=99", b"/x", b"ERRQUE=10/c/l/s;", b"ERRQUE=0;", b"CHARSIZE=AUTO;", b"S1/c", b"S99999",
 ]
 
 

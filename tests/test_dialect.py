@@ -48,8 +48,11 @@ def sample():
 def test_matiec_targets_write_the_golden_text(sample, target):
     assert sample[target].files["project.st"] == (GOLDEN / "project.st").read_bytes()
     assert "README.md" not in sample[target].files
-    # The only folder is the editors' project, whose plc.xml is project.xml itself.
-    assert {name for name in sample[target].files if "/" in name} == {"plc_project/plc.xml", "plc_project/beremiz.xml"}
+    # The only folders are the editors' project, whose plc.xml is project.xml itself, and the screen masks' JSON.
+    assert {name for name in sample[target].files if "/" in name and not name.startswith("masks/")} == {
+        "plc_project/plc.xml", "plc_project/beremiz.xml"}
+    assert {name for name in sample[target].files if name.startswith("masks/")} == {
+        "masks/M_dia_wz.msk.json", "masks/M_dia_a1.msk.json", "masks/M_error.a.json"}
     assert sample[target].files["plc_project/plc.xml"] == sample[target].files["project.xml"]
     stamp = re.compile(rb"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d")
     assert stamp.sub(b"", sample[target].files["project.xml"]) == stamp.sub(b"", sample["matiec"].files["project.xml"])

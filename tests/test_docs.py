@@ -15,7 +15,7 @@ from transpiler.language.semantics import ASSUMPTIONS, PROFILES
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGES = ("getting-started", "cli", "scenarios", "language", "assumptions", "import", "ci", "modules", "api", "hh_lib")
+PAGES = ("getting-started", "cli", "scenarios", "language", "assumptions", "import", "ci", "modules", "api", "hh_lib", "masks")
 # A citation of the internal reference ("spec 6.5", the file names of the language description) points users at a
 # text they do not have; messages and generated comments point at docs/ pages instead.
 SPEC_CITATION = re.compile(r"spec [0-9]+[a-z]?\.[0-9]+|spec (sections? )?[0-9]+[a-z]?\b|heidenhain-plc\.md|"

@@ -12,7 +12,13 @@ from transpiler.frontend.parse import MpParser
 
 # (id, files, expected errors as (code, file, line, col)); the list is the complete error list,
 # so every case also checks that one fault gives one error (no cascade).
+_MASK_PROGRAM = {"main.src": "#define /g d.def\nL I_a\n= WG_status\nEM\n", "d.def": "I_a I 1\nWG_status W 100\n",
+                 "OEM.cfg": ""}
 ERROR_CASES = [
+    # screen masks beside the main program (docs/masks.md)
+    ("mask-syntax", {**_MASK_PROGRAM, "s.msk": '"DIAG\\n"\nCHARSIZE=AUTO;\n'}, [("E-MASK-SYNTAX", "s.msk", 2, 1)]),
+    ("mask-undef", {**_MASK_PROGRAM, "s.msk": '" %4D\\n",\n  $WG_stauts$/c;\n'}, [("E-MASK-UNDEF", "s.msk", 2, 3)]),
+    ("mask-format", {**_MASK_PROGRAM, "e.a": '"%s\\n", $WG_status$/c;\n'}, [("E-MASK-FORMAT", "e.a", 1, 9)]),
     # preprocessor (spec 3.2, 17b.11: an unclosed #if is reported at the line that opened it)
     ("pp-missing-endif", {"main.src": "L   I1\n#if A = 1\n=   O1\nEM\n", "OEM.cfg": ""}, [("E-PP-NEST", "main.src", 2, 1)]),
     # no configuration at all: one root error at the first #if on an undefined name, not a warning per #if

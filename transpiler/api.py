@@ -31,6 +31,7 @@ from transpiler.language.semantics import Semantics, SemanticsError, make_semant
 
 if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
     from transpiler.verify.shard import ShardSpec
+    from transpiler.verify.screens import Screen, ScreenRequest
     from transpiler.verify.equiv import EquivalenceResult
     from transpiler.verify.mutate import MutationResult
     from transpiler.verify.scenario import Scenario
@@ -274,10 +275,22 @@ class Simulation:
     scenario: Scenario
     run: SimulationResult
     diagnostics: tuple[Diagnostic, ...]
+    screens: tuple[Screen, ...] = ()       # the masks asked for with `show_masks`, drawn from the interpreter
 
 
-def simulate(project: Project, scenario: Path) -> Simulation:
-    """Run the original program under a scenario file (expectations checked, trace kept)."""
+def screen_requests(project: Project, show_masks: Iterable[str]) -> list[ScreenRequest]:
+    """The `NAME@CYCLE` texts as requests for the project's masks; raises HH2IECError (E-USAGE) on a name that is no
+    mask of the project or a text without a cycle."""
+    from transpiler.verify.screens import parse_requests
+    requests, problems = parse_requests(project.program.masks, show_masks)
+    if problems:
+        raise CompileFailed([Diagnostic.of("E-USAGE", NO_SPAN, p) for p in problems])
+    return requests
+
+
+def simulate(project: Project, scenario: Path, show_masks: Iterable[str] = ()) -> Simulation:
+    """Run the original program under a scenario file (expectations checked, trace kept). `show_masks` (`NAME@CYCLE`,
+    docs/masks.md) draws those masks from the interpreter's operands after those cycles."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify.scenario import load_scenario
     from transpiler.verify.stimulus import build_stimulus
@@ -285,19 +298,31 @@ def simulate(project: Project, scenario: Path) -> Simulation:
     scenario = Path(scenario)
     if not scenario.is_file():
         raise _usage(f"scenario file '{scenario}' does not exist")
+    from transpiler.verify.screens import Screen, render_mask
+    requests = screen_requests(project, show_masks)
     names = project_names(project.program)
     diags = Diagnostics()
     loaded = load_scenario(scenario, names)
     diags.extend(loaded.warnings)
     stimulus = build_stimulus(loaded, names)
     diags.extend(stimulus.diagnostics)
+    drawn: dict[int, tuple[str, ...]] = {}
+
+    def draw(cycle: int, machine) -> None:
+        for i, request in enumerate(requests):
+            if request.cycle == cycle:
+                drawn[i] = render_mask(request.mask, machine.read, project.program)
     try:
-        run = run_scenario(project.program, loaded, names, stimulus, diags=diags)
+        run = run_scenario(project.program, loaded, names, stimulus, diags=diags,
+                           after_cycle=draw if requests else None)
     except ShimUnavailable as exc:
         raise CompileFailed(list(diags.items) + [Diagnostic.of("E-TOOL", Span(str(scenario), 1, 1), str(exc))]) from None
     _fail_on_warnings(project, diags, "of the simulation", run.warnings)
     diags.raise_if_errors()
-    return Simulation(loaded, run, tuple(diags.items))
+    screens = tuple(Screen(loaded.name or scenario.stem, r.mask.name, r.cycle, drawn.get(i),
+                           note="" if i in drawn else f"the run ended after {run.cycles_run} cycles")
+                    for i, r in enumerate(requests))
+    return Simulation(loaded, run, tuple(diags.items), screens)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -430,7 +455,12 @@ class Equivalence:
     backend_note: str
     diagnostics: tuple[Diagnostic, ...]
     html_page: bytes | None = None          # the evidence as one HTML page, when asked for
+    screens: tuple[Screen, ...] = ()        # the masks asked for, drawn from both sides of each scenario's run
     plan: "Plan | None" = None              # every run of the check, of which `result` holds the selected ones
+
+    @property
+    def screens_differ(self) -> bool:
+        return any(s.differs for s in self.screens)
 
     @property
     def equivalent(self) -> bool:
@@ -547,22 +577,30 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
                       mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
                       progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
-                      allow_untranslated: bool = False, html: bool = False, share: Share = EVERYTHING) -> Equivalence:
+                      allow_untranslated: bool = False, html: bool = False, show_masks: Iterable[str] = (),
+                      share: Share = EVERYTHING) -> Equivalence:
     """Co-simulate the original program and its translation (or `st_file`) under each scenario and
     `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST runs exactly
     as written, with the presets of the machine parameters it was made with; a scenario whose own machine
     parameters give other presets ends its run with an error. With `allow_untranslated`, a translation that left
     code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
-    one self-contained HTML page (each divergent run replayed once more with every cycle recorded).
-    `share` picks the runs of the plan to make (a shard's, one alone) and where the generated ones come from."""
+    one self-contained HTML page (each divergent run replayed once more with every cycle recorded). `show_masks`
+    (`NAME@CYCLE`) replays each scenario once more and draws those masks from both sides after those cycles
+    (Equivalence.screens; a pair of screens that differ is a finding of its own, `screens_differ`). `share` picks
+    the runs of the plan to make (a shard's, one alone) and where the generated ones come from."""
     from transpiler.exec.compiled.shim import ShimUnavailable
     from transpiler.verify import pipeline
     from transpiler.verify.equiv import run_equivalence
-    setup = _equivalence_setup(project, [Path(p) for p in scenarios], random_cycles, seed, backend, st_file,
-                               io_map_file, mp_file, shrink, allow_untranslated, share.plan_file)
+    scenarios = [Path(p) for p in scenarios]
+    requests = screen_requests(project, show_masks)
+    if requests and not scenarios:
+        raise _usage("--show-mask draws masks in the runs of --scenario files: give at least one")
+    setup = _equivalence_setup(project, scenarios, random_cycles, seed, backend, st_file, io_map_file, mp_file,
+                               shrink, allow_untranslated, share.plan_file)
     chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
     selected = setup.plan.selected(share)
     loaded = [setup.runs[i - 1] for i in selected]
+    user_scenarios = setup.runs[:len(scenarios)]        # the plan lists the user's scenarios first
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
@@ -578,10 +616,14 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
                                                     f"Equivalence of {project.main.name}", traces,
                                                     project.options.encoding))
+        screens: tuple = ()
+        if requests:
+            from transpiler.verify.screens import draw_both_sides
+            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, mp)
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, setup.st_name, chosen.note, tuple(setup.diagnostics.items) + tuple(chosen.diagnostics),
-                       page, setup.plan)
+                       page, screens, setup.plan)
 
 
 @dataclasses.dataclass(frozen=True)

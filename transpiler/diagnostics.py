@@ -127,6 +127,14 @@ CODES: dict[str, CodeInfo] = {
            "message names the nearest known numbers (docs/modules.md)", "CM 9999"),
         # lints
         _c("W-LINT", "warning", "the program depends on a corner of the semantics that is legal but easy to misread", "L I1\n= O1\nA I2"),
+        # screen masks
+        _c("E-MASK-SYNTAX", "error", "a screen mask (.msk, .a) statement is malformed (docs/masks.md)",
+           '"DIAG TOOL CHANGE\\n"     /* the closing semicolon is missing */'),
+        _c("E-MASK-UNDEF", "error", "a screen mask names a symbol the project does not define (the message names the "
+           "nearest ones), or a reference that is neither $SYMBOL$ nor an operand", '" %4D\\n", $WG_tc_stauts$/c;'),
+        _c("E-MASK-FORMAT", "error", "a screen mask's format does not suit its references: %s of a number, %d of a "
+           "string, /n=k without an F format, a constant, or more or fewer references than fields",
+           '" %s\\n", $WG_tc_status$/c;     /* WG_tc_status is a word */'),
         # runtime (interpreter)
         _c("E-RT-STACK-OVERFLOW", "error", "data stack overflow",
            "LBL Fill\nPS  K1      ; two 16-bit words per push: the 129th overflows 256 words\nJP  Fill"),

@@ -118,6 +118,79 @@ class Symbol:
         return f"K{self.addr}" if self.kind == "K" else f"{self.kind}{self.addr}"
 
 
+# ---- screen masks (.msk, .a): what the operator's PLC window shows
+
+
+@dataclasses.dataclass(frozen=True)
+class MaskRef:
+    """What one field of a mask shows: a symbol `$NAME$`, an operand written by number (`S1`, `W230`), with its
+    modifiers (`/c`, `/n=3`). `kind`/`addr` are the operand once resolved ('' before, or when it did not resolve)."""
+
+    text: str                               # as written, without modifiers: "$WG_tc_status$", "S1"
+    symbol: str | None                      # the symbol name of a $NAME$ reference
+    modifiers: tuple[str, ...]              # "c", "n=3", ...
+    span: Span
+    kind: str = ""                          # M I O T C B W D S once resolved
+    addr: int = 0
+
+    @property
+    def operand(self) -> str:
+        return f"{self.kind}{self.addr}" if self.kind else ""
+
+    @property
+    def decimals(self) -> int:
+        """`/n=k`: the value is a fixed-point number with k decimal places (0 without /n)."""
+        for m in self.modifiers:
+            if m.startswith("n="):
+                return int(m[2:])
+        return 0
+
+
+@dataclasses.dataclass(frozen=True)
+class MaskField:
+    """One printf-like field of a formatted line (`%4D`, `%+5.0F`, `%s`) and the reference it shows."""
+
+    spec: str                               # as written: "%+5.0F"
+    flags: str                              # of "+-0 #"
+    width: int | None
+    precision: int | None
+    conversion: str                         # d D s F
+    ref: MaskRef
+
+
+@dataclasses.dataclass(frozen=True)
+class MaskStatement:
+    """One statement of a mask, in file order.
+
+    kind "text": static text (`pieces` is one string); "line": a formatted line (`pieces` alternate text and
+    fields); "setting": KEY=VALUE (`key`, `value`); "errque": the error queue, `lines` lines of it."""
+
+    kind: str
+    span: Span
+    pieces: tuple[str | MaskField, ...] = ()
+    key: str = ""
+    value: str = ""
+    lines: int = 0
+    modifiers: tuple[str, ...] = ()
+
+    @property
+    def fields(self) -> tuple[MaskField, ...]:
+        return tuple(p for p in self.pieces if isinstance(p, MaskField))
+
+
+@dataclasses.dataclass(frozen=True)
+class Mask:
+    """A screen mask file: its name (the file name), display path and statements."""
+
+    name: str
+    file: str
+    statements: tuple[MaskStatement, ...]
+
+    @property
+    def fields(self) -> tuple[MaskField, ...]:
+        return tuple(f for s in self.statements for f in s.fields)
+
+
 @dataclasses.dataclass(frozen=True)
 class Program:
     """The resolved program: per-file code, symbols, call graph facts; the single source of truth for backends."""
@@ -135,6 +208,7 @@ class Program:
     line_count: int = 0
     config_file: str | None = None                      # the configuration read (display path), if any
     command_line_defines: tuple[tuple[str, object], ...] = ()   # the -D values, in name order
+    masks: tuple[Mask, ...] = ()            # the project's screen masks, references resolved
 
     @property
     def main(self) -> FileCode:

@@ -1,6 +1,6 @@
 """Runs the back ends on one IR program: the ST back end decides the IEC project (once for matiec, and once more
 for a target that writes its POUs otherwise), the writers print it as ST and PLCopen XML (and the libraries HH_Lib
-and HH_Sys as files of their own), the report module adds report.md and io_map.csv; for TwinCAT the PLC project
+and HH_Sys as files of their own), the report module adds report.md, io_map.csv and the screen masks as JSON; for TwinCAT the PLC project
 folder follows, and where the import creates no task, a README.md that says which task to create. Returns file
 contents (names may hold '/' for sub-folders); writing is the caller's job."""
 
@@ -20,7 +20,8 @@ from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LI
 from transpiler.backends.plcopen.project_folder import project_folder
 from transpiler.backends.report.loading import how_to_load
 from transpiler.backends.readme import README_FILE, render_readme
-from transpiler.backends.report.report import render_io_map, render_report
+from transpiler.backends.report.report import io_map_of, render_io_map, render_report
+from transpiler.backends.report.screens import mask_files
 from transpiler.backends.twincat.layout import plan_project
 from transpiler.backends.twincat.writer import render_project
 
@@ -75,6 +76,8 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     native = plan_project(laid_out) if chosen.project_folder == "twincat" and "st" in formats else None
     if native is not None:
         files.update(render_project(native))
+    # The screen masks as data for an HMI, bound to the variables of this translation.
+    files.update(mask_files(program, io_map_of(result)))
     written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
     if chosen.task_by_hand:
         files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")

@@ -52,7 +52,7 @@ def summary(result: CompileResult) -> dict:
                     instructions=program.instruction_count(), lines=program.line_count,
                     routines=len(program.routines), call_depth=program.call_depth,
                     auto_assigned=len(program.auto_assigned), plc_modules=list(program.modules_used),
-                    profile=program.semantics.profile.name)
+                    profile=program.semantics.profile.name, masks=[m.file for m in program.masks])
     return data
 
 
@@ -71,6 +71,8 @@ def cmd_check(args: argparse.Namespace) -> int:
                 print(f"  {key:<14} {data[key]}")
         if data.get("plc_modules"):
             print(f"  {'plc modules':<14} {', '.join(map(str, data['plc_modules']))}")
+        if data.get("masks"):
+            print(f"  {'screen masks':<14} {', '.join(data['masks'])}")
     return EXIT_BAD_INPUT if result.diagnostics.has_errors() else EXIT_OK
 
 

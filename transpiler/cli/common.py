@@ -100,7 +100,8 @@ def write_reports(files: dict) -> bool:
 # Flags that choose what a run writes or how it is split, not what it finds: left out of the arguments a shard
 # records (merge loads the project from them, and the command that reproduces a failure repeats them).
 NOT_INPUTS = frozenset({"shard", "plan", "plan_file", "only", "report", "junit", "cobertura", "lcov", "vcd", "html",
-                        "verbose", "survivors", "mutation_report", "jobs", "help", "handler", "command_parser"})
+                        "verbose", "survivors", "mutation_report", "jobs", "help", "handler", "command_parser",
+                        "show_mask"})
 
 
 def shard_spec(text: str):
@@ -174,3 +175,10 @@ def print_plan(command: str, plan, count: int, seconds_per_cost: float, unit: st
         print(f"  shard {k}/{count}: {units} {unit}, about {plan.setup_seconds + cost * seconds_per_cost:.0f} s")
     print(f"  unsharded: about {plan.setup_seconds + total * seconds_per_cost:.0f} s; the largest shard carries "
           f"{100.0 * max(c for _, c in loads) / total if total else 0:.0f}% of the work")
+
+
+def print_screens(screens) -> None:
+    """The screen masks asked for with --show-mask, each framed under a title line (stdout)."""
+    from transpiler.verify.screens import render_text
+    for screen in screens:
+        print(render_text(screen), end="")

@@ -9,7 +9,7 @@ from typing import Callable
 
 from transpiler import api
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
-                                   check_shard_arguments, input_argv, print_diagnostics, print_plan,
+                                   check_shard_arguments, input_argv, print_diagnostics, print_plan, print_screens,
                                    project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
@@ -38,6 +38,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--html", type=Path, metavar="DIR",
                    help="write the evidence as one self-contained page, DIR/index.html: verdict, runs, each "
                         "divergence as a timeline, every source file with its coverage")
+    p.add_argument("--show-mask", action="append", default=[], metavar="NAME@CYCLE",
+                   help="replay each --scenario and print the screen mask NAME after CYCLE from both sides; screens "
+                   "that differ fail the run (exit 1; repeatable; docs/masks.md)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also a line for every equivalent run and the list of what no run covered")
     add_shard_arguments(p, "runs")
@@ -54,6 +57,8 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     if args.st is not None and not args.st.is_file():
         raise UsageError(f"ST file '{args.st}' does not exist")
     check_shard_arguments(args)
+    if args.show_mask and (args.shard is not None or args.plan is not None):
+        raise UsageError("--show-mask replays the scenarios in one process: give it without --shard and --plan")
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
     inputs = dict(scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed, backend=args.backend,
@@ -64,7 +69,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     line = ProgressLine("equiv", "cycles")
     try:
         check = api.check_equivalence(project, **inputs, vcd_dir=args.vcd, progress=_cycle_progress(line),
-                                      html=args.html is not None,
+                                      html=args.html is not None, show_masks=args.show_mask,
                                       share=api.Share(args.shard, args.only, args.plan_file))
     finally:
         line.close()
@@ -73,6 +78,7 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         print(f"note: {check.backend_note}", file=sys.stderr)
     result = check.result
     _print_outcomes(result, args.verbose)
+    print_screens(check.screens)
     files = {}
     if args.report:
         from transpiler import __version__
@@ -102,11 +108,17 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     if args.shard is not None and not result.outcomes:
         print(f"hh2iec equiv: {share}nothing to run; `hh2iec merge` gives the verdict of all shards")
         return EXIT_OK
-    print(f"hh2iec equiv: {share}{result.verdict} ({len(result.outcomes)} runs, "
+    headline = result.verdict
+    if check.screens_differ:
+        # The screens are a finding of their own: the headline must not read as a pass when the operator's view
+        # differs, whatever the compared operands say.
+        differing = sorted({f"{s.mask} after cycle {s.cycle} of {s.scenario}" for s in check.screens if s.differs})
+        headline = f"SCREENS DIFFER: {'; '.join(differing)}; compared operands: {result.verdict}"
+    print(f"hh2iec equiv: {share}{headline} ({len(result.outcomes)} runs, "
           f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
-    return EXIT_OK if result.equivalent else EXIT_FAILED
+    return EXIT_OK if result.equivalent and not check.screens_differ else EXIT_FAILED
 
 
 def _plan(project, args: argparse.Namespace, inputs: dict) -> int:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from transpiler import api
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
-                                   project_from_args)
+                                   print_screens, project_from_args)
 
 
 def register(sub: argparse._SubParsersAction, common) -> None:
@@ -17,6 +17,9 @@ def register(sub: argparse._SubParsersAction, common) -> None:
     p.add_argument("--scenario", type=Path, required=True, help="scenario file (YAML, see docs/scenarios.md)")
     p.add_argument("--trace", type=Path, metavar="OUT.csv", help="write one row per cycle with the observed values")
     p.add_argument("--vcd", type=Path, metavar="OUT.vcd", help="write the trace as a value-change dump (GTKWave)")
+    p.add_argument("--show-mask", action="append", default=[], metavar="NAME@CYCLE",
+                   help="print the screen mask NAME (M_dia_wz.msk or M_dia_wz) as the PLC window shows it after CYCLE "
+                   "(repeatable; docs/masks.md)")
     p.set_defaults(handler=cmd_simulate)
 
 
@@ -28,8 +31,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             raise UsageError(f"{flag} {path}: folder '{path.parent}' does not exist")
     project = project_from_args(args, scenario=args.scenario)
     print_diagnostics(project.diagnostics)
-    sim = api.simulate(project, args.scenario)
+    sim = api.simulate(project, args.scenario, show_masks=args.show_mask)
     print_diagnostics(sim.diagnostics)
+    print_screens(sim.screens)
     return _report(args, sim)
 
 

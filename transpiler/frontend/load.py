@@ -9,6 +9,8 @@ from typing import Iterator, Mapping
 from transpiler.frontend import ast
 from transpiler.diagnostics import Diagnostics, Span, NO_SPAN
 from transpiler.frontend.mainfile import is_module
+from transpiler.frontend.masks import read_masks
+from transpiler.ir import Mask
 from transpiler.frontend.parse import DefParser, SrcParser
 from transpiler.frontend.preprocess import (DefineValue, Defines, InactiveRegion, PPParser, Preprocessor, find_default_cfg,
                          initial_defines, read_config, unused_overrides)
@@ -37,6 +39,7 @@ class ParsedProject:
     labels_incomplete: bool = False
     number_mp4111: int | None = None     # DEFINE NUMBERMP4111 of the configuration (A-37), when set
     config_file: str | None = None       # display path of the configuration read
+    masks: tuple[Mask, ...] = ()         # the screen masks beside the main program, references unresolved
 
 
 MAX_NUMBER_MP4111 = 904             # T96 ... T999
@@ -156,10 +159,11 @@ class _Loader:
                 local_defs.setdefault(owner, []).extend(defs)
         number_mp4111 = self._number_mp4111()
         unused_overrides(self.defines, self.diags)
+        masks = read_masks(opts.main, self.folders, self.diags, opts.encoding)
         return ParsedProject(tuple(src_files), tuple(global_defs), {k: tuple(v) for k, v in local_defs.items()},
                              dict(self.defines.values), tuple(self.inactive), tuple(self.files_read), self.line_count,
                              frozenset(self.symbols_incomplete), self.labels_incomplete, number_mp4111,
-                             self.config_file)
+                             self.config_file, masks)
 
     def _number_mp4111(self) -> int | None:
         """DEFINE NUMBERMP4111 = n of the configuration (OEM.SYS's setting), checked against T96 ... T999."""

@@ -15,6 +15,7 @@ from transpiler.frontend.flow import (LOST_LINE_CODES, check_flow, check_module_
                                       successors)
 from transpiler.frontend.load import ParsedProject
 from transpiler.frontend.lowering import FileLowering
+from transpiler.frontend.mask_refs import resolve_masks
 from transpiler.frontend.symbols import build_symbols
 from transpiler.ir import FileCode, Program
 from transpiler.language.semantics import Semantics
@@ -40,7 +41,8 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics,
             check_flow(i, f, diags)
     check_module_starts(files, lowerings, diags)
     routines, depth = call_graph(files, semantics, diags)
+    masks = resolve_masks(project.masks, symbols, semantics, diags)
     modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
     return Program(files, symbols.all_symbols(), semantics, routines, depth, tuple(modules), project.files_read,
                    dict(project.defines), project.inactive, tuple(auto), project.line_count, project.config_file,
-                   tuple(sorted(overrides.items())))
+                   tuple(sorted(overrides.items())), masks)

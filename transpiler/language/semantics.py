@@ -73,6 +73,11 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
                "spelling)"),
     Assumption("A-62", "marker_structs", True, (False,), "markers sharing a symbol prefix (ML_ax_*) as one STRUCT "
                "(how the ST is written, not what the control does)", layout_only=True),
+    Assumption("A-63", "mask_d_format", "signed", ("d_unsigned",), "screen masks: %d and %D both show the operand's "
+               "signed value (d_unsigned: %d shows it unsigned within the operand's width, %D stays signed)"),
+    Assumption("A-64", "mask_c_modifier", "printf", ("clip",), "screen masks: the undocumented /c modifier changes "
+               "nothing, a value wider than its field widens the line as printf does (clip: /c fills such a field "
+               "with '*')"),
 )
 
 ASSUMPTION_BY_KEY: dict[str, Assumption] = {a.key: a for a in ASSUMPTIONS}

@@ -420,7 +420,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False) -> CosimResult:
+               pipelined: bool = False, inspect: Callable[[int, Callable, Callable], None] | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -436,7 +436,10 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
 
     `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
     reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
-    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures)."""
+    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures).
+
+    `inspect(cycle, original, translated)` is called after each cycle both sides ran, with a lookup `(kind, addr) ->
+    value` into each side (None where the translation holds no such operand); it runs the halves in lockstep."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
@@ -461,6 +464,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     start = time.perf_counter()
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
+    if inspect is not None:
+        record = _with_inspection(record, inspect, machine.read, st_lookup(side, iomap))
     pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
     reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
     try:
@@ -489,6 +494,23 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.coverage = half.coverage()
             result.machine = machine
     return result
+
+
+def st_lookup(side: StSide, iomap: IoMap) -> Callable[[str, int], object]:
+    """`(kind, addr) -> value` of an operand in the ST side through the io map's accessors, None where the map has
+    no place for it."""
+    def read(kind: str, addr: int):
+        acc = iomap.accessor(f"{kind}{addr}")
+        return acc.read(side) if acc is not None else None
+    return read
+
+
+def _with_inspection(record, inspect, original, translated):
+    def both(cycle: int, a: list, b: list) -> None:
+        if record is not None:
+            record(cycle, a, b)
+        inspect(cycle, original, translated)
+    return both
 
 
 def _swept_divergence(cycle: int, refs: tuple[OperandRef, ...], a_values: list, b_values: list,

@@ -179,8 +179,10 @@ def apply_machine_data(sys, data: MachineData) -> None:
 
 
 def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulus: Stimulus | None = None, *,
-                 machine: Machine | None = None, diags: Diagnostics | None = None) -> SimulationResult:
-    """Run every cycle of the scenario; stops at the first runtime fault. Raises CompileFailed on bad input."""
+                 machine: Machine | None = None, diags: Diagnostics | None = None,
+                 after_cycle: Callable[[int, Machine], None] | None = None) -> SimulationResult:
+    """Run every cycle of the scenario; stops at the first runtime fault. Raises CompileFailed on bad input.
+    `after_cycle(cycle, machine)` sees the machine after each cycle that ran without a fault."""
     diags = diags or Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     machine = machine or build_machine(program, scenario, diags)
@@ -209,6 +211,8 @@ def run_scenario(program: Program, scenario: Scenario, names: NameTable, stimulu
         if report.faults:
             fault = report.faults[0]
             break
+        if after_cycle is not None:
+            after_cycle(cycle, machine)
         failures += check_expectations(scenario, cycle, read)
     seconds = time.perf_counter() - start
     fault_span = _nc_event_span(scenario, fault.cycle) if fault is not None and fault.span is None else None

@@ -7,6 +7,7 @@ from __future__ import annotations
 from transpiler.backends.st.readability import measure
 from transpiler.backends.st.writer import render_st
 from transpiler.backends.iec_model import Pou
+from transpiler.backends.report.screens import screens_section
 from transpiler.backends.report.target import target_must_provide
 from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project
@@ -176,6 +177,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
+    lines += screens_section(program, io_map_of(result))
     lines += ["", "## What the target must provide", ""] + target_must_provide(program, result) + _library_files(result)
     lines += ["", "## Timers and counters", ""]
     for name, cycles in sorted(result.presets.items()):

@@ -138,6 +138,16 @@ class Layout:
                         bits["M"].add(addr)
                     else:
                         mem.add((kind, addr))
+        # What the screen masks show is declared as well, though the program may never name it: an HMI binds to it.
+        for mask in self.program.masks:
+            for field in mask.fields:
+                kind, addr = field.ref.kind, field.ref.addr
+                if kind in BIT_KINDS:
+                    bits[kind].add(addr)
+                elif kind in MEM_KINDS:
+                    mem.add((kind, addr))
+                elif kind == "S":
+                    strings.add(addr)
         for t in timers:
             bits["T"].add(t)
             bits["T"].add(t - prof.timer_start[0] + prof.timer_running[0])
