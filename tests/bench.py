@@ -243,10 +243,42 @@ def bench_difftest_generator(programs: int = 40) -> dict:
     return {"seconds_per_program": round(per_program, 4)}
 
 
+SHARD_OVERHEAD_TARGET = 0.15      # the shards' summed time may exceed the unsharded run's by this share (issue 32)
+
+
+def bench_shards(shards: int = 4) -> dict:
+    """`equiv` of the sample (its scenarios and 2000 generated cycles, as `make demo`) unsharded, then as the CI recipe
+    does it with the shards one after the other: the plan once, `shards` shards, the merge. Wall and CPU time of
+    each (CPU time is less disturbed by other work on a shared machine) and each shard's set-up (its time less its
+    runs' own seconds)."""
+    import json
+    from tests.shards import comparable, run_sharded, sample_equiv_args, timed
+    args = sample_equiv_args()
+    with tempfile.TemporaryDirectory(prefix="hh2iec-bench-shards-") as folder:
+        whole = Path(folder) / "whole.json"
+        wall, cpu, _ = timed(["equiv", *args, "--report", str(whole)])
+        run = run_sharded("equiv", args, shards, Path(folder) / "shards", parallel=False)
+        same = run.merge_code in (0, 1) and comparable(run.merged) == comparable(whole)
+        setups = [seconds - sum(r["seconds"] for r in json.loads(report.read_text())["runs"])
+                  for seconds, report in zip(run.shard_seconds,
+                                             sorted((Path(folder) / "shards").glob("shard-*.json")))]
+    shard_cpu, shard_wall = sum(run.shard_cpu), sum(run.shard_seconds)
+    over = shard_cpu / cpu - 1 if cpu else 0.0
+    print(f"shards, sample equiv: unsharded {wall:.1f} s ({cpu:.1f} s CPU); plan {run.plan_seconds:.1f} s "
+          f"({run.plan_cpu:.1f} s CPU, the coverage-guided search once); {shards} shards "
+          f"{shard_wall:.1f} s ({shard_cpu:.1f} s CPU) in all, largest {max(run.shard_seconds):.1f} s; per-shard "
+          f"set-up {min(setups):.1f}-{max(setups):.1f} s; shards' CPU sum {100 * over:+.0f}% of the unsharded run "
+          f"(target <= {100 * SHARD_OVERHEAD_TARGET:.0f}%: {'met' if over <= SHARD_OVERHEAD_TARGET else 'MISSED'}), "
+          f"plan included {100 * ((shard_cpu + run.plan_cpu) / cpu - 1) if cpu else 0:+.0f}%; merged report "
+          f"{'equals' if same else 'DIFFERS FROM'} the unsharded one")
+    return {"unsharded_cpu": round(cpu, 1), "plan_cpu": round(run.plan_cpu, 1), "shards_cpu": round(shard_cpu, 1),
+            "setup_seconds": round(max(setups), 1), "same": same}
+
+
 BENCHES: dict[str, Callable[..., object]] = {"readability": bench_readability, "mutants": bench_mutants,
                                              "frontend": bench_frontend, "interpreter": bench_interpreter,
                                              "transpile": bench_transpile, "cli": bench_cli, "cosim": bench_cosim,
-                                             "difftest": bench_difftest_generator}
+                                             "difftest": bench_difftest_generator, "shards": bench_shards}
 
 
 def ratios(figures: dict[str, object]) -> list[str]:

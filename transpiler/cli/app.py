@@ -10,7 +10,7 @@ from importlib import metadata
 from typing import Sequence
 
 from transpiler import __version__, api
-from transpiler.cli import equiv, mutate, simulate, transpile
+from transpiler.cli import equiv, merge, mutate, simulate, transpile
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
                                    diagnostics_json, one_shot, options_from_args, print_diagnostics,
                                    semantics_from_args)
@@ -20,7 +20,7 @@ from transpiler.language.semantics import ASSUMPTION_BY_KEY, ASSUMPTIONS, PROFIL
 from transpiler.resources import DataMissing
 
 # Each module registers its own subcommands; listed here so that the parser's contents are visible in one place.
-SUBCOMMAND_MODULES = (transpile, simulate, equiv, mutate)
+SUBCOMMAND_MODULES = (transpile, simulate, equiv, mutate, merge)
 
 
 def build_parser() -> argparse.ArgumentParser:
