@@ -686,6 +686,17 @@ def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list,
     return plan, {mutants[i - 1]: i for i in plan.selected(share)}
 
 
+def _mutant_side_factory(backend: str, iec) -> Callable[[str], Callable]:
+    """How a mutant's ST text becomes an executor on the chosen backend."""
+    if backend == "matiec":
+        from transpiler.backends.st.check import find_iec2c
+        from transpiler.exec.compiled.matiec_side import matiec_side_factory
+        iec2c = find_iec2c()
+        return lambda text: matiec_side_factory(text, iec, iec2c)
+    from transpiler.verify.cosim import builtin_side_factory
+    return lambda text: builtin_side_factory(text, "project.st")
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
@@ -698,8 +709,6 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     import os
     import tempfile
     import time
-    from transpiler.backends.st.check import find_iec2c
-    from transpiler.verify.cosim import builtin_side_factory
     from transpiler.verify.equiv import choose_backend
     from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
                                           judge_all, load_equivalents, mutation_sites)
@@ -718,12 +727,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     chosen = choose_backend(backend, st_text, "project.st", iec)
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
-    if chosen.name == "matiec":
-        from transpiler.exec.compiled.matiec_side import matiec_side_factory
-        iec2c = find_iec2c()
-        side_factory = lambda text: matiec_side_factory(text, iec, iec2c)  # noqa: E731
-    else:
-        side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
+    side_factory = _mutant_side_factory(chosen.name, iec)
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
