@@ -16,6 +16,7 @@ from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify import pipeline
+from transpiler.verify.recording import RecordedReference, Recording, record
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
@@ -420,7 +421,7 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False) -> CosimResult:
+               pipelined: bool = False, recording: Recording | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -436,7 +437,10 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
 
     `base_mp` are the machine parameters the translation was made with; the scenario's own override them on the
     reference side, and where that gives other presets than the ST holds, the run ends with an error naming them.
-    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures)."""
+    The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures).
+
+    `recording` (record_reference of this scenario) replays the reference half instead of running it: the result
+    is the one the run with the reference interpreter gives (recording.py says why), without its coverage."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
@@ -461,8 +465,15 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     start = time.perf_counter()
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
-    pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
-    reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
+    pipelined = (pipelined and record is None and recording is None and total > pipeline.BATCH
+                 and pipeline.fork_available())
+    if recording is not None:
+        coverage = False
+        reference = RecordedReference(recording)
+    elif pipelined:
+        reference = pipeline.PipelinedReference(half, total)
+    else:
+        reference = _LocalReference(half)
     try:
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
         complete = result.cycles_run == total
@@ -489,6 +500,19 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.coverage = half.coverage()
             result.machine = machine
     return result
+
+
+def record_reference(program: Program, iomap: IoMap, scenario: Scenario, names: NameTable,
+                     stimulus: Stimulus | None = None, *, compiled: CompiledProgram | None = None,
+                     base_mp: Mapping | None = None) -> Recording:
+    """The reference half of cosimulate's run of `scenario`, run once through all its cycles and kept, for
+    cosimulate(..., recording=) to replay against many translated sides."""
+    diags = Diagnostics()
+    stimulus = stimulus or build_stimulus(scenario, names)
+    parameters = effective_machine_parameters(scenario, diags, base_mp)
+    machine = build_machine(program, scenario, diags, compiled=compiled, parameters=parameters)
+    comparison = comparison_for(program, names, iomap)
+    return record(_ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names), stimulus.cycles)
 
 
 def _swept_divergence(cycle: int, refs: tuple[OperandRef, ...], a_values: list, b_values: list,

@@ -32,7 +32,8 @@ from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
 from transpiler.verify import pipeline
-from transpiler.verify.cosim import StSide, cosimulate
+from transpiler.verify.cosim import StSide, cosimulate, record_reference
+from transpiler.verify.recording import Recording
 from transpiler.verify.scenario import NameTable, Scenario
 
 KILLED, SURVIVED, INVALID, ERROR, EQUIVALENT = "killed", "survived", "invalid", "error", "equivalent"
@@ -291,6 +292,14 @@ class Judge:
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
     pipelined: bool = False             # the reference in a process of its own (judging one mutant at a time)
+    # per scenario, its reference run recorded once (record_references): mutants then run only their own half
+    recordings: tuple[Recording, ...] | None = None
+
+    def record_references(self) -> "Judge":
+        """This judge with every scenario's reference run recorded (the reference does not depend on the mutant)."""
+        recordings = tuple(record_reference(self.program, self.iomap, scenario, self.names, compiled=self.compiled,
+                                            base_mp=self.base_mp) for scenario in self.scenarios)
+        return dataclasses.replace(self, recordings=recordings, pipelined=False)
 
     def __call__(self, mutant: Mutant) -> Verdict:
         start = time.perf_counter()
@@ -303,9 +312,10 @@ class Judge:
             return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
         first_error = None
         for runs, scenario in enumerate(self.scenarios, 1):
+            recording = self.recordings[runs - 1] if self.recordings is not None else None
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
-                                    base_mp=self.base_mp, pipelined=self.pipelined)
+                                    base_mp=self.base_mp, pipelined=self.pipelined, recording=recording)
             except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
                 first_error = first_error or f"{scenario.name}: {_message(exc)}"
                 continue
