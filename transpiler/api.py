@@ -410,7 +410,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     import tempfile
     import time
     from transpiler.backends.st.check import find_iec2c
-    from transpiler.verify.cosim import builtin_side_factory
+    from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory
     from transpiler.verify.equiv import choose_backend
     from transpiler.verify.guided import generate
     from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
@@ -434,14 +434,16 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
         from transpiler.exec.compiled.matiec_side import matiec_side_factory
         iec2c = find_iec2c()
         side_factory = lambda text: matiec_side_factory(text, iec, iec2c)  # noqa: E731
+        schema_factory = None
     else:
         side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
+        schema_factory = lambda text, mutations: BuiltinSchema(text, mutations, "project.st")  # noqa: E731
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
     loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path, base_mp=mp)
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), mp)
+                  st_text, side_factory, compile_program(project.program), mp, schema_factory)
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.

@@ -610,16 +610,36 @@ def runtime_snapshot(rt, places: list[Place]) -> list:
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
-    from transpiler.exec.stexec import StRuntimeError, load_st
+    from transpiler.exec.stexec import load_st
+    return _builtin_sides(load_st(st_text, filename), st_text, 0)
+
+
+class BuiltinSchema:
+    """Many mutants of one ST text compiled once by the built-in executor (a mutant schema, stexec/schema.py):
+    `factory(number)` gives fresh runtimes of mutant `number` (0 the original, stexec.PROBE the original recording
+    the mutants it infects); `unswitched` are the mutants the schema does not hold."""
+
+    def __init__(self, st_text: str, mutations: Sequence, filename: str = "project.st"):
+        from transpiler.exec.stexec import load_st
+        from transpiler.exec.compiled.sysfb import modules_in
+        self.st_text = st_text
+        self.project = load_st(st_text, filename, mutations=mutations, impure=modules_in(st_text))
+        self.unswitched = self.project.unswitched
+
+    def factory(self, number: int) -> Callable[[], StSide]:
+        return _builtin_sides(self.project, self.st_text, number)
+
+
+def _builtin_sides(project, st_text: str, mutant: int) -> Callable[[], StSide]:
+    from transpiler.exec.stexec import StRuntimeError
     from transpiler.exec.compiled.sysfb import SysBinding
-    project = load_st(st_text, filename)
 
     class _Side:
         name = "builtin"
 
         def __init__(self) -> None:
             self.sys = SysBinding(st_text)
-            self.rt = project.instantiate(self.sys.externals() or None)
+            self.rt = project.instantiate(self.sys.externals() or None, mutant)
 
         def attach_machine(self, machine) -> None:
             self.sys.attach(machine)

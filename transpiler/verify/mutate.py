@@ -13,6 +13,7 @@ the denominator: score = killed / (killed + survived + error - judged equivalent
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import multiprocessing
 import random
@@ -20,7 +21,7 @@ import re
 import time
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Iterable, Iterator, Mapping
+from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -31,7 +32,6 @@ from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
-from transpiler.verify import pipeline
 from transpiler.verify.cosim import StSide, cosimulate, record_reference
 from transpiler.verify.recording import Recording
 from transpiler.verify.scenario import NameTable, Scenario
@@ -278,10 +278,24 @@ class Verdict:
     runs: int = 0                # scenarios run on it, shortest first: a killed mutant's killer is the last of them
 
 
+class MutantSides(Protocol):
+    """Many mutants of the ST text built once (a mutant schema): `factory(number)` makes ST sides of the mutant
+    numbered `number` in the judged list (1, 2, ...; 0 the original, PROBE the original recording in each side's
+    `rt.infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
+
+    unswitched: frozenset
+
+    def factory(self, number: int) -> Callable[[], StSide]: ...
+
+
+PROBE = -1                    # the mutant number of a probing run (stexec.PROBE)
+
+
 @dataclasses.dataclass
 class Judge:
     """Everything a worker needs to judge a mutant: the program, its scenarios (validated on the unmutated ST)
-    and how to build an ST executor from a text (`side_factory(text)`; raises on a text it cannot build)."""
+    and how to build an ST executor from a text (`side_factory(text)`; raises on a text it cannot build) or, where
+    the backend can, all mutants at once (`schema_factory(text, [TextMutation, ...])`, a MutantSides)."""
 
     program: Program
     iomap: IoMap
@@ -291,17 +305,12 @@ class Judge:
     side_factory: Callable[[str], Callable[[], StSide]]
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
-    pipelined: bool = False             # the reference in a process of its own (judging one mutant at a time)
-    # per scenario, its reference run recorded once (record_references): mutants then run only their own half
+    schema_factory: Callable[[str, list], MutantSides] | None = None
+    # per scenario, its reference run recorded once (see prepare): mutants then run only their own half
     recordings: tuple[Recording, ...] | None = None
 
-    def record_references(self) -> "Judge":
-        """This judge with every scenario's reference run recorded (the reference does not depend on the mutant)."""
-        recordings = tuple(record_reference(self.program, self.iomap, scenario, self.names, compiled=self.compiled,
-                                            base_mp=self.base_mp) for scenario in self.scenarios)
-        return dataclasses.replace(self, recordings=recordings, pipelined=False)
-
     def __call__(self, mutant: Mutant) -> Verdict:
+        """The mutant's text built on its own and run under every scenario (against the recordings if any)."""
         start = time.perf_counter()
         try:
             factory = self.side_factory(mutant.apply(self.st_text))
@@ -310,12 +319,19 @@ class Judge:
                            time.perf_counter() - start)
         except Exception as exc:  # noqa: BLE001 - a mutant that cannot be built is invalid, with its message
             return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
+        return self.run(mutant, factory, range(len(self.scenarios)), start)
+
+    def run(self, mutant: Mutant, factory: Callable[[], StSide], runs: Iterable[int], start: float) -> Verdict:
+        """Judge the built mutant under the scenarios numbered `runs` (in that order) until one kills it."""
         first_error = None
-        for runs, scenario in enumerate(self.scenarios, 1):
-            recording = self.recordings[runs - 1] if self.recordings is not None else None
+        ran = 0
+        for index in runs:
+            scenario = self.scenarios[index]
+            recording = self.recordings[index] if self.recordings is not None else None
+            ran += 1
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
-                                    base_mp=self.base_mp, pipelined=self.pipelined, recording=recording)
+                                    base_mp=self.base_mp, recording=recording)
             except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
                 first_error = first_error or f"{scenario.name}: {_message(exc)}"
                 continue
@@ -327,12 +343,15 @@ class Judge:
             elif result.error is not None and result.error_side == "translated":
                 how = f"fault of the translation: {result.error}"
             if how is not None:
-                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, runs)
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, ran)
             if result.error is not None:
                 first_error = first_error or f"{scenario.name}: {result.error}"
         if first_error is not None:
-            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, len(self.scenarios))
-        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start, len(self.scenarios))
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, ran)
+        return Verdict(mutant, SURVIVED, "" if ran else NEVER_INFECTED, time.perf_counter() - start, ran)
+
+
+NEVER_INFECTED = "no run reaches the mutated code with a value the mutation changes"
 
 
 def _message(exc: BaseException) -> str:
@@ -353,40 +372,112 @@ def baseline_problems(judge: Judge) -> list[str]:
     return problems
 
 
-def _worker(judge: Judge, mutants: list[Mutant], tasks, results) -> None:
-    """A forked process: judges mutants by index until it takes the end marker."""
-    while (index := tasks.get()) is not None:
-        verdict = judge(mutants[index])
-        results.put((index, verdict.outcome, verdict.by, verdict.seconds, verdict.runs))
+@dataclasses.dataclass
+class Judging:
+    """A list of mutants ready to be judged (prepare): the scenarios' reference runs recorded, the mutants built
+    once where the backend has schemata, and per scenario the mutants its run of the original infects. A mutant
+    is then judged (`judging(index)`) only under the runs that infect it, shortest first, until one kills it: a
+    run that does not infect it runs as the original's, which agrees with the reference; never infected, it
+    survives without a run. Mutants outside the schema are built from their text and run under every scenario."""
+
+    judge: Judge
+    mutants: list[Mutant]
+    sides: MutantSides | None = None
+    infected: tuple[frozenset[int], ...] | None = None      # per scenario: numbers (index + 1) its run infects
+
+    def __call__(self, index: int) -> Verdict:
+        mutant, number = self.mutants[index], index + 1
+        if self.sides is None or number in self.sides.unswitched:
+            return self.judge(mutant)
+        start = time.perf_counter()
+        runs = range(len(self.judge.scenarios))
+        if self.infected is not None:
+            runs = [i for i in runs if number in self.infected[i]]
+        return self.judge.run(mutant, self.sides.factory(number), runs, start)
 
 
-def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
-    """Verdicts as they come in; with jobs > 1 the judge is shared with forked workers (only results are pickled)."""
-    if jobs <= 1 or len(mutants) <= 1:
-        # One mutant at a time leaves a CPU for the reference interpreter of each run.
-        one_at_a_time = dataclasses.replace(judge, pipelined=pipeline.worthwhile())
-        for mutant in mutants:
-            yield one_at_a_time(mutant)
+def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1) -> Judging:
+    """Record every scenario's reference run, build the mutant schema (where the backend has one) and probe each
+    scenario with it; the scenarios are shared out over `jobs` forked processes."""
+    sides = None
+    if judge.schema_factory is not None:
+        from transpiler.exec.stexec import TextMutation
+        sides = judge.schema_factory(judge.st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(mutants)])
+    task = functools.partial(_prepare_scenario, judge, sides)
+    found = dict(_each(task, range(len(judge.scenarios)), jobs))
+    recordings = tuple(found[i][0] for i in range(len(judge.scenarios)))
+    infected = None
+    if sides is not None and all(found[i][1] is not None for i in found):
+        infected = tuple(found[i][1] for i in range(len(judge.scenarios)))
+    return Judging(dataclasses.replace(judge, recordings=recordings), mutants, sides, infected)
+
+
+def _prepare_scenario(judge: Judge, sides: MutantSides | None, index: int) -> tuple[Recording, frozenset | None]:
+    """One scenario's reference run recorded and, with a schema, the mutants its probing run infects (None if the
+    probing run does not agree with the reference: then every run counts as infecting every mutant)."""
+    scenario = judge.scenarios[index]
+    recording = record_reference(judge.program, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                                 base_mp=judge.base_mp)
+    if sides is None:
+        return recording, None
+    made: list = []
+    factory = sides.factory(PROBE)
+
+    def probing_side():
+        made.append(factory())
+        return made[-1]
+    result = cosimulate(judge.program, probing_side, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                        base_mp=judge.base_mp, recording=recording)
+    if not result.equivalent or result.cycles_run != recording.cycles or len(made) != 1:
+        return recording, None
+    return recording, frozenset(made[0].rt.infected)
+
+
+def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int) -> Iterator[tuple[int, Any]]:
+    """(item, task(item)) for every item, in `jobs` forked processes when jobs > 1 (results are pickled)."""
+    items = list(items)
+    if jobs <= 1 or len(items) <= 1:
+        for item in items:
+            yield item, task(item)
         return
     context = multiprocessing.get_context("fork")
     tasks, results = context.Queue(), context.Queue()
-    for index in range(len(mutants)):
-        tasks.put(index)
+    for item in items:
+        tasks.put(item)
     for _ in range(jobs):
         tasks.put(None)
-    workers = [context.Process(target=_worker, args=(judge, mutants, tasks, results), daemon=True)
-               for _ in range(jobs)]
+    workers = [context.Process(target=_worker, args=(task, tasks, results), daemon=True) for _ in range(jobs)]
     for w in workers:
         w.start()
     try:
-        for _ in mutants:
-            index, outcome, by, seconds, runs = results.get()
-            yield Verdict(mutants[index], outcome, by, seconds, runs)
+        for _ in items:
+            yield results.get()
     finally:
         for w in workers:
             if w.is_alive():
                 w.terminate()
             w.join()
+
+
+def _worker(task: Callable[[int], Any], tasks, results) -> None:
+    """A forked process: runs the task on items until it takes the end marker."""
+    while (item := tasks.get()) is not None:
+        results.put((item, task(item)))
+
+
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
+    """Verdicts of the given mutants as they come in (prepare, then judge each; with jobs > 1 in forked workers,
+    which share what was prepared and send back only verdicts). Any list of mutants can be given: a subset judges
+    exactly as it would among all."""
+    judging = prepare(judge, mutants, jobs)
+    for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
+        outcome, by, seconds, runs = verdict
+        yield Verdict(mutants[index], outcome, by, seconds, runs)
+
+
+def _verdict_fields(judging: Judging, index: int) -> tuple[str, str, float, int]:
+    verdict = judging(index)
+    return verdict.outcome, verdict.by, verdict.seconds, verdict.runs
 
 
 @dataclasses.dataclass
