@@ -467,13 +467,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
     pipelined = (pipelined and record is None and recording is None and total > pipeline.BATCH
                  and pipeline.fork_available())
-    if recording is not None:
-        coverage = False
-        reference = RecordedReference(recording)
-    elif pipelined:
-        reference = pipeline.PipelinedReference(half, total)
-    else:
-        reference = _LocalReference(half)
+    coverage = coverage and recording is None
+    reference = _reference(half, total, pipelined, recording)
     try:
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
         complete = result.cycles_run == total
@@ -500,6 +495,15 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
             result.coverage = half.coverage()
             result.machine = machine
     return result
+
+
+def _reference(half: _ReferenceHalf, total: int, pipelined: bool, recording: Recording | None):
+    """The reference half as the cycle loop reads it: replayed, in a process of its own, or in this one."""
+    if recording is not None:
+        return RecordedReference(recording)
+    if pipelined:
+        return pipeline.PipelinedReference(half, total)
+    return _LocalReference(half)
 
 
 def record_reference(program: Program, iomap: IoMap, scenario: Scenario, names: NameTable,

@@ -8,7 +8,14 @@ scenario first: it is KILLED by a divergence, an operand
 missing in the translation, or a fault of the translated side (what `equiv` calls NOT EQUIVALENT); ST the
 executor rejects makes it INVALID (excluded); a mutant whose runs end only in harness exceptions is an ERROR
 (never a kill); else it SURVIVED. A file of judged-equivalent mutants (each with its reason) takes those out of
-the denominator: score = killed / (killed + survived + error - judged equivalent)."""
+the denominator: score = killed / (killed + survived + error - judged equivalent).
+
+Judging saves work without changing a verdict (prepare, Judging): each scenario's reference run is recorded once
+(recording.py); where the backend builds mutant schemata, all mutants are built at once and a probing run of the
+original per scenario tells which mutants it infects; a mutant then runs only under the runs that infect it (a
+run that does not is the original's run, which agrees with the reference), and one no run infects survives
+without a run. judge_all judges any list of mutants this way, so a subset (a shard) gets the verdicts it would
+get among all."""
 
 from __future__ import annotations
 
