@@ -397,6 +397,22 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
                                          project.options.encoding))
 
 
+def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None) -> list:
+    """The verdicts of `mutants` (see verify/mutate.py judge_all); raises CompileFailed when the unmutated
+    translation does not agree with the reference under the stimulus."""
+    from transpiler.verify.mutate import judge_all, prepare
+    judging = prepare(judge, mutants, jobs)
+    if judging.problems:
+        raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
+                     "would mean nothing (run hh2iec equiv): " + "; ".join(judging.problems[:5]))
+    verdicts = []
+    for verdict in judge_all(judge, mutants, jobs, judging):
+        verdicts.append(verdict)
+        if progress is not None:
+            progress(len(verdicts), len(mutants))
+    return verdicts
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
@@ -413,8 +429,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory
     from transpiler.verify.equiv import choose_backend
     from transpiler.verify.guided import generate
-    from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
-                                          judge_all, load_equivalents, mutation_sites)
+    from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, choose, load_equivalents,
+                                          mutation_sites)
     from transpiler.verify.simulate import project_names
     from transpiler.exec.interp import compile_program
     scenarios = [Path(p) for p in scenarios]
@@ -449,20 +465,12 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
         # Mutant libraries are throw-away: they stay out of the user's build cache.
         os.environ["HH2IEC_CACHE"] = cache
         try:
-            problems = baseline_problems(judge)
-            if problems:
-                raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
-                             "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
             sites = mutation_sites(st_text)
             mutants = choose(sites, count, seed)
             if listed is not None:
                 mutants = [m for m in mutants if m.key in listed]
             start = time.perf_counter()
-            verdicts = []
-            for verdict in judge_all(judge, mutants, jobs):
-                verdicts.append(verdict)
-                if progress is not None:
-                    progress(len(verdicts), len(mutants))
+            verdicts = _judged(judge, mutants, jobs, progress)
             seconds = time.perf_counter() - start
         finally:
             if saved_cache is None:

@@ -97,6 +97,8 @@ class Comparison:
     # the translation lacks is `missing`, never excluded.
     excluded: tuple[tuple[str, str], ...] = ()
     sweep: tuple[OperandRef, ...] = ()      # compared once after the last cycle (sweep_refs)
+    accessors: tuple[Accessor, ...] = ()    # of the columns, in order
+    sweep_accessors: tuple[Accessor, ...] = ()
 
 
 def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
@@ -119,7 +121,10 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
     missing = tuple(MissingOperand(str(r), names.display_name(r), tuple(writers.get(r, ())))
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
-    return Comparison(tuple(cols), inputs, missing, sweep=sweep_refs(program, iomap, (ref for _, ref in cols)))
+    sweep = sweep_refs(program, iomap, (ref for _, ref in cols))
+    return Comparison(tuple(cols), inputs, missing, sweep=sweep,
+                      accessors=tuple(iomap.accessor(str(ref)) for _, ref in cols),
+                      sweep_accessors=tuple(iomap.accessor(str(ref)) for ref in sweep))
 
 
 def sweep_refs(program: Program, iomap: IoMap, static: Iterable[OperandRef]) -> tuple[OperandRef, ...]:
@@ -336,9 +341,9 @@ class _TranslatedHalf:
     def values(self) -> tuple[list, list]:
         return self.static(), self.indexed()
 
-    def final_values(self, refs: tuple[OperandRef, ...]) -> list:
-        """The values at `refs`, read once: in one call where the side can (its snapshot or bulk reader)."""
-        accessors = [self.driver.iomap.accessor(str(ref)) for ref in refs]
+    def final_values(self, accessors: Sequence[Accessor]) -> list:
+        """The values at the accessors' places, read once: in one call where the side can (its snapshot or bulk
+        reader)."""
         snapshot = getattr(self.side, "snapshot", None)
         if snapshot is not None:
             return snapshot([acc.place for acc in accessors])
@@ -421,7 +426,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False, recording: Recording | None = None) -> CosimResult:
+               pipelined: bool = False, recording: Recording | None = None,
+               comparison: Comparison | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -440,7 +446,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     The scenario's `expect` entries are checked on the original every cycle (result.expectation_failures).
 
     `recording` (record_reference of this scenario) replays the reference half instead of running it: the result
-    is the one the run with the reference interpreter gives (recording.py says why), without its coverage."""
+    is the one the run with the reference interpreter gives (recording.py), without coverage; `comparison` is
+    comparison_for(program, names, iomap), for callers that run one program many times."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
@@ -448,9 +455,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     side = make_side()
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
-    comparison = comparison_for(program, names, iomap)
+    comparison = comparison or comparison_for(program, names, iomap)
     mismatches = preset_mismatches(side, iomap, program, parameters[0], cycle_time)
-    accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
+    accessors = list(comparison.accessors)
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs)
     translated = _TranslatedHalf(side, driver, stimulus, accessors)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
@@ -467,7 +474,6 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
     pipelined = (pipelined and record is None and recording is None and total > pipeline.BATCH
                  and pipeline.fork_available())
-    coverage = coverage and recording is None
     reference = _reference(half, total, pipelined, recording)
     try:
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
@@ -475,8 +481,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
         if complete and result.divergence is None and result.error is None:
             result.swept = len(sweep)
             result.divergence = _swept_divergence(total - 1, sweep, reference.final_values(),
-                                                  translated.final_values(sweep), names)
-        if coverage and (complete or not pipelined):
+                                                  translated.final_values(comparison.sweep_accessors), names)
+        if coverage and recording is None and (complete or not pipelined):
             result.coverage = reference.coverage()
     finally:
         reference.close()
@@ -508,14 +514,14 @@ def _reference(half: _ReferenceHalf, total: int, pipelined: bool, recording: Rec
 
 def record_reference(program: Program, iomap: IoMap, scenario: Scenario, names: NameTable,
                      stimulus: Stimulus | None = None, *, compiled: CompiledProgram | None = None,
-                     base_mp: Mapping | None = None) -> Recording:
+                     base_mp: Mapping | None = None, comparison: Comparison | None = None) -> Recording:
     """The reference half of cosimulate's run of `scenario`, run once through all its cycles and kept, for
     cosimulate(..., recording=) to replay against many translated sides."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
     machine = build_machine(program, scenario, diags, compiled=compiled, parameters=parameters)
-    comparison = comparison_for(program, names, iomap)
+    comparison = comparison or comparison_for(program, names, iomap)
     return record(_ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names), stimulus.cycles)
 
 

@@ -39,7 +39,7 @@ from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
-from transpiler.verify.cosim import StSide, cosimulate, record_reference
+from transpiler.verify.cosim import Comparison, StSide, comparison_for, cosimulate, record_reference
 from transpiler.verify.recording import Recording
 from transpiler.verify.scenario import NameTable, Scenario
 
@@ -315,6 +315,7 @@ class Judge:
     schema_factory: Callable[[str, list], MutantSides] | None = None
     # per scenario, its reference run recorded once (see prepare): mutants then run only their own half
     recordings: tuple[Recording, ...] | None = None
+    comparison: Comparison | None = None        # what every run compares (comparison_for, made once by prepare)
 
     def __call__(self, mutant: Mutant) -> Verdict:
         """The mutant's text built on its own and run under every scenario (against the recordings if any)."""
@@ -338,7 +339,7 @@ class Judge:
             ran += 1
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
-                                    base_mp=self.base_mp, recording=recording)
+                                    base_mp=self.base_mp, recording=recording, comparison=self.comparison)
             except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
                 first_error = first_error or f"{scenario.name}: {_message(exc)}"
                 continue
@@ -367,18 +368,6 @@ def _message(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0][:200]}" if text else type(exc).__name__
 
 
-def baseline_problems(judge: Judge) -> list[str]:
-    """Runs of the unmutated translation that are not equivalent: mutation results would mean nothing."""
-    factory = judge.side_factory(judge.st_text)
-    problems = []
-    for scenario in judge.scenarios:
-        r = cosimulate(judge.program, factory, judge.iomap, scenario, judge.names, compiled=judge.compiled,
-                       base_mp=judge.base_mp)
-        if not r.equivalent:
-            problems.append(f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}")
-    return problems
-
-
 @dataclasses.dataclass
 class Judging:
     """A list of mutants ready to be judged (prepare): the scenarios' reference runs recorded, the mutants built
@@ -391,6 +380,8 @@ class Judging:
     mutants: list[Mutant]
     sides: MutantSides | None = None
     infected: tuple[frozenset[int], ...] | None = None      # per scenario: numbers (index + 1) its run infects
+    # runs of the unmutated translation that do not agree with the reference: mutation results would mean nothing
+    problems: tuple[str, ...] = ()
 
     def __call__(self, index: int) -> Verdict:
         mutant, number = self.mutants[index], index + 1
@@ -406,38 +397,42 @@ class Judging:
 def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1) -> Judging:
     """Record every scenario's reference run, build the mutant schema (where the backend has one) and probe each
     scenario with it; the scenarios are shared out over `jobs` forked processes."""
+    judge = dataclasses.replace(judge, comparison=judge.comparison or comparison_for(judge.program, judge.names,
+                                                                                    judge.iomap))
     sides = None
     if judge.schema_factory is not None:
         from transpiler.exec.stexec import TextMutation
         sides = judge.schema_factory(judge.st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(mutants)])
-    task = functools.partial(_prepare_scenario, judge, sides)
+    original = judge.side_factory(judge.st_text) if sides is None else None
+    task = functools.partial(_prepare_scenario, judge, sides, original)
     found = dict(_each(task, range(len(judge.scenarios)), jobs))
-    recordings = tuple(found[i][0] for i in range(len(judge.scenarios)))
+    ordered = [found[i] for i in range(len(judge.scenarios))]
+    problems = tuple(problem for _, _, problem in ordered if problem is not None)
     infected = None
-    if sides is not None and all(found[i][1] is not None for i in found):
-        infected = tuple(found[i][1] for i in range(len(judge.scenarios)))
-    return Judging(dataclasses.replace(judge, recordings=recordings), mutants, sides, infected)
+    if sides is not None and not problems:
+        infected = tuple(runs for _, runs, _ in ordered)
+    return Judging(dataclasses.replace(judge, recordings=tuple(recording for recording, _, _ in ordered)), mutants,
+                   sides, infected, problems)
 
 
-def _prepare_scenario(judge: Judge, sides: MutantSides | None, index: int) -> tuple[Recording, frozenset | None]:
-    """One scenario's reference run recorded and, with a schema, the mutants its probing run infects (None if the
-    probing run does not agree with the reference: then every run counts as infecting every mutant)."""
+def _prepare_scenario(judge: Judge, sides: MutantSides | None, original: Callable[[], StSide] | None, index: int
+                      ) -> tuple[Recording, frozenset | None, str | None]:
+    """One scenario's reference run recorded, the unmutated translation run against it (with a schema, its
+    probing run, which also finds the mutants the run infects) and what is wrong if that run does not agree."""
     scenario = judge.scenarios[index]
     recording = record_reference(judge.program, judge.iomap, scenario, judge.names, compiled=judge.compiled,
-                                 base_mp=judge.base_mp)
-    if sides is None:
-        return recording, None
+                                 base_mp=judge.base_mp, comparison=judge.comparison)
     made: list = []
-    factory = sides.factory(PROBE)
+    factory = sides.factory(PROBE) if sides is not None else original
 
-    def probing_side():
+    def side():
         made.append(factory())
         return made[-1]
-    result = cosimulate(judge.program, probing_side, judge.iomap, scenario, judge.names, compiled=judge.compiled,
-                        base_mp=judge.base_mp, recording=recording)
-    if not result.equivalent or result.cycles_run != recording.cycles or len(made) != 1:
-        return recording, None
-    return recording, frozenset(made[0].rt.infected)
+    r = cosimulate(judge.program, side, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                   base_mp=judge.base_mp, recording=recording, comparison=judge.comparison)
+    if not r.equivalent:
+        return recording, None, f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}"
+    return recording, frozenset(made[0].rt.infected) if sides is not None else None, None
 
 
 def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int) -> Iterator[tuple[int, Any]]:
@@ -472,11 +467,11 @@ def _worker(task: Callable[[int], Any], tasks, results) -> None:
         results.put((item, task(item)))
 
 
-def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
-    """Verdicts of the given mutants as they come in (prepare, then judge each; with jobs > 1 in forked workers,
-    which share what was prepared and send back only verdicts). Any list of mutants can be given: a subset judges
-    exactly as it would among all."""
-    judging = prepare(judge, mutants, jobs)
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None) -> Iterator[Verdict]:
+    """Verdicts of the given mutants as they come in (prepare, unless `judging` is that of these mutants, then judge
+    each; with jobs > 1 in forked workers, which share what was prepared and send back only verdicts). Any list of
+    mutants can be given: a subset judges exactly as it would among all."""
+    judging = judging or prepare(judge, mutants, jobs)
     for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
         outcome, by, seconds, runs = verdict
         yield Verdict(mutants[index], outcome, by, seconds, runs)
