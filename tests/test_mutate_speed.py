@@ -46,9 +46,15 @@ def test_every_mutant_gets_the_verdict_of_its_own_text_run_in_lockstep(name, job
     judge = _judge(name)
     sites = mutation_sites(judge.st_text)
     before = [_plain(judge(m)) for m in sites]
-    after = {v.mutant: _plain(v) for v in judge_all(judge, sites, jobs)}
+    verdicts = list(judge_all(judge, sites, jobs))
+    after = {v.mutant: _plain(v) for v in verdicts}
     assert [after[m] for m in sites] == before
     assert {outcome for outcome, _ in before} >= {"killed"}
+    # the runs a verdict names are the ones it went through: the killer (what the mutation report's killedBy says)
+    # is the last of them, also where runs that do not infect the mutant were left out
+    for v in verdicts:
+        if v.outcome == "killed":
+            assert v.by.startswith(judge.scenarios[v.scenarios_run[-1]].name + ": ")
 
 
 def test_a_construct_with_swapped_case_labels_and_rejected_mutants_is_covered():

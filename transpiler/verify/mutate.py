@@ -283,6 +283,11 @@ class Verdict:
     by: str                      # the killing scenario and how, a message, or the reason of a judged equivalent
     seconds: float
     runs: int = 0                # scenarios run on it, shortest first: a killed mutant's killer is the last of them
+    ran: tuple[int, ...] | None = None     # which scenarios (by index) those were; None: the first `runs` of them
+
+    @property
+    def scenarios_run(self) -> tuple[int, ...]:
+        return self.ran if self.ran is not None else tuple(range(self.runs))
 
 
 class MutantSides(Protocol):
@@ -332,11 +337,11 @@ class Judge:
     def run(self, mutant: Mutant, factory: Callable[[], StSide], runs: Iterable[int], start: float) -> Verdict:
         """Judge the built mutant under the scenarios numbered `runs` (in that order) until one kills it."""
         first_error = None
-        ran = 0
+        done: list[int] = []
         for index in runs:
             scenario = self.scenarios[index]
             recording = self.recordings[index] if self.recordings is not None else None
-            ran += 1
+            done.append(index)
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
                                     base_mp=self.base_mp, recording=recording, comparison=self.comparison)
@@ -351,12 +356,14 @@ class Judge:
             elif result.error is not None and result.error_side == "translated":
                 how = f"fault of the translation: {result.error}"
             if how is not None:
-                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, ran)
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, len(done),
+                               tuple(done))
             if result.error is not None:
                 first_error = first_error or f"{scenario.name}: {result.error}"
         if first_error is not None:
-            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, ran)
-        return Verdict(mutant, SURVIVED, "" if ran else NEVER_INFECTED, time.perf_counter() - start, ran)
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, len(done), tuple(done))
+        return Verdict(mutant, SURVIVED, "" if done else NEVER_INFECTED, time.perf_counter() - start, len(done),
+                       tuple(done))
 
 
 NEVER_INFECTED = "no run reaches the mutated code with a value the mutation changes"
@@ -473,13 +480,12 @@ def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging |
     mutants can be given: a subset judges exactly as it would among all."""
     judging = judging or prepare(judge, mutants, jobs)
     for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
-        outcome, by, seconds, runs = verdict
-        yield Verdict(mutants[index], outcome, by, seconds, runs)
+        yield Verdict(mutants[index], *verdict)
 
 
-def _verdict_fields(judging: Judging, index: int) -> tuple[str, str, float, int]:
+def _verdict_fields(judging: Judging, index: int) -> tuple:
     verdict = judging(index)
-    return verdict.outcome, verdict.by, verdict.seconds, verdict.runs
+    return verdict.outcome, verdict.by, verdict.seconds, verdict.runs, verdict.ran
 
 
 @dataclasses.dataclass
