@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from transpiler import api
-from transpiler.api import _load_scenarios, _translate, io_map_of
+from transpiler.api import _load_scenarios, _translate
+from transpiler.backends.report.report import io_map_of
 from transpiler.exec.interp import compile_program
 from transpiler.exec.stexec import PROBE, TextMutation, load_st
 from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory, cosimulate

@@ -633,7 +633,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         screens: tuple = ()
         if requests:
             from transpiler.verify.screens import draw_both_sides
-            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, base_mp)
+            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, mp)
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
     return Equivalence(result, setup.st_name, chosen.note, tuple(setup.diagnostics.items) + tuple(chosen.diagnostics),
