@@ -234,10 +234,15 @@ def test_en_dash_spellings_of_l_minus():
 def test_definition_template_cache_gives_the_same_result_as_a_direct_parse():
     parser = DefParser()
     shapes = ["{} M", "{} M 12", "{} W4", "{} K $FF", "{} K 99999999999", "/c {} M &Other", "{} I &{}", "{} Q 5",
-              "{} K", "#define /g {}", "{}", "{} S 4 x"]
+              "{} K", "#define /g {}", "{}", "{} S 4 x",
+              # a number at the line's end goes through the template with 0 there
+              "{} M 4172", "{} K 100", "{} k100", "{} W\t123456789", "{} D 1234567890", "{} K 0012", "{} K -12",
+              "{} K +12", "{} T 07", "/c {} B 9", "{} I &{}7", "{} M &x 5", "{} 12", "{} X 12", "{} M 12 3",
+              "{} K 2147483648", "{} K 99999999999999999999", "{} M  0", "{} S4 5"]
     for shape, name in itertools.product(shapes, NAME_CORPUS):
         line = shape.format(name, name)
         assert parser.parse_line(line) == parser.parse_uncached(line), line
+        assert parser.parse_line(line) == parser.parse_uncached(line), line     # and again from the line cache
 
 
 def test_canonical_spelling():

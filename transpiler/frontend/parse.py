@@ -422,6 +422,11 @@ _DEF_NAME = re.compile(r"^\s*(?:/c\s+)?([A-Za-z_][A-Za-z0-9_]*)", re.IGNORECASE)
 
 # A definition line whose first word is the symbol name: lines that differ only in that name parse alike.
 _DEF_LEADING_NAME = re.compile(r"^((?:/[cC][ \t]+)?)([A-Za-z_][A-Za-z0-9_]*)(?=[ \t])")
+# ... and a fixed address or a constant given as a plain decimal number at the line's end (`M 4172`, `K 100`):
+# lines that also differ only in that number parse alike (the template has 0 there; up to 9 digits, so that the
+# number is the address or constant itself, well inside 32 bits).
+_DEF_NUMBER = re.compile(r"(?<![0-9])([0-9]{1,9})$")
+_DEF_KIND_BEFORE_NUMBER = re.compile(r"[MIOTCBWDSKmiotcbwdsk][ \t]*$")
 
 
 class DefParser(_CachedLineParser):
@@ -440,6 +445,29 @@ class DefParser(_CachedLineParser):
         if shape[0] != "ok" or shape[1][0] != "symbol":
             return None
         return ("ok", shape[1][:2] + (name,) + shape[1][3:])
+
+    def parse_line(self, code: str) -> tuple:
+        """As _CachedLineParser.parse_line; a symbol line with a decimal address or constant at its end is parsed
+        through the template with 0 there (a project's .def lines nearly all differ in name and address)."""
+        key = code.strip()
+        cached = self._cache.get(key)
+        if cached is not None:
+            return cached
+        number = _DEF_NUMBER.search(key)
+        if number is None or _DEF_KIND_BEFORE_NUMBER.search(key, 0, number.start()) is None \
+                or number.group(1) == "0":
+            return super().parse_line(key)
+        shape = super().parse_line(key[:number.start()] + "0")
+        result = shape[1] if shape[0] == "ok" else None
+        value = int(number.group(1))
+        if result is not None and result[0] == "symbol" and result[3] != "K" and result[4] == 0:
+            cached = ("ok", result[:4] + (value,) + result[5:])
+        elif result is not None and result[0] == "symbol" and result[3] == "K" and result[5] == 0:
+            cached = ("ok", result[:5] + (value,) + result[6:])
+        else:
+            return super().parse_line(key)
+        self._cache[key] = cached
+        return cached
 
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.DefFile:
         symbols: list[ast.SymbolDef] = []

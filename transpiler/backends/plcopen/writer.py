@@ -49,7 +49,8 @@ _REPETITION = re.compile(r"^\s*(\d+)\s*\((.*)\)\s*$", re.DOTALL)
 
 def xml_safe(text: str) -> str:
     """`text` with every character XML 1.0 cannot carry replaced by U+FFFD."""
-    return _NOT_XML.sub(REPLACEMENT, text)
+    # (printable ASCII, nearly every name and value, needs no scan)
+    return text if text.isascii() and text.isprintable() else _NOT_XML.sub(REPLACEMENT, text)
 
 
 def _q(tag: str) -> str:
@@ -57,10 +58,9 @@ def _q(tag: str) -> str:
 
 
 def _sub(parent: etree._Element, tag: str, **attributes: str) -> etree._Element:
-    element = etree.SubElement(parent, _q(tag))
-    for key, value in attributes.items():
-        element.set(key, xml_safe(value))
-    return element
+    # (the attributes go in with the element: one call into lxml per element, not one per attribute)
+    return etree.SubElement(parent, _q(tag), {key: xml_safe(value) for key, value in attributes.items()}
+                            if attributes else None)
 
 
 def _formatted_text(parent: etree._Element, tag: str, text: str) -> etree._Element:

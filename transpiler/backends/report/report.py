@@ -13,7 +13,7 @@ from transpiler.backends.st import hh_lib
 from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LIB_XML, library_project
 from transpiler.backends.report.iomap import IoMap, MapRow, iec_address
 from transpiler.backends.st.backend import StResult
-from transpiler.backends.st.liveness import use_def
+from transpiler.backends.st.liveness import SA_CODES
 from transpiler.diagnostics import Diagnostics
 from transpiler.ir import Program
 from transpiler.language.semantics import ASSUMPTION_BY_KEY
@@ -71,8 +71,7 @@ def user_pous(result: StResult) -> list[Pou]:
 
 def _target_limits(program: Program) -> list[str]:
     """What the vendor-neutral ST cannot hold the way the control does, as far as this program needs it."""
-    string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops
-                    if "SA" in frozenset().union(*use_def(op))]
+    string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops if op.code in SA_CODES]
     if not string_lines:
         return []
     where = ", ".join(string_lines[:5]) + (f" and {len(string_lines) - 5} more" if len(string_lines) > 5 else "")

@@ -13,6 +13,9 @@ _WA_USE = frozenset({"WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "W
                      "CMP", "SHL", "SHR", "BS", "BC", "BT", "PSW", "INCW", "DECW", "NOTW", "TWOC"})
 _WA_DEF = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD", "SUB", "MUL",
                      "DIV", "MOD", "SHL", "SHR", "BS", "BC", "PLW", "INCW", "DECW", "NOTW", "TWOC", "SUBM", "RPLY"})
+_SA_USE = frozenset({"SCAT", "SST", "SCMP"})
+_SA_DEF = frozenset({"SLD", "SCAT"})
+SA_CODES = _SA_USE | _SA_DEF        # the only ops that read or write the string accumulator
 
 
 def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
@@ -28,9 +31,9 @@ def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
         use.add("WA")
     if c in _WA_DEF:
         d.add("WA")
-    if c in ("SCAT", "SST", "SCMP"):
+    if c in _SA_USE:
         use.add("SA")
-    if c in ("SLD", "SCAT"):
+    if c in _SA_DEF:
         d.add("SA")
     if c in ("PSX", "INCX", "DECX"):
         use.add("X")

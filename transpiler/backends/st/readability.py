@@ -54,6 +54,8 @@ def measure(st_text: str, instructions: int) -> Readability:
     externals = 0
     inside = False
     for line in st_text.split("\n"):
+        if not inside and "VAR_EXTERNAL" not in line:
+            continue                # (outside a block only its opening line matters)
         code = _code_of(line)       # a block may carry its title as a comment
         if code == "VAR_EXTERNAL":
             inside = True
