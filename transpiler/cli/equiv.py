@@ -73,9 +73,9 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     print_screens(check.screens)
     files = {}
     if args.report:
-        files[args.report] = report_json(result)
+        files[args.report] = report_json(result, check.screens)
     if args.junit:
-        files[args.junit] = report_junit(result)
+        files[args.junit] = report_junit(result, check.screens)
     if args.cobertura or args.lcov:
         from transpiler.verify.coverage_export import coverage_files
         try:

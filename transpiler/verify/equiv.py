@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 from xml.sax.saxutils import escape, quoteattr
 
 from transpiler.backends.iec_model import IecProject
@@ -19,6 +19,7 @@ from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, c
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
+from transpiler.verify.screens import Screen, render_text
 from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
 from transpiler.verify.traces import TraceRecorder, write_vcd_scopes
 
@@ -291,8 +292,19 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
                              source_coverage(program, ops, len(coverage_sets)))
 
 
-def report_json(result: EquivalenceResult) -> str:
-    """The machine-readable report (`--report`): every run with its verdict, divergence and shrunk stimulus."""
+def screen_json(screen: Screen) -> dict[str, Any]:
+    """One screen of `--show-mask` as report data: which mask after which cycle of which scenario, both drawings
+    (None where a side drew nothing), whether they differ, and why nothing was drawn."""
+    return {"scenario": screen.scenario, "mask": screen.mask, "cycle": screen.cycle,
+            "drawn": screen.original is not None, "differs": screen.differs,
+            "original": list(screen.original) if screen.original is not None else None,
+            "translated": list(screen.translated) if screen.translated is not None else None,
+            "note": screen.note}
+
+
+def report_json(result: EquivalenceResult, screens: Sequence[Screen] = ()) -> str:
+    """The machine-readable report (`--report`): every run with its verdict, divergence and shrunk stimulus, and
+    the screens `--show-mask` drew (`screens`, empty without it)."""
     outcomes, backend, coverage = result.outcomes, result.backend, result.coverage
     runs = []
     for o in outcomes:
@@ -313,7 +325,7 @@ def report_json(result: EquivalenceResult) -> str:
                      "shrunk_scenario": scenario_to_yaml(o.shrunk) if o.shrunk else None})
     data = {"backend": backend, "verdict": result.verdict, "equivalent": result.equivalent, "runs": runs,
             "not_translated": [{"at": str(span), "what": text} for span, text in result.untranslated],
-            "coverage": coverage}
+            "coverage": coverage, "screens": [screen_json(screen) for screen in screens]}
     if result.source is not None:
         data["coverage"] = {**coverage, "files": [
             {"file": f.path, "lines": f.lines_valid, "lines_executed": f.lines_covered,
@@ -322,15 +334,20 @@ def report_json(result: EquivalenceResult) -> str:
     return json.dumps(data, indent=2) + "\n"
 
 
-def report_junit(result: EquivalenceResult) -> str:
-    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error."""
+def report_junit(result: EquivalenceResult, screens: Sequence[Screen] = ()) -> str:
+    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error. Each
+    screen of `--show-mask` is a test case too: screens that differ are a failure, one not drawn (the run ended
+    before its cycle) is skipped."""
     outcomes, backend = result.outcomes, result.backend
     failures = sum(1 for o in outcomes if o.result.divergence or o.result.missing or o.result.expectation_failures)
+    failures += sum(1 for screen in screens if screen.differs)
     errors = sum(1 for o in outcomes if o.result.error)
+    skipped = sum(1 for screen in screens if screen.original is None)
     total = sum(o.result.seconds for o in outcomes)
+    skipped_attr = f' skipped="{skipped}"' if skipped else ""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(outcomes)}" '
-             f'failures="{failures}" errors="{errors}" time="{total:.3f}">']
+             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(outcomes) + len(screens)}" '
+             f'failures="{failures}" errors="{errors}"{skipped_attr} time="{total:.3f}">']
     for o in outcomes:
         r = o.result
         lines.append(f'  <testcase classname="hh2iec.equiv" name={quoteattr(r.scenario)} time="{r.seconds:.3f}">')
@@ -351,8 +368,27 @@ def report_junit(result: EquivalenceResult) -> str:
         elif r.error:
             lines.append(f"    <error message={quoteattr(r.error)}/>")
         lines.append("  </testcase>")
+    lines += _screen_cases(screens)
     lines.append("</testsuite>")
     return "\n".join(lines) + "\n"
+
+
+def _screen_cases(screens: Sequence[Screen]) -> list[str]:
+    """The JUnit test cases of the screens, each with its drawing(s) as the command line prints them."""
+    lines = []
+    for screen in screens:
+        name = f"{screen.mask} after cycle {screen.cycle} of {screen.scenario}"
+        lines.append(f'  <testcase classname="hh2iec.equiv.screens" name={quoteattr(name)} time="0.000">')
+        text = escape(render_text(screen))
+        if screen.original is None:
+            lines.append(f"    <skipped message={quoteattr('not drawn: ' + screen.note)}/>")
+        elif screen.differs:
+            lines.append(f"    <failure message={quoteattr('the original and the translation draw different screens')}>"
+                         f"{text}</failure>")
+        else:
+            lines.append(f"    <system-out>{text}</system-out>")
+        lines.append("  </testcase>")
+    return lines
 
 
 def write_vcd(folder: Path, scenario: Scenario, res: CosimResult, traces: list, program: Program,
