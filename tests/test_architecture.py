@@ -12,7 +12,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "transpiler"
 
 # Floors from the bottom up: a module may import its own floor or lower ones, never a higher one.
 FLOORS = [
-    ("transpiler.diagnostics", "transpiler.atomic", "transpiler.resources"),
+    ("transpiler.diagnostics", "transpiler.atomic", "transpiler.resources", "transpiler.records"),
     ("transpiler.language",),
     ("transpiler.ir",),
     ("transpiler.frontend",),

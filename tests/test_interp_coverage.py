@@ -74,27 +74,30 @@ def test_coverage_alone_still_means_the_exact_variant() -> None:
     assert not compile_program(program, coverage=True, exact=False).exact
 
 
-def test_value_profile_marks_compares_whose_operands_come_out_equal_or_one_apart(tmp_path: Path) -> None:
+def test_boundaries_mark_compares_whose_operands_come_out_equal_or_one_apart(tmp_path: Path) -> None:
     # Catches: a wrong slot for a difference (off by one), a signed compare marked on the unsigned values, marks
-    # without value_profile (they would slow every co-simulation), a branch figure that counts them.
+    # without coverage, a branch figure that counts them, compares counted by the value profile twice.
     (tmp_path / "main.src").write_text("L     W10\n>     K100\n=     M1\nL     B20\n<     K-5\n=     M2\nEM\n")
     program = _program(tmp_path / "main.src")
     plain = Machine(program, compiled=compile_program(program, coverage=True, exact=False), coverage=True)
     machine = Machine(program, compiled=compile_program(program, coverage=True, exact=False, value_profile=True),
                       coverage=True)
+    bare = Machine(program, compiled=compile_program(program), coverage=False)
     seen = []
     for cycle, (w10, b20) in enumerate([(0, 0), (101, 0), (100, -6), (99, -5), (102, -4)]):
-        for m in (plain, machine):
+        for m in (plain, machine, bare):
             m.write("W", 10, w10)
             m.write("B", 20, b20)
             m.run_cycle(cycle, [])
-        seen.append(machine.value_outcomes())
+        seen.append(machine.boundary_outcomes())
+        assert plain.boundary_outcomes() == seen[-1]
     cmp_w, cmp_b = 1, 4                       # op ids of the two compares
     assert seen[0] == frozenset()
     assert seen[1] == {(cmp_w, 1)}
     assert seen[2] == {(cmp_w, 1), (cmp_w, 0), (cmp_b, -1)}
     assert seen[4] == {(cmp_w, d) for d in (-1, 0, 1)} | {(cmp_b, d) for d in (-1, 0, 1)}
-    assert machine.value_outcome_count == 6 and plain.value_outcome_count == 0
+    assert machine.boundary_outcome_count == 6 and bare.boundary_outcome_count == 0
+    assert machine.value_outcome_count == 0
     assert machine.branch_outcome_count == plain.branch_outcome_count
 
 

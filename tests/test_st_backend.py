@@ -150,8 +150,9 @@ def test_cli_transpile_writes_all_outputs(tmp_path):
     assert proc.returncode == 0, proc.stderr
     # the sample calls data and machine modules: the HH_Sys interface library is written beside the project
     assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == [
-        "hh_lib.st", "hh_lib.xml", "hh_sys.st", "hh_sys.xml", "io_map.csv", "plc_project/beremiz.xml",
-        "plc_project/plc.xml", "project.st", "project.xml", "report.md"]
+        "hh_lib.st", "hh_lib.xml", "hh_sys.st", "hh_sys.xml", "io_map.csv", "masks/M_dia_a1.msk.json",
+        "masks/M_dia_wz.msk.json", "masks/M_error.a.json", "plc_project/beremiz.xml", "plc_project/plc.xml",
+        "project.st", "project.xml", "report.md"]
     report = (out / "report.md").read_text()
     assert "## I/O map" in report and "## Assumptions applied" in report and "state-machine fallback" in report
     limits = report.split("## Target limits", 1)[1].split("\n## ", 1)[0]

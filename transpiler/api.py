@@ -16,10 +16,6 @@ from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from transpiler.atomic import write_files_atomically
-from transpiler.backends.report.iomap import IoMap
-from transpiler.backends.report.report import io_map_of, user_pous
-from transpiler.backends.st.backend import StResult
-from transpiler.backends.transpile import transpile_program
 from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.mainfile import main_candidates
@@ -29,7 +25,10 @@ from transpiler.frontend.preprocess import parse_define_value
 from transpiler.ir import Program
 from transpiler.language.semantics import Semantics, SemanticsError, make_semantics
 
-if TYPE_CHECKING:   # the executors load only when a simulation or co-simulation runs, not for `check`
+if TYPE_CHECKING:   # the back ends, executors and shard planning load only when a translation or simulation runs, not for `check`
+    from transpiler.backends.report.iomap import IoMap
+    from transpiler.backends.st.backend import StResult
+    from transpiler.verify.shard import ShardSpec
     from transpiler.verify.screens import Screen, ScreenRequest
     from transpiler.verify.equiv import EquivalenceResult
     from transpiler.verify.mutate import MutationResult
@@ -53,8 +52,10 @@ def semantics_for(profile: str | None = None, overrides: Mapping[str, object] | 
                   scenario: Path | None = None) -> Semantics:
     """The control profile and semantic choices: `scenario`'s `profile`/`semantics` keys, overridden by `profile`
     and `overrides`; the default profile is itnc530. Raises HH2IECError on an unknown profile or setting."""
-    from transpiler.verify.simulate import scenario_settings
-    scenario_profile, settings, where = scenario_settings(scenario) if scenario is not None else (None, {}, None)
+    scenario_profile, settings, where = None, {}, None
+    if scenario is not None:
+        from transpiler.verify.simulate import scenario_settings
+        scenario_profile, settings, where = scenario_settings(scenario)
     merged = {str(k): v for k, v in settings.items()}
     merged.update({str(k): v for k, v in (overrides or {}).items()})
     try:
@@ -153,10 +154,12 @@ class Transpilation:
 
     @property
     def io_map(self) -> IoMap:
+        from transpiler.backends.report.report import io_map_of
         return io_map_of(self.result, self.mp_file.name if self.mp_file is not None else None)
 
     @property
     def pou_count(self) -> int:
+        from transpiler.backends.report.report import user_pous
         return len(user_pous(self.result))
 
     def write(self, out_dir: Path) -> None:
@@ -223,6 +226,7 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
     path, mp, diags = machine_parameters_of(project, mp_file, allowed=allowed)
     diags.raise_if_errors()
+    from transpiler.backends.transpile import transpile_program
     out = transpile_program(project.program, diags, mp, formats, mp_file=path, target=target)
     if path is None and out.result.preset_vars:
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
@@ -333,6 +337,127 @@ def simulate(project: Project, scenario: Path, show_masks: Iterable[str] = ()) -
 
 
 @dataclasses.dataclass(frozen=True)
+class Plan:
+    """The units of a check (equiv's runs, mutate's mutants) in plan order, each with a cost estimate (cycles to
+    co-simulate), and the digest of the inputs they follow from. Every shard of a check computes the same plan; a
+    unit's number (1-based) is its place in it. `generated` holds the runs the coverage-guided search chose (written
+    into a plan file, so that shards need not search again)."""
+
+    command: str
+    digest: str
+    names: tuple[str, ...]
+    costs: tuple[float, ...]
+    generated: tuple = ()
+    setup_seconds: float = 0.0              # what translating and loading the scenarios took in this process
+    search_seconds: float = 0.0             # what the coverage-guided search took (0 with a plan file)
+
+    def assignment(self, count: int) -> list[int]:
+        """The shard (1..count) of each unit (shard.partition over the costs)."""
+        from transpiler.verify.shard import partition
+        return partition(self.costs, count)
+
+    def selected(self, share: "Share") -> list[int]:
+        """The numbers of the units `share` runs. Raises HH2IECError (E-USAGE) for a number outside the plan."""
+        count = len(self.names)
+        if share.sample > 0:
+            return sorted({1 + i * count // share.sample for i in range(min(share.sample, count))})
+        if share.only is not None:
+            if not 1 <= share.only <= count:
+                raise _usage(f"--only {share.only}: the plan has units 1 to {count}")
+            return [share.only]
+        if share.shard is None:
+            return list(range(1, count + 1))
+        return [i + 1 for i, k in enumerate(self.assignment(share.shard.count)) if k == share.shard.index]
+
+
+@dataclasses.dataclass(frozen=True)
+class Share:
+    """Which units of a check's plan this process runs and where its generated runs come from: the units of `shard`
+    (K of N), the one numbered `only`, or `sample` units spread evenly (to estimate the time of one); `plan_file`
+    holds the runs the coverage-guided search chose once for every shard. The default: every unit, searched here."""
+
+    shard: "ShardSpec | None" = None
+    only: int | None = None
+    plan_file: Path | None = None
+    sample: int = 0
+
+
+EVERYTHING = Share()
+
+
+def _inputs_digest(command: str, project: Project, mp_path: Path | None, files: Iterable[tuple[str, Path | None]],
+                   settings: Mapping[str, object]) -> str:
+    """The digest of everything a check's result follows from (see verify/shard.inputs_digest): the project's
+    files, the machine parameters, the named input files, the semantics, defines and the settings given."""
+    from transpiler import __version__
+    from transpiler.verify.shard import inputs_digest
+    folder = project.main.parent
+    sources = [("source", folder / name) for name in project.program.source_files]
+    options = project.options
+    semantics = project.semantics
+    all_settings = {"profile": semantics.profile.name, "semantics": dict(semantics.values),
+                    "defines": {k: str(v) for k, v in options.defines.items()}, "encoding": options.encoding,
+                    "werror": options.werror, **settings}
+    return inputs_digest(command, __version__, [*sources, ("machine parameters", mp_path), *files], all_settings)
+
+
+def _generated_runs(command: str, project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping | None,
+                    random_cycles: int, seed: int, plan_file: Path | None, digest: str) -> tuple[list, float]:
+    """The runs of the coverage-guided search (verify/guided.py; the user's scenarios its seeds) and the seconds it
+    took; with `plan_file`, the runs it chose when the plan was made, read back instead of searching again."""
+    import time
+    from transpiler.verify.guided import generate
+    if plan_file is not None:
+        return read_plan_file(plan_file, command, digest, names), 0.0
+    start = time.perf_counter()
+    runs = generate(project.program, names, random_cycles, seed, seeds, machine_parameters=mp_path, base_mp=mp)
+    return runs, time.perf_counter() - start
+
+
+def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
+    return CompileFailed([Diagnostic.of("E-SHARD", Span(str(at), 1, 1) if at is not None else NO_SPAN, message)])
+
+
+def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path | None = None) -> list:
+    """The generated runs of a plan file written by `--plan N --plan-file FILE` on the same inputs; raises
+    HH2IECError (E-SHARD) when the file is not a plan of `command` or was made from other inputs."""
+    import json
+    from transpiler.verify.scenario import ScenarioError, scenario_from_text
+    from transpiler.verify.shard import FORMAT
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise _shard_problem(f"cannot read the plan file: {exc}", path) from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT or data.get("kind") != "hh2iec-plan":
+        raise _shard_problem("not a plan file of this hh2iec (write one with --plan N --plan-file FILE)", path)
+    if data.get("command") != command:
+        raise _shard_problem(f"a plan file of `{data.get('command')}`, not of `{command}`", path)
+    if data.get("digest") != digest:
+        raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
+                             "version) than this run's: make it again with the same arguments", path)
+    out = []
+    for i, text in enumerate(data.get("generated", [])):
+        try:
+            out.append(scenario_from_text(text, f"{path}#generated{i + 1}", folder or Path.cwd(), names))
+        except ScenarioError as exc:
+            raise CompileFailed(list(exc.diagnostics)) from None
+    return out
+
+
+def plan_file_text(plan: Plan) -> str:
+    """The plan file (`--plan N --plan-file FILE`): the inputs' digest and the generated runs as scenario YAML
+    (machine-parameter files relative to the current folder, where every shard runs)."""
+    import json
+    from transpiler.verify.shard import FORMAT
+    from transpiler.verify.stimulus import scenario_to_yaml
+    return json.dumps({"kind": "hh2iec-plan", "format": FORMAT, "command": plan.command, "digest": plan.digest,
+                       "units": [{"unit": i + 1, "name": n, "cost": c} for i, (n, c) in
+                                 enumerate(zip(plan.names, plan.costs))],
+                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated]}, indent=1) + "\n"
+
+
+@dataclasses.dataclass(frozen=True)
 class Equivalence:
     """The equivalence check: every run's outcome, the verdict, and how the ST side was chosen."""
 
@@ -342,6 +467,7 @@ class Equivalence:
     diagnostics: tuple[Diagnostic, ...]
     html_page: bytes | None = None          # the evidence as one HTML page, when asked for
     screens: tuple[Screen, ...] = ()        # the masks asked for, drawn from both sides of each scenario's run
+    plan: "Plan | None" = None              # every run of the check, of which `result` holds the selected ones
 
     @property
     def screens_differ(self) -> bool:
@@ -352,31 +478,31 @@ class Equivalence:
         return self.result.equivalent
 
 
-def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
-                      backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
-                      mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
-                      progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
-                      allow_untranslated: bool = False, html: bool = False,
-                      show_masks: Iterable[str] = ()) -> Equivalence:
-    """Co-simulate the original program and its translation (or `st_file`) under each scenario and
-    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST's shipped
-    machine-parameter values must be the project's (else E-MP-TRANSLATION); a scenario's own machine parameters
-    are written into its globals as run-time data (values it cannot hold: E-MP-UNREPRESENTABLE, NO VERDICT). With `allow_untranslated`, a translation that left
-    code out is co-simulated but its verdict is at best NOT PROVEN. With `html` the result carries the evidence as
-    one self-contained HTML page (each divergent run replayed once more with every cycle recorded). `show_masks`
-    (`NAME@CYCLE`) replays each scenario once more and draws those masks from both sides after those cycles
-    (Equivalence.screens; a pair of screens that differ is a finding of its own, `screens_differ`)."""
-    from transpiler.exec.compiled.shim import ShimUnavailable
-    from transpiler.verify import pipeline
-    from transpiler.verify.equiv import choose_backend, run_equivalence
-    from transpiler.verify.guided import generate
+@dataclasses.dataclass
+class _EquivSetup:
+    """What an equivalence check sets up before it runs anything: the translation, the executor and the runs."""
+
+    st_text: str
+    st_name: str
+    iomap: IoMap
+    chosen: object
+    names: object
+    mp: dict | None                 # the machine parameters the translation was made with; None: the project has none
+    runs: list
+    plan: Plan
+    diagnostics: Diagnostics
+    untranslated: tuple
+
+
+def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: int, seed: int, backend: str,
+                       st_file: Path | None, io_map_file: Path | None, mp_file: Path | None, shrink: bool,
+                       allow_untranslated: bool, plan_file: Path | None) -> _EquivSetup:
+    import time
+    from transpiler.verify.equiv import choose_backend
     from transpiler.verify.simulate import project_names
-    scenarios = [Path(p) for p in scenarios]
+    start = time.perf_counter()
     if not scenarios and random_cycles <= 0:
         raise _usage("equiv needs at least one --scenario or --random-cycles N")
-    requests = screen_requests(project, show_masks)
-    if requests and not scenarios:
-        raise _usage("--show-mask draws masks in the runs of --scenario files: give at least one")
     for path in scenarios:
         if not path.is_file():
             raise _usage(f"scenario file '{path}' does not exist")
@@ -384,6 +510,8 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         raise _usage(f"ST file '{st_file}' does not exist")
     mp_path, mp, transpiled, diags = _translate(project, {"st"}, mp_file, allow_untranslated)
     st_text, st_name = transpiled.st_text, "project.st"
+    from transpiler.backends.report.iomap import IoMap
+    from transpiler.backends.report.report import io_map_of
     iomap = io_map_of(transpiled.result)
     if st_file is not None:
         st_file = Path(st_file)
@@ -394,38 +522,122 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
                 iomap = IoMap.from_csv(map_path.read_text(encoding="utf-8"))
             except ValueError as exc:
                 raise CompileFailed([Diagnostic.of("E-USAGE", Span(str(map_path), 1, 1), str(exc))]) from None
+    digest = _equivalence_digest(project, mp_path, scenarios, random_cycles, seed, backend, st_file, io_map_file,
+                                 shrink, allow_untranslated)
     chosen = choose_backend(backend, st_text, st_name, transpiled.result.project)
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
     loaded = _load_scenarios(project, scenarios, names, diags)
-    user_scenarios = list(loaded)
-    if random_cycles > 0:
-        # Coverage-guided corner stimulus, the user's scenarios its seeds (see verify/guided.py).
-        loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                           base_mp=base_mp)
+    setup_seconds = time.perf_counter() - start
+    generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp, random_cycles,
+                                                seed, plan_file, digest)
+    runs = loaded + generated
+    plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
+                tuple(generated), setup_seconds, search_seconds)
+    return _EquivSetup(st_text, st_name, iomap, chosen, names, base_mp, runs, plan, diags,
+                       tuple(transpiled.result.untranslated))
+
+
+def _equivalence_digest(project: Project, mp_path: Path | None, scenarios: list[Path], random_cycles: int, seed: int,
+                        backend: str, st_file: Path | None, io_map_file: Path | None, shrink: bool,
+                        allow_untranslated: bool) -> str:
+    map_path = None
+    if st_file is not None:
+        map_path = Path(io_map_file) if io_map_file is not None else Path(st_file).parent / "io_map.csv"
+        map_path = map_path if map_path.is_file() else None
+    return _inputs_digest("equiv", project, mp_path,
+                          [*(("scenario", path) for path in scenarios), ("st", st_file), ("io map", map_path)],
+                          {"random_cycles": random_cycles, "seed": seed, "backend": backend, "shrink": shrink,
+                           "allow_untranslated": allow_untranslated})
+
+
+def equivalence_digest(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                       backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                       mp_file: Path | None = None, shrink: bool = True, allow_untranslated: bool = False) -> str:
+    """The inputs' digest check_equivalence gives its plan with the same arguments, without running anything (the
+    merge of shard results checks that the sources it loads are the ones the shards ran on)."""
+    mp_path, _, diags = machine_parameters_of(project, mp_file)
+    diags.raise_if_errors()
+    return _equivalence_digest(project, mp_path, [Path(p) for p in scenarios], random_cycles, seed, backend,
+                               st_file, io_map_file, shrink, allow_untranslated)
+
+
+def plan_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                     backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                     mp_file: Path | None = None, shrink: bool = True, allow_untranslated: bool = False,
+                     plan_file: Path | None = None) -> tuple[Plan, float]:
+    """The runs check_equivalence would make with the same arguments (the coverage-guided search included), and
+    the seconds per co-simulated cycle measured on one run of about the mean length (the calibration run)."""
+    import time
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify.equiv import run_equivalence
+    setup = _equivalence_setup(project, [Path(p) for p in scenarios], random_cycles, seed, backend, st_file,
+                               io_map_file, mp_file, shrink, allow_untranslated, plan_file)
+    costs = setup.plan.costs
+    mean = sum(costs) / len(costs)
+    probe = min(range(len(costs)), key=lambda i: (abs(costs[i] - mean), i))
+    start = time.perf_counter()
+    try:
+        run_equivalence(project.program, setup.chosen.factory, setup.iomap, [setup.runs[probe]], setup.names,
+                        setup.chosen.name, shrink_divergences=False, base_mp=setup.mp)
+    except ShimUnavailable as exc:
+        raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
+    return setup.plan, (time.perf_counter() - start) / max(1.0, costs[probe])
+
+
+def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 0, seed: int = 1,
+                      backend: str = "auto", st_file: Path | None = None, io_map_file: Path | None = None,
+                      mp_file: Path | None = None, shrink: bool = True, vcd_dir: Path | None = None,
+                      progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
+                      allow_untranslated: bool = False, html: bool = False, show_masks: Iterable[str] = (),
+                      share: Share = EVERYTHING) -> Equivalence:
+    """Co-simulate the original program and its translation (or `st_file`) under each scenario and
+    `random_cycles` of random stimulus, compared every cycle; divergent stimuli are shrunk. The ST's shipped
+    machine-parameter values must be the project's (else E-MP-TRANSLATION); a scenario's own machine parameters
+    are written into its globals as run-time data (values it cannot hold: E-MP-UNREPRESENTABLE, NO VERDICT). With
+    `allow_untranslated`, a translation that left code out is co-simulated but its verdict is at best NOT PROVEN.
+    With `html` the result carries the evidence as one self-contained HTML page (each divergent run replayed once more with every cycle recorded). `show_masks`
+    (`NAME@CYCLE`) replays each scenario once more and draws those masks from both sides after those cycles
+    (Equivalence.screens; a pair of screens that differ is a finding of its own, `screens_differ`). `share` picks
+    the runs of the plan to make (a shard's, one alone) and where the generated ones come from."""
+    from transpiler.exec.compiled.shim import ShimUnavailable
+    from transpiler.verify import pipeline
+    from transpiler.verify.equiv import run_equivalence
+    scenarios = [Path(p) for p in scenarios]
+    requests = screen_requests(project, show_masks)
+    if requests and not scenarios:
+        raise _usage("--show-mask draws masks in the runs of --scenario files: give at least one")
+    setup = _equivalence_setup(project, scenarios, random_cycles, seed, backend, st_file, io_map_file, mp_file,
+                               shrink, allow_untranslated, share.plan_file)
+    chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
+    selected = setup.plan.selected(share)
+    loaded = [setup.runs[i - 1] for i in selected]
+    user_scenarios = setup.runs[:len(scenarios)]        # the plan lists the user's scenarios first
     try:
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
-                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=base_mp,
-                                 untranslated=tuple(transpiled.result.untranslated),
+                                 shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
+                                 untranslated=setup.untranslated,
                                  pipelined=pipeline.worthwhile())
+        result.run_ids = tuple(selected)
         page = None
         if html:
             from transpiler.verify.evidence import divergence_traces, equivalence_evidence
             from transpiler.verify.html_report import render_page
-            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, st_text,
-                                       base_mp)
+            traces = divergence_traces(result, project.program, chosen.factory, iomap, names, loaded, setup.st_text,
+                                       mp)
             page = render_page(equivalence_evidence(result, project.program, project.main.parent,
                                                     f"Equivalence of {project.main.name}", traces,
                                                     project.options.encoding))
         screens: tuple = ()
         if requests:
             from transpiler.verify.screens import draw_both_sides
-            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, base_mp)
+            screens = draw_both_sides(project.program, chosen.factory, iomap, user_scenarios, names, requests, mp)
     except ShimUnavailable as exc:
         raise CompileFailed([Diagnostic.of("E-TOOL", NO_SPAN, str(exc))]) from None
-    return Equivalence(result, st_name, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), page, screens)
+    return Equivalence(result, setup.st_name, chosen.note, tuple(setup.diagnostics.items) + tuple(chosen.diagnostics),
+                       page, screens, setup.plan)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -436,6 +648,8 @@ class Mutation:
     st_text: str
     backend_note: str
     diagnostics: tuple[Diagnostic, ...]
+    plan: Plan | None = None                # every mutant of the check, of which `result` holds the judged ones
+    unit_ids: Mapping = dataclasses.field(default_factory=dict)     # judged mutant -> its number in the plan
 
 
 def mutation_page(project: Project, mutation: Mutation, min_score: float) -> bytes:
@@ -448,22 +662,45 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
                                          project.options.encoding))
 
 
+def _mutation_runs(project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping | None,
+                   scenarios: list[Path],
+                   equivalent_file: Path | None, mutants_file: Path | None, settings: tuple[int, int, str, int],
+                   share: Share) -> tuple[str, list, float]:
+    """The inputs' digest of a mutation check (`settings`: random cycles, seed, backend choice and count) and its
+    generated runs with the seconds their search took."""
+    random_cycles, seed, backend, count = settings
+    digest = _inputs_digest("mutate", project, mp_path, [*(("scenario", path) for path in scenarios),
+                                                         ("equivalent", equivalent_file), ("mutants", mutants_file)],
+                            {"random_cycles": random_cycles, "seed": seed, "backend": backend, "count": count})
+    return (digest, *_generated_runs("mutate", project, names, seeds, mp_path, mp, random_cycles, seed,
+                                     share.plan_file, digest))
+
+
+def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list, search_seconds: float,
+                   share: Share) -> tuple[Plan, dict]:
+    """The mutants in plan order, and the ones `share` judges with their numbers. A mutant's cost estimate is the
+    cycles of every scenario, what it takes to survive (a kill stops early, at a place no estimate made before
+    judging knows). The set-up time is the caller's to measure."""
+    plan = Plan("mutate", digest, tuple(f"{m.pou}: {m.operator}: {m.description}" for m in mutants),
+                (float(sum(s.cycles for s in scenarios)),) * len(mutants), tuple(generated), 0.0, search_seconds)
+    return plan, {mutants[i - 1]: i for i in plan.selected(share)}
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
-           progress: Callable[[int, int], None] | None = None) -> Mutation:
+           progress: Callable[[int, int], None] | None = None, share: Share = EVERYTHING) -> Mutation:
     """Mutants of the emitted ST judged by co-simulation under the scenarios and `random_cycles` of
     coverage-guided stimulus (see verify/mutate.py); `count` > 0 judges a seeded sample spread over the
     operators, `mutants_file` (the --survivors format) only the mutants it lists; `equivalent_file` lists mutants
     judged equivalent, which leave the denominator. Raises CompileFailed on bad input, or when the unmutated
-    translation is not equivalent under the stimulus."""
+    translation is not equivalent under the stimulus. `share`: as for check_equivalence, over the mutants."""
     import os
     import tempfile
     import time
     from transpiler.backends.st.check import find_iec2c
     from transpiler.verify.cosim import builtin_side_factory
     from transpiler.verify.equiv import choose_backend
-    from transpiler.verify.guided import generate
     from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
                                           judge_all, load_equivalents, mutation_sites)
     from transpiler.verify.simulate import project_names
@@ -491,8 +728,11 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
-    loaded += generate(project.program, names, random_cycles, seed, loaded, machine_parameters=mp_path,
-                       base_mp=base_mp)
+    digest, generated, search_seconds = _mutation_runs(project, names, loaded, mp_path, base_mp, scenarios,
+                                                       equivalent_file, mutants_file,
+                                                       (random_cycles, seed, backend, count), share)
+    loaded += generated
+    from transpiler.backends.report.report import io_map_of
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
                   st_text, side_factory, compile_program(project.program), base_mp)
     saved_cache = os.environ.get("HH2IEC_CACHE")
@@ -505,9 +745,9 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
                 raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
                              "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
             sites = mutation_sites(st_text)
-            mutants = choose(sites, count, seed)
-            if listed is not None:
-                mutants = [m for m in mutants if m.key in listed]
+            mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
+            plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
+            mutants = list(unit_ids)
             start = time.perf_counter()
             verdicts = []
             for verdict in judge_all(judge, mutants, jobs):
@@ -527,4 +767,4 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     result = MutationResult(verdicts, len(sites), [s.name for s in judge.scenarios], chosen.name, seconds, unmatched,
                             listed_absent=absent, scenario_files=tuple(files.get(id(s), "") for s in judge.scenarios),
                             pou_sources={p.name: p.source_map for p in iec.pous if p.source_map})
-    return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics))
+    return Mutation(result, st_text, chosen.note, tuple(diags.items) + tuple(chosen.diagnostics), plan, unit_ids)

@@ -6,6 +6,8 @@ import dataclasses
 import enum
 from typing import Iterable
 
+from transpiler.records import quick_init
+
 
 class Severity(enum.Enum):
     ERROR = "error"
@@ -13,6 +15,7 @@ class Severity(enum.Enum):
     NOTE = "note"
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, order=True)
 class Span:
     """A position in an original source file (1-based line and column)."""
@@ -184,6 +187,9 @@ CODES: dict[str, CodeInfo] = {
            "configuration's names, writes through a VAR_EXTERNAL FB instance, located addresses the runtime does not "
            "map); in a translation this is a bug in hh2iec", "CONFIGURATION HH_Config  ; the OpenPLC runtime needs "
            "Config0"),
+        _c("E-SHARD", "error", "shard results or a plan file that do not belong together: another command, other "
+           "inputs (sources, scenarios, settings, hh2iec version), a shard missing or given twice",
+           "hh2iec merge shard1.json shard2.json   ; written with --shard 1/3 and 2/3: shard 3/3 is missing"),
         _c("E-USAGE", "error", "bad command-line usage",
            "hh2iec check          ; MAIN.src is missing\nhh2iec check Main.src -D CFG_X    ; -D needs NAME=VALUE"),
         _c("E-XSD", "error", "emitted PLCopen XML does not validate against the TC6 schema (a bug in hh2iec)",

@@ -7,6 +7,7 @@ from typing import Mapping
 
 from transpiler.diagnostics import Span
 from transpiler.language.semantics import Semantics
+from transpiler.records import quick_init
 
 BIT_KINDS = frozenset("MIOTC")
 MEM_KINDS = frozenset("BWD")
@@ -14,6 +15,7 @@ WIDTH = {"B": 8, "W": 16, "D": 32, "K": 32, "KF": 32, "X": 32}
 BYTES = {"B": 1, "W": 2, "D": 4}
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Operand:
     """A resolved operand. kind: M I O T C | B W D | K | KF | X | S (string memory) | STR (immediate text)."""
@@ -47,6 +49,7 @@ class Operand:
         return f"{self.kind}{self.addr}" + ("[X]" if self.indexed else "")
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class CallTarget:
     """A subprogram entry (file index and op index of its LBL) or a PLC module number."""
@@ -74,6 +77,7 @@ class Bracket:
     load: bool
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Op:
     """One lowered operation. `code` is the semantic operation (see interp/compile.py for the list)."""

@@ -2,9 +2,11 @@
 
 Usage: python -m tests.difftest.run [--count 200] [--seed 1] [--cycles 300] [--size 40] [--jobs N]
                                     [--backends auto|builtin|both] [--matiec-every K] [--reduce] [--out DIR]
+                                    [--shard K/N]
 
 Program i of a run is generated from seed SEED * 1 000 000 + i, so every failure can be replayed on its own
-(`--only SEED_OF_PROGRAM`). The random stimulus toggles every input the program reads. When both executors run,
+(`--only SEED_OF_PROGRAM`), and `--shard K/N` checks only shard K of N of the programs (each CI job of N its own
+share, dealt out as `hh2iec equiv --shard` deals out runs; every shard's exit status counts). The random stimulus toggles every input the program reads. When both executors run,
 a disagreement is blamed on the side that differs from the other two: both ST executors against the reference
 interpreter -> translator; one executor alone -> that executor. Exit 0 when every program was equivalent,
 1 otherwise.
@@ -28,6 +30,7 @@ if str(ROOT) not in sys.path:
 from tests.difftest.check import OK, PASSING, STR_MAX, TARGET_LIMIT, Verdict, available_backends, check_files  # noqa: E402
 from tests.difftest.generator import generate  # noqa: E402
 from transpiler.cli.progress import ProgressLine  # noqa: E402
+from transpiler.verify.shard import ShardSpec, partition  # noqa: E402
 
 REGRESSIONS = ROOT / "tests" / "regressions"
 
@@ -60,8 +63,19 @@ def jobs_for(args: argparse.Namespace) -> list[Job]:
     # matiec compiles every program (seconds each): with --backends auto it takes part in every K-th program only.
     every = {"builtin": 0, "both": 1, "auto": args.matiec_every}[args.backends] if "matiec" in found else 0
     seeds = [args.only] if args.only is not None else [program_seed(args.seed, i) for i in range(args.count)]
+    if args.shard is not None:
+        # every program costs about the same (its size and cycles are the run's): the partition deals them out
+        assignment = partition([float(args.size * args.cycles)] * len(seeds), args.shard.count)
+        seeds = [s for s, k in zip(seeds, assignment) if k == args.shard.index]
     return [Job(s, args.size, args.cycles, found if every and n % every == 0 else ("builtin",))
             for n, s in enumerate(seeds)]
+
+
+def _shard(text: str) -> ShardSpec:
+    try:
+        return ShardSpec.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -74,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--backends", choices=("auto", "builtin", "both"), default="auto")
     parser.add_argument("--matiec-every", type=int, default=10, help="with --backends auto: matiec on every K-th")
     parser.add_argument("--only", type=int, help="check the one program with this program seed")
+    parser.add_argument("--shard", type=_shard, metavar="K/N", help="check only shard K of N of the programs")
     parser.add_argument("--reduce", action="store_true", help="reduce each failure into tests/regressions/")
     parser.add_argument("--out", type=Path, default=REGRESSIONS, help="where reduced cases go")
     parser.add_argument("--quiet", action="store_true", help="only the summary")

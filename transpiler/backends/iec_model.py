@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from types import MappingProxyType
 from typing import Literal
 
 PouKind = Literal["PROGRAM", "FUNCTION_BLOCK", "FUNCTION"]
@@ -118,5 +119,9 @@ def st_comment(text: str) -> str:
     """An ST comment that is safe whatever `text` contains (no nested or closing comment markers)."""
     safe = text.replace("(*", "( *").replace("*)", "* )")
     # Control characters other than tab would upset some importers; show them as '?'.
-    safe = "".join(ch if ch == "\t" or ord(ch) >= 32 else "?" for ch in safe)
+    safe = safe.translate(_CONTROL_AS_QUESTION_MARK)
     return f"(* {safe} *)"
+
+
+# (str.translate's table: every control character but tab becomes '?')
+_CONTROL_AS_QUESTION_MARK = MappingProxyType({code: "?" for code in range(32) if chr(code) != "\t"})

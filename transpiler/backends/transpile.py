@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics
+from transpiler.frontend.pipeline import cyclic_gc_paused
 from transpiler.ir import Program
 from transpiler.backends.st.backend import StBackend, StResult
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, dialect, for_target, target_section
@@ -38,6 +39,12 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv; `target` picks the
     dialect of project.st and project.xml (st/dialect.py). `st_text` is always the matiec text: that is what the
     co-simulation runs; `result` is the matiec translation too, for the report and the I/O map."""
+    with cyclic_gc_paused():
+        return _transpile(program, diags, mp, formats, mp_file, target)
+
+
+def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
+               formats: set[str], mp_file: Path | None, target: str) -> Transpiled:
     from transpiler.backends.plcopen.writer import render_target_xml, render_xml
     from transpiler.backends.st.writer import render_st, render_target_st
     mp_name = mp_file.name if mp_file is not None else None
@@ -52,7 +59,9 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
         built = StBackend(program, Diagnostics(), mp, mp_file=mp_name, dialect=chosen).build().project
     laid_out = for_target(built, target)
     if "st" in formats:
-        files["project.st"] = render_target_st(laid_out).encode("utf-8")
+        # The matiec layout of the matiec translation is st_text itself (render_target_st would print it again).
+        same_text = laid_out.project is project and laid_out.dialect.st_template == TARGETS[DEFAULT_TARGET].st_template
+        files["project.st"] = (st_text if same_text else render_target_st(laid_out)).encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_target_xml(laid_out)
         if chosen.xml_globals == "configuration":
@@ -81,7 +90,7 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
     written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
     if chosen.task_by_hand:
         files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")
-    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)
+    files["report.md"] = (render_report(program, result, diags, mp_name, st_text) + target_section(laid_out)
                           + how_to_load(laid_out, written, native)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)

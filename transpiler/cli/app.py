@@ -10,16 +10,17 @@ from importlib import metadata
 from typing import Sequence
 
 from transpiler import __version__, api
-from transpiler.cli import equiv, mutate, simulate, transpile
+from transpiler.cli import equiv, merge, mutate, simulate, transpile
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
-                                   diagnostics_json, options_from_args, print_diagnostics, semantics_from_args)
+                                   diagnostics_json, one_shot, options_from_args, print_diagnostics,
+                                   semantics_from_args)
 from transpiler.diagnostics import CODES, NO_SPAN, CompileFailed, explain
 from transpiler.frontend.pipeline import CompileResult
 from transpiler.language.semantics import ASSUMPTION_BY_KEY, ASSUMPTIONS, PROFILES, Assumption
 from transpiler.resources import DataMissing
 
 # Each module registers its own subcommands; listed here so that the parser's contents are visible in one place.
-SUBCOMMAND_MODULES = (transpile, simulate, equiv, mutate)
+SUBCOMMAND_MODULES = (transpile, simulate, equiv, mutate, merge)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -57,6 +58,7 @@ def summary(result: CompileResult) -> dict:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
+    one_shot()
     result = api.check_project(options_from_args(args), semantics_from_args(args))
     print_diagnostics(result.diagnostics.items)
     data = summary(result)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import gc
 import sys
 from pathlib import Path
 from typing import Iterable
@@ -72,6 +73,14 @@ def project_from_args(args: argparse.Namespace, scenario: Path | None = None) ->
     return api.load_project(options, semantics_from_args(args, scenario))
 
 
+def one_shot() -> None:
+    """For a command that reads a project, writes its result and ends (check, transpile): the cyclic garbage
+    collector is switched off for the rest of the process. The front end and the back ends build millions of
+    acyclic records (freed by reference counting as usual); each collection of the collector would only walk
+    them again (a tenth of `check` on a 100 000-line project), and the process ends right after."""
+    gc.disable()
+
+
 def print_diagnostics(items: Iterable[Diagnostic], stream=None) -> None:
     stream = stream or sys.stderr
     for d in items:
@@ -97,6 +106,89 @@ def write_reports(files: dict) -> bool:
     if files:
         print("reports: " + ", ".join(str(path) for path in files))
     return True
+
+
+# ---------------------------------------------------------------------------------------------
+# sharding (verify/shard.py): the flags equiv and mutate share, and the arguments a shard records
+
+# Flags that choose what a run writes or how it is split, not what it finds: left out of the arguments a shard
+# records (merge loads the project from them, and the command that reproduces a failure repeats them).
+NOT_INPUTS = frozenset({"shard", "plan", "plan_file", "only", "report", "junit", "cobertura", "lcov", "vcd", "html",
+                        "verbose", "survivors", "mutation_report", "jobs", "help", "handler", "command_parser",
+                        "show_mask"})
+
+
+def shard_spec(text: str):
+    from transpiler.verify.shard import ShardSpec
+    try:
+        return ShardSpec.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_shard_arguments(p: argparse.ArgumentParser, units: str) -> None:
+    p.add_argument("--shard", type=shard_spec, metavar="K/N",
+                   help=f"run only shard K of N: a share of the {units} every shard computes alike from the same "
+                        "inputs; needs --report (the shard's result, for `hh2iec merge`)")
+    p.add_argument("--plan", type=int, metavar="N",
+                   help=f"run nothing: print the number of {units} and the estimated time of each of N shards")
+    p.add_argument("--plan-file", type=Path, metavar="FILE",
+                   help="with --plan: also write the plan, with the runs the coverage-guided search chose, to FILE; "
+                        "with --shard or --only: take those runs from FILE instead of searching again")
+    p.add_argument("--only", type=int, metavar="ID",
+                   help=f"run only the one of the {units} with this number (`run` or `unit` in the report; the "
+                        "merged report names the command line for each failure)")
+
+
+def check_shard_arguments(args: argparse.Namespace) -> None:
+    if args.plan is not None:
+        if args.plan < 1:
+            raise UsageError("--plan N needs N of at least 1 shard")
+        if args.shard is not None or args.only is not None:
+            raise UsageError("--plan runs nothing: give it without --shard and --only")
+    elif args.plan_file is not None and not args.plan_file.is_file():
+        raise UsageError(f"plan file '{args.plan_file}' does not exist (write it with --plan N --plan-file FILE)")
+    if args.shard is not None and args.only is not None:
+        raise UsageError("--only runs one unit of the whole plan: give it without --shard")
+    if args.shard is not None and args.report is None:
+        raise UsageError("--shard needs --report OUT.json: the shard's result, which `hh2iec merge` combines")
+
+
+def input_argv(args: argparse.Namespace) -> list[str]:
+    """The command's arguments that decide what it finds (the project, inputs and settings), rebuilt from the
+    parsed values in the parser's order, long flags preferred: what a shard records for merge and reproduction."""
+    positional: list[str] = []
+    options: list[str] = []
+    for action in args.command_parser._actions:
+        if action.dest in NOT_INPUTS:
+            continue
+        value = getattr(args, action.dest, None)
+        if not action.option_strings:
+            positional.append(str(value))
+            continue
+        if value == action.default or value is None:
+            continue
+        flag = max(action.option_strings, key=len)
+        if isinstance(action, argparse._StoreTrueAction):
+            options.append(flag)
+        elif isinstance(action, argparse._AppendAction):
+            for item in value:
+                options += [flag, str(item)]
+        else:
+            options += [flag, str(value)]
+    return positional + options
+
+
+def print_plan(command: str, plan, count: int, seconds_per_cost: float, unit: str, setup_note: str) -> None:
+    """The plan of `--plan N`: the units and the estimated time of each shard."""
+    from transpiler.verify.shard import shard_loads
+    loads = shard_loads(plan.costs, plan.assignment(count), count)
+    total = sum(plan.costs)
+    print(f"{command} plan: {len(plan.costs)} {unit}; set-up per shard {plan.setup_seconds:.1f} s{setup_note}")
+    for k, (units, cost) in enumerate(loads, 1):
+        print(f"  shard {k}/{count}: {units} {unit}, about {plan.setup_seconds + cost * seconds_per_cost:.0f} s")
+    print(f"  unsharded: about {plan.setup_seconds + total * seconds_per_cost:.0f} s; the largest shard carries "
+          f"{100.0 * max(c for _, c in loads) / total if total else 0:.0f}% of the work")
 
 
 def print_screens(screens) -> None:

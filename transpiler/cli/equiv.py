@@ -8,8 +8,9 @@ from pathlib import Path
 from typing import Callable
 
 from transpiler import api
-from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
-                                   print_screens, project_from_args, write_reports)
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
+                                   check_shard_arguments, input_argv, print_diagnostics, print_plan, print_screens,
+                                   project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
 
@@ -42,7 +43,8 @@ def register(sub: argparse._SubParsersAction, common) -> None:
                    "that differ fail the run (exit 1; repeatable; docs/masks.md)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also a line for every equivalent run and the list of what no run covered")
-    p.set_defaults(handler=cmd_equiv)
+    add_shard_arguments(p, "runs")
+    p.set_defaults(handler=cmd_equiv, command_parser=p)
 
 
 def cmd_equiv(args: argparse.Namespace) -> int:
@@ -54,15 +56,21 @@ def cmd_equiv(args: argparse.Namespace) -> int:
             raise UsageError(f"scenario file '{path}' does not exist")
     if args.st is not None and not args.st.is_file():
         raise UsageError(f"ST file '{args.st}' does not exist")
+    check_shard_arguments(args)
+    if args.show_mask and (args.shard is not None or args.plan is not None):
+        raise UsageError("--show-mask replays the scenarios in one process: give it without --shard and --plan")
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
+    inputs = dict(scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed, backend=args.backend,
+                  st_file=args.st, io_map_file=args.io_map, mp_file=args.mp, shrink=not args.no_shrink,
+                  allow_untranslated=args.allow_untranslated)
+    if args.plan is not None:
+        return _plan(project, args, inputs)
     line = ProgressLine("equiv", "cycles")
     try:
-        check = api.check_equivalence(project, scenarios=args.scenario, random_cycles=args.random_cycles,
-                                      seed=args.seed, backend=args.backend, st_file=args.st, io_map_file=args.io_map,
-                                      mp_file=args.mp, shrink=not args.no_shrink, vcd_dir=args.vcd,
-                                      progress=_cycle_progress(line), allow_untranslated=args.allow_untranslated,
-                                      html=args.html is not None, show_masks=args.show_mask)
+        check = api.check_equivalence(project, **inputs, vcd_dir=args.vcd, progress=_cycle_progress(line),
+                                      html=args.html is not None, show_masks=args.show_mask,
+                                      share=api.Share(args.shard, args.only, args.plan_file))
     finally:
         line.close()
     print_diagnostics(check.diagnostics)
@@ -73,7 +81,15 @@ def cmd_equiv(args: argparse.Namespace) -> int:
     print_screens(check.screens)
     files = {}
     if args.report:
-        files[args.report] = report_json(result, check.screens)
+        from transpiler import __version__
+        from transpiler.verify.shard import reproduce_command, shard_section
+        argv = input_argv(args)
+        plan_file = str(args.plan_file) if args.plan_file is not None else None
+        section = None if args.shard is None else shard_section(
+            "equiv", args.shard, check.plan.digest, __version__, argv, (check.plan.names, check.plan.costs),
+            result.run_ids, plan_file=plan_file)
+        files[args.report] = report_json(result, lambda run: reproduce_command("equiv", argv, run, plan_file), section,
+                                         check.screens)
     if args.junit:
         files[args.junit] = report_junit(result, check.screens)
     if args.cobertura or args.lcov:
@@ -88,17 +104,34 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         files[args.html / PAGE_FILE] = check.html_page
     if not write_reports(files):
         return EXIT_BAD_INPUT
+    share = (f"shard {args.shard} ({len(result.outcomes)} of {len(check.plan.names)} runs): " if args.shard else
+             f"run {args.only} of {len(check.plan.names)}: " if args.only else "")
+    if args.shard is not None and not result.outcomes:
+        print(f"hh2iec equiv: {share}nothing to run; `hh2iec merge` gives the verdict of all shards")
+        return EXIT_OK
     headline = result.verdict
     if check.screens_differ:
         # The screens are a finding of their own: the headline must not read as a pass when the operator's view
         # differs, whatever the compared operands say.
         differing = sorted({f"{s.mask} after cycle {s.cycle} of {s.scenario}" for s in check.screens if s.differs})
         headline = f"SCREENS DIFFER: {'; '.join(differing)}; compared operands: {result.verdict}"
-    print(f"hh2iec equiv: {headline} ({len(result.outcomes)} runs, "
+    print(f"hh2iec equiv: {share}{headline} ({len(result.outcomes)} runs, "
           f"{sum(o.result.cycles_run for o in result.outcomes)} cycles, backend {result.backend})")
     if result.errors:
         return EXIT_BAD_INPUT
     return EXIT_OK if result.equivalent and not check.screens_differ else EXIT_FAILED
+
+
+def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
+    """`--plan N`: the runs and the estimated time of each of N shards; `--plan-file` also writes the plan."""
+    plan, per_cycle = api.plan_equivalence(project, **inputs)
+    note = f"; {1000 * per_cycle:.2f} ms per co-simulated cycle (one calibration run)"
+    if plan.generated:
+        note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs once, "
+                 "here, else again in every shard")
+    print_plan("equiv", plan, args.plan, per_cycle, "runs", note)
+    files = {args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {}
+    return EXIT_OK if write_reports(files) else EXIT_BAD_INPUT
 
 
 def _cycle_progress(line: ProgressLine) -> Callable[[str, int, int], Callable[[int, int], None]]:
@@ -156,13 +189,31 @@ def _print_outcomes(result, verbose: bool) -> None:
     if not result.started:
         print("coverage: none (no run started)")
         return
-    c = result.coverage
+    print_coverage(result.coverage, verbose)
+
+
+def print_coverage(c: dict, verbose: bool) -> None:
+    """The coverage line (and with `verbose` every branch outcome, CASE entry, MC/DC condition and boundary value no
+    run took, and every infeasible one with its reason)."""
+    from transpiler.verify.mcdc import figures
     print(f"coverage: instructions {c['instructions_executed']}/{c['instructions']} ({_pct(c['instructions_executed'], c['instructions'])}), "
           f"conditional branches both ways {c['branches_both_ways']}/{c['branches']} "
-          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}")
+          f"({_pct(c['branches_both_ways'], c['branches'])}), CASE entries {c['case_entries_taken']}/{c['case_entries']}"
+          + (f", {figures(c)}" if "mcdc" in c else ""))
     never = c.get("never_taken", ())
     if verbose:
         for item in never:
             print(f"  not covered: {item['at']}: {item['what']}")
     elif never:
         print(f"  {len(never)} branch outcomes or CASE entries no run took (-v lists them)")
+    if "mcdc" in c:
+        missing = c["mcdc"]["not_shown"] + c["boundaries"]["not_reached"]
+        infeasible = c["mcdc"]["infeasible"] + c["boundaries"]["infeasible"]
+        if verbose:
+            for item in missing:
+                print(f"  not covered: {item['at']}: {item['what']}")
+            for item in infeasible:
+                print(f"  infeasible: {item['at']}: {item['what']}: {item['reason']}")
+        elif missing or infeasible:
+            print(f"  {len(missing)} MC/DC conditions or boundary values no run covered, {len(infeasible)} "
+                  "infeasible (-v lists them)")

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
+import time
 import sys
 from pathlib import Path
 
 from transpiler import api
-from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, print_diagnostics,
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
+                                   check_shard_arguments, input_argv, print_diagnostics, print_plan,
                                    project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 
@@ -45,12 +48,13 @@ def register(sub: argparse._SubParsersAction, common) -> None:
                         "surviving mutant beside the source line it comes from")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="also the table per operator and every mutant judged equivalent or invalid")
-    p.set_defaults(handler=cmd_mutate)
+    add_shard_arguments(p, "mutants")
+    p.set_defaults(handler=cmd_mutate, command_parser=p)
 
 
 def cmd_mutate(args: argparse.Namespace) -> int:
     from transpiler.verify.mutate import (EQUIVALENT, ERROR, INVALID, KILLED, KILLED_ANYWAY, OPERATORS, OUTCOMES,
-                                          SURVIVED, equivalents_yaml, report_json, report_junit, survivor_location)
+                                          SURVIVED, survivor_location)
     if not args.scenario and args.random_cycles <= 0:
         raise UsageError("mutate needs at least one --scenario or --random-cycles N")
     if args.jobs < 1:
@@ -60,13 +64,18 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     for path in [*args.scenario, *(f for f in (args.equivalent, args.mutants) if f)]:
         if not path.is_file():
             raise UsageError(f"file '{path}' does not exist")
+    check_shard_arguments(args)
     project = project_from_args(args, scenario=args.scenario[0] if args.scenario else None)
     print_diagnostics(project.diagnostics)
+    inputs = dict(scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed, backend=args.backend,
+                  mp_file=args.mp, jobs=args.jobs, count=args.count, equivalent_file=args.equivalent,
+                  mutants_file=args.mutants)
+    if args.plan is not None:
+        return _plan(project, args, inputs)
     line = ProgressLine("mutate", "mutants judged")
     try:
-        run = api.mutate(project, scenarios=args.scenario, random_cycles=args.random_cycles, seed=args.seed,
-                         backend=args.backend, mp_file=args.mp, jobs=args.jobs, count=args.count,
-                         equivalent_file=args.equivalent, mutants_file=args.mutants, progress=line.update)
+        run = api.mutate(project, **inputs, progress=line.update,
+                         share=api.Share(args.shard, args.only, args.plan_file))
     finally:
         line.close()
     print_diagnostics(run.diagnostics)
@@ -98,9 +107,33 @@ def cmd_mutate(args: argparse.Namespace) -> int:
                 else "judged equivalent, but the translation has no such mutant: the entry is stale")
         print(f"{e.span}: note: {what}: {e.pou}: {e.mutation}: {e.st}")
     met = result.meets(args.min_score)
+    if not write_reports(_report_files(args, project, run)):
+        return EXIT_BAD_INPUT
+    if args.shard is not None:
+        print(f"hh2iec mutate: shard {args.shard}: {len(result.verdicts)} of {len(run.plan.names)} mutants judged; "
+              "`hh2iec merge` gives the score of all shards")
+        return EXIT_OK          # the score is one of all mutants: the merge compares it with the minimum
+    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
+          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
+          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
+    return EXIT_OK if met else EXIT_FAILED
+
+
+def _report_files(args: argparse.Namespace, project, run) -> dict:
+    """The files the arguments ask for; a shard's report carries its `shard` section (verify/shard.py)."""
+    from transpiler.verify.mutate import equivalents_yaml, report_json, report_junit
+    result = run.result
     files = {}
     if args.report:
-        files[args.report] = report_json(result, run.st_text)
+        from transpiler import __version__
+        from transpiler.verify.shard import reproduce_command, shard_section
+        argv = input_argv(args)
+        plan_file = str(args.plan_file) if args.plan_file is not None else None
+        section = None if args.shard is None else shard_section(
+            "mutate", args.shard, run.plan.digest, __version__, argv, (run.plan.names, run.plan.costs),
+            sorted(run.unit_ids.values()), plan_file=plan_file, min_score=args.min_score)
+        files[args.report] = report_json(result, run.st_text, run.unit_ids,
+                                         lambda unit: reproduce_command("mutate", argv, unit, plan_file), section)
     if args.junit:
         files[args.junit] = report_junit(result, run.st_text)
     if args.survivors:
@@ -111,9 +144,27 @@ def cmd_mutate(args: argparse.Namespace) -> int:
     if args.html is not None:
         from transpiler.verify.html_report import PAGE_FILE
         files[args.html / PAGE_FILE] = api.mutation_page(project, run, args.min_score)
-    if not write_reports(files):
-        return EXIT_BAD_INPUT
-    print(f"hh2iec mutate: score {100 * result.score:.1f}% ({result.count(KILLED)} killed of {result.denominator} "
-          f"non-equivalent mutants; {result.count(EQUIVALENT)} judged equivalent, {result.count(ERROR)} errors, "
-          f"{result.count(INVALID)} invalid); minimum {100 * args.min_score:.1f}%: {'met' if met else 'MISSED'}")
-    return EXIT_OK if met else EXIT_FAILED
+    return files
+
+
+CALIBRATION_MUTANTS = 6
+
+
+def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
+    """`--plan N`: the mutants and the estimated time of each of N shards, from a few mutants judged as a sample;
+    `--plan-file` also writes the plan."""
+    start = time.perf_counter()
+    run = api.mutate(project, **inputs, share=api.Share(sample=CALIBRATION_MUTANTS))
+    judged = run.result.verdicts
+    plan = dataclasses.replace(run.plan, setup_seconds=time.perf_counter() - start - run.result.seconds
+                               - run.plan.search_seconds)
+    per_mutant = sum(v.seconds for v in judged) / len(judged) / max(1, args.jobs) if judged else 0.0
+    per_cost = per_mutant / plan.costs[0] if plan.costs and plan.costs[0] else 0.0
+    note = (f" (translation, scenarios, the unmutated run); {per_mutant:.2f} s per mutant with --jobs {args.jobs} "
+            f"({len(judged)} mutants judged as a sample)")
+    if plan.generated:
+        note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs once, "
+                 "here, else again in every shard")
+    print_plan("mutate", plan, args.plan, per_cost, "mutants", note)
+    files = {args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {}
+    return EXIT_OK if write_reports(files) else EXIT_BAD_INPUT

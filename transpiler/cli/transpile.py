@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from transpiler import api
-from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_OK, UsageError, print_diagnostics, project_from_args
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, UsageError, one_shot, print_diagnostics,
+                                   project_from_args)
 from transpiler.diagnostics import NO_SPAN
 
 
@@ -33,6 +34,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
     formats = {f.strip().lower() for f in args.format.split(",") if f.strip()}
     if not formats or formats - {"st", "xml"}:
         raise UsageError(f"--format takes st, xml or st,xml, not '{args.format}'")
+    one_shot()
     project = project_from_args(args)
     out = api.transpile(project, formats=formats, mp_file=args.mp, allow_untranslated=args.allow_untranslated,
                         target=args.target)

@@ -10,10 +10,10 @@ from transpiler.language.semantics import Semantics
 def check_range(kind: str, addr: int, semantics: Semantics, span: Span, diags: Diagnostics, what: str,
                 count: int = 1) -> bool:
     profile = semantics.profile
-    prefix = "" if what == f"{kind}{addr}" else f"{what}: "     # name the symbol when one was written
     if kind in MEM_KINDS:
         size = BYTES[kind]
         if addr % size:
+            prefix = _prefix(kind, addr, what)
             diags.report("E-ADDR-ALIGN", span, f"{prefix}{kind}{addr} is not aligned to {size} bytes")
             return False
         ok = (_inside_one_interval(profile.ranges.B, addr, addr + size - 1)
@@ -27,9 +27,15 @@ def check_range(kind: str, addr: int, semantics: Semantics, span: Span, diags: D
     else:
         return True
     if not ok:
+        prefix = _prefix(kind, addr, what)
         extra = f" (and the following {count - 1})" if count > 1 else ""
         diags.report("E-ADDR-RANGE", span, f"{prefix}{kind}{addr}{extra} is outside the {profile.name} range")
     return ok
+
+
+def _prefix(kind: str, addr: int, what: str) -> str:
+    """How a message names the operand: the symbol when one was written."""
+    return "" if what == f"{kind}{addr}" else f"{what}: "
 
 
 def _inside_one_interval(intervals: tuple[tuple[int, int], ...], first: int, last: int) -> bool:

@@ -6,8 +6,10 @@ import dataclasses
 from typing import Union
 
 from transpiler.diagnostics import Span
+from transpiler.records import quick_init
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class OperandSyntax:
     """An operand as written. kind: M I O T C B W D K S SREF SIMM KF X NUM SYM."""
@@ -18,6 +20,7 @@ class OperandSyntax:
     text: str
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Instr:
     mnemonic: str                 # canonical spelling: upper case, 'x' for multiply, brackets without blanks

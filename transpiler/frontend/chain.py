@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
@@ -55,6 +55,8 @@ class ChainLowering:
         self.pending_jumps = pending_jumps
         self.pending_calls = pending_calls
         self.brackets: list[BracketFrame] = []
+        self._groups = (self._load_store, self._logic_word, self._bracket_stack, self._control, self._extended)
+        self._group_of: dict[str, Callable[[_Step], Lowered | None]] = {}    # mnemonic -> the group that took it
 
     def lower(self, instr: ast.Instr, operand: Operand | None, index: int, chain_open: bool, last_acc: str) -> Lowered:
         m = instr.mnemonic
@@ -62,10 +64,17 @@ class ChainLowering:
         is_bit = operand is not None and operand.is_bit
         is_str = operand is not None and operand.kind in ("S", "STR")
         step = _Step(m, instr, operand, base, index, chain_open, last_acc, is_bit, is_str)
-        # (the groups take disjoint mnemonics; each answers None for a mnemonic that is not its own)
-        for group in (self._load_store, self._logic_word, self._bracket_stack, self._control, self._extended):
+        # (the groups take disjoint mnemonics; each answers None for a mnemonic that is not its own and a tuple for
+        # one that is, so the group that took a mnemonic once is asked first the next time)
+        known = self._group_of.get(m)
+        if known is not None:
+            lowered = known(step)
+            if lowered is not None:
+                return lowered
+        for group in self._groups:
             lowered = group(step)
             if lowered is not None:
+                self._group_of[m] = group
                 return lowered
         self.diags.report("E-UNSUPPORTED", instr.span, f"{m} is not supported")
         return None, chain_open, last_acc

@@ -48,9 +48,10 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
         if i in seen:
             continue
         seen.add(i)
-        if ops[i].code == "KFIELD":
+        code = ops[i].code
+        if code == "KFIELD" or code == "EM":      # (EM: no successor)
             continue
-        for s in successors(ops, i):
+        for s in ((i + 1,) if code not in ("JP", "JPT", "JPF") else successors(ops, i)):
             if s >= len(ops):
                 falls_off = True
             elif s not in seen:
@@ -73,15 +74,42 @@ def routines_entered(op: Op) -> list[CallTarget]:
 def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
     """Op indices reachable from an entry until EM (the body of a subprogram)."""
     ops = files[entry.file].ops
+    n = len(ops)
     seen: set[int] = set()
     stack = [entry.index]
     while stack:
         i = stack.pop()
-        if i in seen or i >= len(ops):
+        if i in seen or i >= n:
             continue
         seen.add(i)
-        stack.extend(s for s in successors(ops, i) if s not in seen)
+        # successors(ops, i), inlined: this walk runs for every routine in several stages
+        op = ops[i]
+        code = op.code
+        if code == "EM":
+            continue
+        if code == "JP" or code == "JPT" or code == "JPF":
+            if op.target is not None and op.target not in seen:
+                stack.append(op.target)
+            if code == "JP":
+                continue
+        stack.append(i + 1)
     return sorted(seen)
+
+
+class RoutineBodies:
+    """routine_body of each entry of one program's files, worked out once: the back end's analyses (liveness, the
+    stack interfaces, the job plan, the translation itself) each walk every routine's body."""
+
+    def __init__(self, files: tuple[FileCode, ...]):
+        self.files = files
+        self._bodies: dict[tuple[int, int], tuple[int, ...]] = {}
+
+    def __call__(self, entry: CallTarget) -> tuple[int, ...]:
+        key = (entry.file, entry.index)
+        body = self._bodies.get(key)
+        if body is None:
+            body = self._bodies[key] = tuple(routine_body(self.files, entry))
+        return body
 
 
 def check_module_starts(files: tuple[FileCode, ...], lowerings: list[FileLowering], diags: Diagnostics) -> None:

@@ -11,7 +11,7 @@ from transpiler.frontend.opcodes import CONTROL, STRUCT_ALL
 from transpiler.frontend.operands import OperandResolver, label_text
 from transpiler.frontend.structure import StructureMatcher
 from transpiler.frontend.symbols import SymTables
-from transpiler.ir import Op
+from transpiler.ir import Op, Operand
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.semantics import Semantics
 
@@ -36,6 +36,7 @@ class FileLowering:
         self.case_entries: dict[int, list[tuple[Span, tuple[str, ...]]]] = {}   # CASE op index -> entry notes
         self.pending_jumps: list[tuple[int, str, Span]] = []
         self.operands = OperandResolver(src.path, symbols, self.kfields, semantics, diags)
+        self.resolved: dict[tuple[str, ast.OperandSyntax], Operand] = {}     # (mnemonic, operand) -> accepted operand
         self.structure = StructureMatcher(self.ops, semantics, diags)
         self.chain = ChainLowering(semantics, diags, self.structure, self.pending_jumps, self.pending_calls)
         # state while lowering the statements in order
@@ -49,8 +50,11 @@ class FileLowering:
 
     def run(self) -> None:
         self._collect_kfields()
+        instr_type = ast.Instr
         for stmt in self.src.statements:
-            if isinstance(stmt, ast.Global):
+            if type(stmt) is instr_type:         # (nine lines in ten: tested first)
+                self._instruction(stmt)
+            elif isinstance(stmt, ast.Global):
                 self.globals.append(stmt)
             elif isinstance(stmt, ast.Extern):
                 self.externs.setdefault(stmt.name, stmt)
@@ -113,12 +117,19 @@ class FileLowering:
             return
         operand = None
         if instr.operand is not None and info.form == "operand":
-            operand = self.operands.resolve(instr)
-            if operand is None or not self.operands.kind_ok(instr, operand):
-                if m == "CASE":
-                    # Keep the table open (without an op) so that its entries and ENDC cause no more errors.
-                    self.case_open, self.case_faults = (None, instr.span), []
-                return
+            # An operand resolved and checked once for this mnemonic is the same operand the next time (the
+            # file's symbols and KFIELD tables are fixed while it is lowered); only a rejected one is checked
+            # again, so that each occurrence reports its own diagnostic.
+            key = (m, instr.operand)
+            operand = self.resolved.get(key)
+            if operand is None:
+                operand = self.operands.resolve(instr)
+                if operand is None or not self.operands.kind_ok(instr, operand):
+                    if m == "CASE":
+                        # Keep the table open (without an op) so that its entries and ENDC cause no more errors.
+                        self.case_open, self.case_faults = (None, instr.span), []
+                    return
+                self.resolved[key] = operand
         op, self.chain_open, self.last_acc = self.chain.lower(instr, operand, index, self.chain_open, self.last_acc)
         if op is None:
             return

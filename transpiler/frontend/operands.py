@@ -22,6 +22,7 @@ class OperandResolver:
         self.kfields = kfields
         self.semantics = semantics
         self.diags = diags
+        self.case_insensitive = semantics["symbol_case"] == "insensitive"
 
     def resolve(self, instr: ast.Instr) -> Operand | None:
         syn = instr.operand
@@ -29,7 +30,7 @@ class OperandResolver:
         kind, value = syn.kind, syn.value
         symbol = None
         if kind == "SYM":
-            sym = self.symbols.lookup(self.path, str(value), self.semantics["symbol_case"] == "insensitive")
+            sym = self.symbols.lookup(self.path, str(value), self.case_insensitive)
             if sym is None:
                 if str(value) in self.kfields:
                     self.diags.report("E-OPERAND-KIND", span, f"constant field {value} is read as 'KF {value}[X]'")

@@ -160,9 +160,11 @@ def _code_lines(lines: Iterable[Line], pending: list[str]) -> Iterator[tuple[str
             if line.comment is not None:
                 pending.append(line.comment.strip())
             continue
-        comments = tuple(pending) + ((line.comment.strip(),) if line.comment is not None else ())
-        pending.clear()
-        yield code, line.span, comments
+        own = (line.comment.strip(),) if line.comment is not None else ()
+        if pending:
+            own = tuple(pending) + own
+            pending.clear()
+        yield code, line.span, own
 
 
 @dataclasses.dataclass
@@ -259,6 +261,9 @@ class SrcParser(_CachedLineParser):
     def __init__(self, lenient_brackets: bool = True, documented_literals: bool = False) -> None:
         super().__init__("src.lark", _SrcTransformer(documented_literals))
         self.lenient_brackets = lenient_brackets
+        # Line text -> (mnemonic, operand) of an instruction line that parsed and passed _instruction's checks
+        # without a diagnostic: the same text gives the same instruction, so it is checked once per run.
+        self._accepted: dict[str, tuple[str, ast.OperandSyntax]] = {}
 
     def _name_slot(self, key: str) -> tuple[str, str] | None:
         last = _LAST_NAME.search(key)
@@ -274,7 +279,13 @@ class SrcParser(_CachedLineParser):
         trailing_comments: list[str] = []
         kfield: _PendingKField | None = None
         broken_labels: list[str] = []
+        accepted = self._accepted
         for code, span, comments in _code_lines(lines, trailing_comments):
+            if kfield is None:
+                known = accepted.get(code)
+                if known is not None:       # an instruction line met before, accepted without a diagnostic
+                    statements.append(ast.Instr(known[0], known[1], span, comments))
+                    continue
             status, result = self.parse_line(code)
             if status == "range":
                 diags.report("E-LIT-RANGE", span, f"literal {result} does not fit in 32 bits")
@@ -311,12 +322,15 @@ class SrcParser(_CachedLineParser):
             elif tag == "define_file":
                 statements.append(ast.DefineFile(result[1], result[2], span, comments))
             else:
-                if not self.lenient_brackets and result[1].endswith("[") and _BLANK_BEFORE_BRACKET.match(code):
+                blank = not self.lenient_brackets and result[1].endswith("[") and _BLANK_BEFORE_BRACKET.match(code)
+                if blank:
                     # reported, but the bracket is kept so that its ']' does not cascade into E-BRACKET-BALANCE
                     diags.report("E-SYNTAX", span, f"blank between {result[1][:-1]} and '[' (lenient_brackets is off, A-02b)")
                 instr = self._instruction(result[1], result[2], span, comments, diags, code)
                 if instr is not None:
                     statements.append(instr)
+                    if not blank:
+                        accepted[code] = (instr.mnemonic, instr.operand)
         if kfield is not None:
             diags.report("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
         return ast.SourceFile(display, tuple(statements), tuple(trailing_comments), line_count, tuple(broken_labels))

@@ -16,6 +16,7 @@ from transpiler.frontend.grammars import lalr_parser
 DefineValue = Union[int, str]
 
 _PP_LINE = re.compile(r"^\s*(#if|#ifdef|#ifndef|#else|#endif|DEFINE)(?![A-Za-z0-9_])", re.IGNORECASE)
+_MAY_HOLD_DASH = re.compile("[\u2013\x96\xe2]")     # what _normalise_dashes looks for (its first characters)
 _INCLUDE_LINE = re.compile(r'^\s*(?:INCLUDE|#include)\s+"?([^";\s]+)"?\s*$', re.IGNORECASE)
 
 
@@ -208,16 +209,29 @@ class Preprocessor:
         stack: list[_Frame] = []
         active = True
         chain = _chain + (display,)        # the files being included, for cycle detection
+        pp_line, append = _PP_LINE.match, out.append
         for index, raw in enumerate(lines):
             lineno = index + 1
-            text = _normalise_dashes(raw)
-            directive = _PP_LINE.match(text)
+            text = _normalise_dashes(raw) if _MAY_HOLD_DASH.search(raw) else raw
+            directive = pp_line(text)
             if directive:
                 handled, active = self._directive(display, lineno, text, directive.group(1).lower(), stack, active)
                 if handled:
                     continue
-            if active:
-                self._code_line(display, lineno, text, out, include, star_comments, chain)
+            if not active:
+                continue
+            # The common line: code and an optional comment, no '*' comment, no INCLUDE, no string before a ';'
+            # (_code_line handles every other line, and this one in the same way).
+            stripped = text.lstrip()
+            if not stripped:
+                continue
+            first = stripped[0]
+            if first != "*" and first not in "Ii#" and '"' not in text:
+                cut = text.find(";")
+                span = Span(display, lineno, len(text) - len(stripped) + 1)
+                append(Line(text, None, span) if cut < 0 else Line(text[:cut], text[cut + 1:], span))
+                continue
+            self._code_line(display, lineno, text, out, include, star_comments, chain)
         for frame in stack:
             self.diags.report("E-PP-NEST", frame.span, f"'{frame.condition}' has no matching #endif")
             self._close_region(display, frame, len(lines))

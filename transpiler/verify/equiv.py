@@ -1,5 +1,6 @@
 """Equivalence: co-simulates the original and the translated program under scenarios and random stimulus,
-shrinks divergent stimuli, and gives the verdict with coverage and JSON/JUnit reports."""
+shrinks divergent stimuli, and gives the verdict with coverage (instructions, branches, CASE entries, MC/DC and
+boundary values) and JSON/JUnit reports."""
 
 from __future__ import annotations
 
@@ -14,12 +15,15 @@ from transpiler.backends.report.iomap import IoMap
 from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram, compile_program
 from transpiler.ir import Program
+from transpiler.exec.interp.machine import Coverage
 from transpiler.verify.rundata import UNREPRESENTABLE
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
+from transpiler.verify.mcdc import DecisionCoverage, decision_coverage, driven_operands
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
 from transpiler.verify.screens import Screen, render_text
+from transpiler.verify.shard import decode_coverage, encode_coverage
 from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
 from transpiler.verify.traces import TraceRecorder, write_vcd_scopes
 
@@ -203,6 +207,9 @@ class EquivalenceResult:
     coverage: dict[str, Any]
     untranslated: tuple[tuple[Span, str], ...] = ()     # code the translation left out (allowed by the user)
     source: SourceCoverage | None = None                # the same coverage per source file and line
+    decisions: DecisionCoverage | None = None           # MC/DC and boundary values (verify/mcdc.py)
+    driven: frozenset[tuple[str, int]] = frozenset()    # operands the runs' scenarios set (never constant)
+    run_ids: tuple[int, ...] = ()                       # each outcome's number in the plan (1, 2, ... when empty)
 
     @property
     def equivalent(self) -> bool:
@@ -237,20 +244,41 @@ class EquivalenceResult:
 
     @property
     def verdict(self) -> str:
-        """NOT EQUIVALENT (a divergence, an operand missing, a run that failed, or a translation shipped with other
-        machine parameters than the project's), NO VERDICT (nothing else wrong, but a run's machine data could not
-        be written into the ST, so that run compared nothing), EXPECTATION FAILED (the original does not meet the
-        scenario), NOT PROVEN (code was left untranslated), else EQUIVALENT."""
-        refused = self.refused
-        if self.divergent or len(self.errors) > len(refused) or not self.outcomes:
-            return "NOT EQUIVALENT"
-        if refused:
-            return "NO VERDICT"
-        if self.expectation_failures:
-            return "EXPECTATION FAILED"
-        if self.untranslated:
-            return "NOT PROVEN"
-        return "EQUIVALENT"
+        return verdict_of([run_state(bool(o.result.divergence), bool(o.result.missing), o.result.error,
+                                     o.result.error_side, bool(o.result.expectation_failures), o.result.error_code)
+                           for o in self.outcomes], bool(self.untranslated))
+
+
+DIVERGENT, FAILED_RUN, REFUSED, UNMET, AGREED = "divergent", "error", "refused", "expectation failed", "agreed"
+
+
+def run_state(divergence: bool, missing: bool, error: str | None, error_side: str | None, unmet: bool,
+              error_code: str | None = None) -> str:
+    """What one run counts as for the verdict: DIVERGENT (compared unequal, an operand missing, or a fault of the
+    translation), REFUSED (never started: the scenario's machine data cannot be written into the emitted ST),
+    FAILED_RUN (could not be carried out otherwise), UNMET (the original missed an expectation), else AGREED."""
+    if divergence or missing or (error is not None and error_side == "translated"):
+        return DIVERGENT
+    if error is not None:
+        return REFUSED if error_code == UNREPRESENTABLE else FAILED_RUN
+    return UNMET if unmet else AGREED
+
+
+def verdict_of(states: list[str], untranslated: bool) -> str:
+    """NOT EQUIVALENT (a divergence, an operand missing, a run that failed, a translation shipped with other machine
+    parameters than the project's, or no run at all), NO VERDICT (nothing else wrong, but a run's machine data
+    could not be written into the ST, so that run compared nothing), EXPECTATION FAILED (the original does not meet
+    the scenario), NOT PROVEN (code was left untranslated), else EQUIVALENT: the verdict of the runs' states, one
+    process's or the merged shards'."""
+    if not states or DIVERGENT in states or FAILED_RUN in states:
+        return "NOT EQUIVALENT"
+    if REFUSED in states:
+        return "NO VERDICT"
+    if UNMET in states:
+        return "EXPECTATION FAILED"
+    if untranslated:
+        return "NOT PROVEN"
+    return "EQUIVALENT"
 
 
 def _translation_fault(result: CosimResult) -> bool:
@@ -287,9 +315,21 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
             coverage_sets.append(res.coverage)
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
-    ops = op_coverage(program, coverage_sets)
-    return EquivalenceResult(outcomes, backend, summarize_coverage(ops), tuple(untranslated),
-                             source_coverage(program, ops, len(coverage_sets)))
+    driven = driven_operands(scenarios, names)
+    summary, source, decisions = coverage_of(program, coverage_sets, driven)
+    return EquivalenceResult(outcomes, backend, summary, tuple(untranslated), source, decisions,
+                             driven=frozenset(driven))
+
+
+def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]]
+                ) -> tuple[dict[str, Any], SourceCoverage, DecisionCoverage]:
+    """The coverage summary, the per-file coverage and MC/DC with boundary values over the runs' coverage sets
+    (`driven`: the operands the runs' scenarios set, never constant): one process's runs, or the runs of every
+    shard (merge_reports), computed alike."""
+    ops = op_coverage(program, sets)
+    decisions = decision_coverage(program, sets, driven)
+    return ({**summarize_coverage(ops), **decisions.summary()}, source_coverage(program, ops, len(sets)),
+            decisions)
 
 
 def screen_json(screen: Screen) -> dict[str, Any]:
@@ -302,71 +342,121 @@ def screen_json(screen: Screen) -> dict[str, Any]:
             "note": screen.note}
 
 
-def report_json(result: EquivalenceResult, screens: Sequence[Screen] = ()) -> str:
-    """The machine-readable report (`--report`): every run with its verdict, divergence and shrunk stimulus, and
-    the screens `--show-mask` drew (`screens`, empty without it)."""
-    outcomes, backend, coverage = result.outcomes, result.backend, result.coverage
+def _screen_of(data: Mapping[str, Any]) -> Screen:
+    return Screen(data["scenario"], data["mask"], data["cycle"],
+                  tuple(data["original"]) if data["original"] is not None else None,
+                  tuple(data["translated"]) if data["translated"] is not None else None, data["note"])
+
+
+def report_data(result: EquivalenceResult, reproduce: Callable[[int], str] | None = None,
+                shard: Mapping[str, Any] | None = None, screens: Sequence[Screen] = ()) -> dict[str, Any]:
+    """The machine-readable report (`--report`) as data: every run with its number in the plan, verdict, divergence
+    and shrunk stimulus; `reproduce(run)` gives the command line that runs one failing run alone; the screens
+    `--show-mask` drew (`screens`: empty without it, and in shards, which draw none). A shard's report carries
+    `shard` (see verify/shard.py) with each run's coverage sets, from which merge_reports recomputes the coverage of
+    all runs."""
+    ids = result.run_ids or tuple(range(1, len(result.outcomes) + 1))
     runs = []
-    for o in outcomes:
+    for run_id, o in zip(ids, result.outcomes):
         r = o.result
-        runs.append({"scenario": r.scenario, "cycles": r.cycles_run, "compared_operands": r.compared,
-                     "compared_indexed_addresses": r.compared_indexed,
-                     "compared_after_last_cycle": r.swept,
-                     "equivalent": r.equivalent, "error": r.error, "error_code": r.error_code,
-                     "seconds": round(r.seconds, 3),
-                     "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
-                     "compared": list(r.compared_operands),
-                     "excluded": [{"operand": operand, "reason": reason} for operand, reason in r.excluded],
-                     "missing_in_translation": [{"operand": m.operand, "name": m.name,
-                                                 "written_at": [str(s) for s in m.written_at]} for m in r.missing],
-                     "expectation_failures": [{"cycle": f.cycle, "name": f.name, "expected": f.expected,
-                                               "actual": f.actual, "at": str(f.span) if f.span else None}
-                                              for f in r.expectation_failures],
-                     "shrunk_scenario": scenario_to_yaml(o.shrunk) if o.shrunk else None})
-    data = {"backend": backend, "verdict": result.verdict, "equivalent": result.equivalent, "runs": runs,
-            "not_translated": [{"at": str(span), "what": text} for span, text in result.untranslated],
-            "coverage": coverage, "screens": [screen_json(screen) for screen in screens]}
-    if result.source is not None:
+        entry = {"run": run_id, "scenario": r.scenario, "cycles": r.cycles_run, "compared_operands": r.compared,
+                 "compared_indexed_addresses": r.compared_indexed,
+                 "compared_after_last_cycle": r.swept,
+                 "equivalent": r.equivalent, "error": r.error, "error_side": r.error_side, "error_code": r.error_code,
+                 "seconds": round(r.seconds, 3),
+                 "divergence": dataclasses.asdict(r.divergence) if r.divergence else None,
+                 "compared": list(r.compared_operands),
+                 "excluded": [{"operand": operand, "reason": reason} for operand, reason in r.excluded],
+                 "missing_in_translation": [{"operand": m.operand, "name": m.name,
+                                             "written_at": [str(s) for s in m.written_at], "text": m.render()}
+                                            for m in r.missing],
+                 "expectation_failures": [{"cycle": f.cycle, "name": f.name, "expected": f.expected,
+                                           "actual": f.actual, "at": str(f.span) if f.span else None,
+                                           "message": f.message()}
+                                          for f in r.expectation_failures],
+                 "shrunk_scenario": scenario_to_yaml(o.shrunk) if o.shrunk else None}
+        if reproduce is not None and _state_of(entry) != AGREED:
+            entry["reproduce"] = reproduce(run_id)
+        runs.append(entry)
+    data = _report(result.backend, runs, [{"at": str(span), "what": text} for span, text in result.untranslated],
+                   result.coverage, result.source)
+    data["screens"] = [screen_json(screen) for screen in screens]
+    if shard is not None:
+        # each run's sets as one compact JSON text: thousands of items per run, one line each in the indented report
+        data["shard"] = {**shard, "driven": sorted([kind, addr] for kind, addr in result.driven),
+                         "coverage": [[run_id, json.dumps(encode_coverage(o.result.coverage), separators=(",", ":"))]
+                                      for run_id, o in zip(ids, result.outcomes) if o.result.coverage is not None]}
+    return data
+
+
+def _state_of(run: Mapping[str, Any]) -> str:
+    return run_state(bool(run["divergence"]), bool(run["missing_in_translation"]), run["error"],
+                     run.get("error_side"), bool(run["expectation_failures"]), run.get("error_code"))
+
+
+def _report(backend: str, runs: list[dict[str, Any]], untranslated: list[dict[str, str]], coverage: dict[str, Any],
+            source: SourceCoverage | None) -> dict[str, Any]:
+    verdict = verdict_of([_state_of(run) for run in runs], bool(untranslated))
+    data = {"backend": backend, "verdict": verdict, "equivalent": verdict == "EQUIVALENT", "runs": runs,
+            "not_translated": untranslated, "coverage": coverage, "screens": []}
+    if source is not None:
         data["coverage"] = {**coverage, "files": [
             {"file": f.path, "lines": f.lines_valid, "lines_executed": f.lines_covered,
              "branch_outcomes": f.branches_valid, "branch_outcomes_taken": f.branches_covered}
-            for f in result.source.files]}
+            for f in source.files]}
+    return data
+
+
+def report_json(result: EquivalenceResult, reproduce: Callable[[int], str] | None = None,
+                shard: Mapping[str, Any] | None = None, screens: Sequence[Screen] = ()) -> str:
+    """The machine-readable report (`--report`): report_data as JSON."""
+    return data_json(report_data(result, reproduce, shard, screens))
+
+
+def data_json(data: Mapping[str, Any]) -> str:
     return json.dumps(data, indent=2) + "\n"
 
 
 def report_junit(result: EquivalenceResult, screens: Sequence[Screen] = ()) -> str:
-    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error. Each
-    screen of `--show-mask` is a test case too: screens that differ are a failure, one not drawn (the run ended
-    before its cycle) is skipped."""
-    outcomes, backend = result.outcomes, result.backend
-    failures = sum(1 for o in outcomes if o.result.divergence or o.result.missing or o.result.expectation_failures)
+    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error; and
+    one per screen of `--show-mask` (see junit_of)."""
+    return junit_of(report_data(result, screens=screens))
+
+
+def junit_of(data: Mapping[str, Any]) -> str:
+    """The JUnit file of a report's data (report_data, or merged shards). Each screen is a test case too: screens
+    that differ are a failure, one not drawn (the run ended before its cycle) is skipped."""
+    runs, backend = data["runs"], data["backend"]
+    screens = [_screen_of(screen) for screen in data.get("screens", ())]
+    failures = sum(1 for r in runs if r["divergence"] or r["missing_in_translation"] or r["expectation_failures"])
     failures += sum(1 for screen in screens if screen.differs)
-    errors = sum(1 for o in outcomes if o.result.error)
+    errors = sum(1 for r in runs if r["error"])
     skipped = sum(1 for screen in screens if screen.original is None)
-    total = sum(o.result.seconds for o in outcomes)
+    total = sum(r["seconds"] for r in runs)
     skipped_attr = f' skipped="{skipped}"' if skipped else ""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(outcomes) + len(screens)}" '
+             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(runs) + len(screens)}" '
              f'failures="{failures}" errors="{errors}"{skipped_attr} time="{total:.3f}">']
-    for o in outcomes:
-        r = o.result
-        lines.append(f'  <testcase classname="hh2iec.equiv" name={quoteattr(r.scenario)} time="{r.seconds:.3f}">')
-        if r.divergence:
-            d = r.divergence
-            msg = f"cycle {d.cycle}: {d.name} ({d.operand}): original {d.original!r}, translated {d.translated!r}"
-            body = scenario_to_yaml(o.shrunk) if o.shrunk else ""
+    for r in runs:
+        lines.append(f'  <testcase classname="hh2iec.equiv" name={quoteattr(r["scenario"])} time="{r["seconds"]:.3f}">')
+        if r["divergence"]:
+            d = r["divergence"]
+            msg = (f"cycle {d['cycle']}: {d['name']} ({d['operand']}): original {d['original']!r}, "
+                   f"translated {d['translated']!r}")
+            body = r["shrunk_scenario"] or ""
             lines.append(f"    <failure message={quoteattr(msg)}>{escape(body)}</failure>")
-        elif _translation_fault(r):
-            lines.append(f"    <failure message={quoteattr(r.error)}/>")
-        elif r.missing:
-            msg = f"{len(r.missing)} operands written by the original are missing in the translation"
-            lines.append(f"    <failure message={quoteattr(msg)}>{escape(chr(10).join(m.render() for m in r.missing))}</failure>")
-        elif r.expectation_failures:
-            msg = f"{len(r.expectation_failures)} expectations of the scenario failed on the original"
-            body = "\n".join(f.message() for f in r.expectation_failures)
+        elif r["error"] is not None and r.get("error_side") == "translated":
+            lines.append(f"    <failure message={quoteattr(r['error'])}/>")
+        elif r["missing_in_translation"]:
+            missing = r["missing_in_translation"]
+            msg = f"{len(missing)} operands written by the original are missing in the translation"
+            lines.append(f"    <failure message={quoteattr(msg)}>{escape(chr(10).join(m['text'] for m in missing))}</failure>")
+        elif r["expectation_failures"]:
+            msg = f"{len(r['expectation_failures'])} expectations of the scenario failed on the original"
+            body = "\n".join(f["message"] for f in r["expectation_failures"])
             lines.append(f"    <failure message={quoteattr(msg)}>{escape(body)}</failure>")
-        elif r.error:
-            lines.append(f"    <error message={quoteattr(r.error)}/>")
+        elif r["error"]:
+            lines.append(f"    <error message={quoteattr(r['error'])}/>")
         lines.append("  </testcase>")
     lines += _screen_cases(screens)
     lines.append("</testsuite>")
@@ -389,6 +479,19 @@ def _screen_cases(screens: Sequence[Screen]) -> list[str]:
             lines.append(f"    <system-out>{text}</system-out>")
         lines.append("  </testcase>")
     return lines
+
+
+def merge_reports(shards: list[Mapping[str, Any]], program: Program) -> dict[str, Any]:
+    """One report from the reports of every shard (checked with shard.check_shards first): the runs in plan order,
+    the coverage recomputed from the runs' coverage sets as one process computes it, the verdict of all runs."""
+    runs = sorted((run for data in shards for run in data["runs"]), key=lambda run: run["run"])
+    sets = [decode_coverage(json.loads(encoded), Coverage)
+            for _, encoded in sorted((item for data in shards for item in data["shard"]["coverage"]),
+                                     key=lambda item: item[0])]
+    driven = {(kind, addr) for data in shards for kind, addr in data["shard"].get("driven", ())}
+    summary, source, _ = coverage_of(program, sets, driven)
+    backends = sorted({data["backend"] for data in shards})
+    return _report("+".join(backends), runs, shards[0]["not_translated"], summary, source)
 
 
 def write_vcd(folder: Path, scenario: Scenario, res: CosimResult, traces: list, program: Program,

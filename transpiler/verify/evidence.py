@@ -13,6 +13,7 @@ from transpiler.verify.cosim import StSide
 from transpiler.verify.divergence_trace import DivergenceTrace, trace_divergence
 from transpiler.verify.equiv import EquivalenceResult
 from transpiler.verify.html_report import Evidence, RunRow, source_files
+from transpiler.verify.mcdc import figures
 from transpiler.verify.scenario import NameTable, Scenario
 
 
@@ -67,7 +68,7 @@ def equivalence_evidence(result: EquivalenceResult, program: Program, main_dir: 
     summary = [f"{len(result.outcomes)} runs, {cycles} cycles, backend {result.backend}.",
                f"Coverage of the original: instructions {c['instructions_executed']}/{c['instructions']}, "
                f"conditional branches both ways {c['branches_both_ways']}/{c['branches']}, CASE entries "
-               f"{c['case_entries_taken']}/{c['case_entries']}."]
+               f"{c['case_entries_taken']}/{c['case_entries']}" + (f", {figures(c)}." if "mcdc" in c else ".")]
     summary += [f"Not translated: {span}: {text}" for span, text in result.untranslated]
     coverage: dict[str, dict[int, tuple[int, int, int]]] = {}
     if result.source is not None:

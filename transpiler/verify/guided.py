@@ -7,10 +7,13 @@ random cycle, a foreign word or marker set to a corner value, an input set, rema
 rare random toggles added, a word the program compares with a constant put next to that constant, a word's start
 value moved arithmetically (doubled, halved, plus or minus one). Each candidate runs on the reference interpreter alone (no ST side, with coverage);
 one that reaches a branch outcome or CASE entry not seen before, a marker or output the program writes in a
-state (0 or 1) not seen before, or a word compare whose operands come out equal or one apart in a way not seen
-before (a value profile: a mutated compare or constant differs from the original only there), is kept, cut just after the last cycle that
-brought something new, so that the co-simulation budget is spent on cycles that matter. What is left of the
-budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random cycles.
+state (0 or 1) not seen before, a word compare whose operands come out equal or one apart in a way not seen
+before (its boundary values: a mutated compare or constant differs from the original only there), a condition of a
+logic chain shown to decide it on its own for the first time (an MC/DC pair: an AND that became an OR differs only
+on such inputs), or a bit gate or divisor value not seen before (the value profile), is kept, cut just after the
+last cycle that brought something new, so that the co-simulation budget is spent on cycles that matter. What is
+left of the budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random
+cycles.
 
 A candidate in which the original program faults (an NC handshake that cannot finish, a runtime fault) is cut
 before the faulting cycle: the generated stimulus only asks what the original answers."""
@@ -25,8 +28,10 @@ from typing import Any, Mapping
 from transpiler.diagnostics import CompileFailed, Diagnostics
 from transpiler.exec.compiled.shim import NcActionError
 from transpiler.exec.interp import CompiledProgram, compile_program
+from transpiler.exec.interp.decisions import Decision, decision_table
 from transpiler.ir import Program
 from transpiler.verify.corners import Corners, harvest
+from transpiler.verify.mcdc import shown_masking, shown_unique
 from transpiler.verify.scenario import Event, NcAction, NameTable, OperandRef, RandomStimulus, Scenario, bind
 from transpiler.verify.simulate import apply_machine_data, build_machine, program_operands
 from transpiler.verify.stimulus import build_stimulus
@@ -41,6 +46,9 @@ FILLER_KINDS = 4            # healthy or not, clean or dirty memory at power-on
 FILLER_MIN = 200            # shortest filler run when the rest of the budget is split
 CHILD_CYCLES = 1000         # longest candidate run
 VALUE_SHARE = 0.25          # share of the budget for runs kept for value-profile features alone
+# Features a run may bring that rank below branches, CASE entries and marker states: the value profile, compare
+# boundaries and MC/DC pairs; runs kept for these alone share VALUE_SHARE of the budget.
+_VALUE_FEATURES = frozenset({"value", "bound", "mcdc"})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,8 +56,18 @@ class Probe:
     """One candidate run on the reference interpreter."""
 
     cycles_ok: int                 # cycles that ran without a fault of the original
-    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("value", ...)
+    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("value", ...),
+                                   # ("bound", op id, difference), ("mcdc", decision, condition)
     last_new: int                  # the cycle in which the last of them first appeared (-1: none)
+    vectors: tuple = ()            # (cycle, decision, vector) of the condition vectors the run recorded first
+    firsts: Mapping = dataclasses.field(default_factory=dict)   # feature -> the cycle it first appeared in
+
+    @property
+    def last_before_mcdc(self) -> int:
+        """The cycle of the last new feature other than an MC/DC pair (-1: none). MC/DC pairs keep turning up
+        late in a run (there are many more of them than branches): a run kept for other features is cut after
+        those, and the pairs it found later stay to be found again, rather than lengthening every kept run."""
+        return max((cycle for feature, cycle in self.firsts.items() if feature[0] != "mcdc"), default=-1)
 
 
 @dataclasses.dataclass
@@ -67,6 +85,19 @@ class Search:
     # (a clamp that closes only after a delay, an output that needs several inputs at once) has no branch, and
     # without this the search would never ask for the states that make it act.
     toggled: tuple[OperandRef, ...] = ()
+    # MC/DC: the decisions (decisions.decision_table order) and the condition vectors of the kept runs per decision
+    decisions: tuple[Decision, ...] = ()
+    vectors: dict = dataclasses.field(default_factory=dict)
+
+    def shown(self, number: int, extra: set[int]) -> set[tuple[str, int, int]]:
+        """The MC/DC features of decision `number` given the kept runs' vectors and `extra` ones."""
+        decision = self.decisions[number]
+        recorded = self.vectors.get(number, set()) | extra
+        n = len(decision.conditions)
+        function = decision.function()
+        return {("mcdc", number, c) for c, coupled in enumerate(decision.coupled)
+                if ("mcdc", number, c) not in self.seen
+                and (shown_masking(recorded, n, c, function) if coupled else shown_unique(recorded, n, c))}
 
     def probe(self, scenario: Scenario) -> Probe | None:
         """Run `scenario` on the reference interpreter; None when the scenario is unusable (bad NC job)."""
@@ -78,7 +109,10 @@ class Search:
             return None
         local: set = set()
         new: set = set()
-        last_new, count, value_count, ok = -1, 0, 0, 0
+        last_new, count, value_count, bound_count, vector_count, ok = -1, 0, 0, 0, 0, 0
+        vectors: list[tuple[int, int, int]] = []
+        run_vectors: dict[int, set[int]] = {}
+        firsts: dict = {}
         read_toggled = machine.reader([(ref.kind, ref.addr) for ref in self.toggled])
         # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
         # per-cycle check costs little once the common states were seen.
@@ -102,23 +136,45 @@ class Search:
             if machine.value_outcome_count != value_count:
                 value_count = machine.value_outcome_count
                 fresh |= {("value", *pair) for pair in machine.value_outcomes()} - local
+            if machine.boundary_outcome_count != bound_count:
+                bound_count = machine.boundary_outcome_count
+                fresh |= {("bound", *pair) for pair in machine.boundary_outcomes()} - local
+            if machine.vector_count != vector_count:
+                # new condition vectors: the conditions they show together with the kept runs' vectors
+                arrived = machine.decision_vectors_since(vector_count)
+                vector_count = machine.vector_count
+                changed = set()
+                for number, vector in arrived:
+                    if vector not in self.vectors.get(number, ()):
+                        run_vectors.setdefault(number, set()).add(vector)
+                        vectors.append((cycle, number, vector))
+                        changed.add(number)
+                for number in changed:
+                    fresh |= self.shown(number, run_vectors[number]) - local
             if fresh:
                 local |= fresh
                 fresh -= self.seen
                 if fresh:
                     new |= fresh
+                    firsts.update(dict.fromkeys(fresh, cycle))
                     last_new = cycle
             if unseen:
                 values = read_toggled()
                 reached = [(i, v) for i, v in unseen if values[i] == v]
                 if reached:
-                    new.update(("bit", str(self.toggled[i]), v) for i, v in reached)
+                    bits = [("bit", str(self.toggled[i]), v) for i, v in reached]
+                    new.update(bits)
+                    firsts.update(dict.fromkeys(bits, cycle))
                     last_new = cycle
                     unseen = [pair for pair in unseen if pair not in reached]
-        return Probe(ok, frozenset(new), last_new)
+        return Probe(ok, frozenset(new), last_new, tuple(vectors), firsts)
 
-    def keep(self, probe: Probe) -> None:
-        self.seen |= probe.new
+    def keep(self, probe: Probe, cycles: int | None = None) -> None:
+        """Take the run's features and condition vectors of its first `cycles` cycles (all: None) as seen."""
+        self.seen |= probe.new if cycles is None else {f for f in probe.new if probe.firsts.get(f, 0) < cycles}
+        for cycle, number, vector in probe.vectors:
+            if cycles is None or cycle < cycles:
+                self.vectors.setdefault(number, set()).add(vector)
 
 
 def _events_with(scenario: Scenario, extra: list[Event]) -> list[Event]:
@@ -244,7 +300,7 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     toggled = tuple(sorted((ref for ref in program_operands(program)[1] if ref.kind in "MO"),
                            key=lambda ref: (ref.kind, ref.addr)))
     search = Search(program, names, corners, compile_program(program, coverage=True, exact=False, value_profile=True),
-                    base_mp, toggled=toggled)
+                    base_mp, toggled=toggled, decisions=decision_table(program).decisions)
     limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
     corpus: list[Scenario] = []
     for scenario in seeds:
@@ -272,15 +328,16 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         if probe is None or not probe.new or probe.last_new >= budget - spent:
             stale += 1
             continue
-        length = min(probe.cycles_ok, probe.last_new + 1 + MARGIN, budget - spent)
-        value_only = all(feature[0] == "value" for feature in probe.new)
+        last = probe.last_before_mcdc
+        length = min(probe.cycles_ok, (probe.last_new if last < 0 else last) + 1 + MARGIN, budget - spent)
+        value_only = all(feature[0] in _VALUE_FEATURES for feature in probe.new)
         if value_only and spent_on_values + length > VALUE_SHARE * budget:
             # the value profile has many more features than branches: it may not crowd them out of the budget
             stale += 1
             continue
         stale = 0
         child = _cut(child, length, names)
-        search.keep(probe)
+        search.keep(probe, length)
         kept.append(child)
         corpus.append(child)
         spent += length
@@ -301,7 +358,7 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         probe = search.probe(filler)
         if probe is None or probe.cycles_ok == 0:
             continue
-        search.keep(probe)
+        search.keep(probe, probe.cycles_ok)
         kept.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, names))
         spent += probe.cycles_ok
     return kept

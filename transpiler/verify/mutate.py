@@ -443,37 +443,92 @@ def survivor_location(st_text: str, mutant: Mutant) -> str:
     return st_origin(st_text, mutant.line)
 
 
-def report_json(result: MutationResult, st_text: str) -> str:
-    data = {"backend": result.backend, "score": round(result.score, 4), "sites": result.sites,
-            "judged": len(result.verdicts), "seconds": round(result.seconds, 1), "scenarios": result.scenarios,
-            "counts": {o: result.count(o) for o in OUTCOMES},
-            "mutants": [{"outcome": v.outcome, "operator": v.mutant.operator, "pou": v.mutant.pou,
-                         "st_line": v.mutant.line, "where": survivor_location(st_text, v.mutant),
-                         "st": v.mutant.original, "mutation": v.mutant.description, "by": v.by,
-                         "seconds": round(v.seconds, 3)} for v in result.verdicts],
-            "unmatched_equivalents": [{"at": str(e.span), "pou": e.pou, "mutation": e.mutation, "st": e.st,
-                                       "why": why} for e, why in result.unmatched_equivalents]}
+def report_data(result: MutationResult, st_text: str, unit_ids: Mapping[Mutant, int] | None = None,
+                reproduce: Callable[[int], str] | None = None, shard: Mapping[str, Any] | None = None
+                ) -> dict[str, Any]:
+    """The report (`--report`) as data: every judged mutant (with its number in the plan, `unit`, when known), the
+    counts and the score; `reproduce(unit)` gives the command line that judges one survivor or error alone. A shard's
+    report carries `shard` (verify/shard.py), from which merge_reports counts the score over all shards."""
+    mutants = []
+    for v in result.verdicts:
+        entry: dict[str, Any] = {"outcome": v.outcome, "operator": v.mutant.operator, "pou": v.mutant.pou,
+                                 "st_line": v.mutant.line, "where": survivor_location(st_text, v.mutant),
+                                 "st": v.mutant.original, "mutation": v.mutant.description, "by": v.by,
+                                 "seconds": round(v.seconds, 3), "occurrence": v.mutant.occurrence}
+        unit = (unit_ids or {}).get(v.mutant)
+        if unit is not None:
+            entry["unit"] = unit
+            if reproduce is not None and v.outcome in (SURVIVED, ERROR):
+                entry["reproduce"] = reproduce(unit)
+        mutants.append(entry)
+    data = _report(result.backend, result.sites, round(result.seconds, 1), result.scenarios, mutants,
+                   [{"at": str(e.span), "pou": e.pou, "mutation": e.mutation, "st": e.st, "why": why,
+                     "line": e.span.line} for e, why in result.unmatched_equivalents])
+    if shard is not None:
+        data["shard"] = dict(shard)
+    return data
+
+
+def _report(backend: str, sites: int, seconds: float, scenarios: list[str], mutants: list[dict[str, Any]],
+            unmatched: list[dict[str, Any]]) -> dict[str, Any]:
+    counts = {o: sum(1 for m in mutants if m["outcome"] == o) for o in OUTCOMES}
+    denominator = counts[KILLED] + counts[SURVIVED] + counts[ERROR]
+    return {"backend": backend, "score": round(counts[KILLED] / denominator if denominator else 0.0, 4),
+            "sites": sites, "judged": len(mutants), "seconds": seconds, "scenarios": scenarios, "counts": counts,
+            "mutants": mutants, "unmatched_equivalents": unmatched}
+
+
+def report_json(result: MutationResult, st_text: str, unit_ids: Mapping[Mutant, int] | None = None,
+                reproduce: Callable[[int], str] | None = None, shard: Mapping[str, Any] | None = None) -> str:
+    return data_json(report_data(result, st_text, unit_ids, reproduce, shard))
+
+
+def data_json(data: Mapping[str, Any]) -> str:
     return json.dumps(data, indent=2) + "\n"
 
 
 def report_junit(result: MutationResult, st_text: str) -> str:
     """One test case per mutant: a survivor is a failure, an error an error, invalid/equivalent skipped."""
+    return junit_of(report_data(result, st_text), result.seconds)
+
+
+def junit_of(data: Mapping[str, Any], seconds: float | None = None) -> str:
+    """The JUnit file of a report's data (report_data, or merged shards)."""
+    mutants, counts = data["mutants"], data["counts"]
+    total = data["seconds"] if seconds is None else seconds
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<testsuite name={quoteattr("hh2iec mutate (" + result.backend + ")")} tests="{len(result.verdicts)}" '
-             f'failures="{result.count(SURVIVED)}" errors="{result.count(ERROR)}" '
-             f'skipped="{result.count(INVALID) + result.count(EQUIVALENT)}" time="{result.seconds:.3f}">']
-    for v in result.verdicts:
-        name = f"{survivor_location(st_text, v.mutant)}: {v.mutant.operator}: {v.mutant.description}"
-        lines.append(f'  <testcase classname="hh2iec.mutate" name={quoteattr(name)} time="{v.seconds:.3f}">')
-        if v.outcome == SURVIVED:
-            lines.append(f"    <failure message={quoteattr('survived: ' + v.mutant.original)}/>")
-        elif v.outcome == ERROR:
-            lines.append(f"    <error message={quoteattr(v.by)}/>")
-        elif v.outcome in (INVALID, EQUIVALENT):
-            lines.append(f"    <skipped message={quoteattr(v.outcome + ': ' + v.by)}/>")
+             f'<testsuite name={quoteattr("hh2iec mutate (" + data["backend"] + ")")} tests="{len(mutants)}" '
+             f'failures="{counts[SURVIVED]}" errors="{counts[ERROR]}" '
+             f'skipped="{counts[INVALID] + counts[EQUIVALENT]}" time="{total:.3f}">']
+    for m in mutants:
+        name = f"{m['where']}: {m['operator']}: {m['mutation']}"
+        lines.append(f'  <testcase classname="hh2iec.mutate" name={quoteattr(name)} time="{m["seconds"]:.3f}">')
+        if m["outcome"] == SURVIVED:
+            lines.append(f"    <failure message={quoteattr('survived: ' + m['st'])}/>")
+        elif m["outcome"] == ERROR:
+            lines.append(f"    <error message={quoteattr(m['by'])}/>")
+        elif m["outcome"] in (INVALID, EQUIVALENT):
+            lines.append(f"    <skipped message={quoteattr(m['outcome'] + ': ' + m['by'])}/>")
         lines.append("  </testcase>")
     lines.append("</testsuite>")
     return "\n".join(lines) + "\n"
+
+
+def merge_reports(shards: list[Mapping[str, Any]]) -> dict[str, Any]:
+    """One report from the reports of every shard (checked with shard.check_shards first): the mutants in the order
+    one process reports them, the counts and score over all of them, each note on the judged-equivalent list once
+    (a shard notes an entry whose mutant it judged and killed, every shard one whose mutant does not exist)."""
+    mutants = sorted((m for data in shards for m in data["mutants"]),
+                     key=lambda m: (m["st_line"], m["operator"], m["mutation"], m.get("unit", 0)))
+    notes: dict[tuple, dict[str, Any]] = {}
+    for data in shards:
+        for note in data["unmatched_equivalents"]:
+            notes.setdefault((note["line"], note["at"], note["why"]), note)
+    unmatched = [notes[key] for key in sorted(notes, key=lambda key: (key[0], key[1]))]
+    first = shards[0]
+    backends = sorted({data["backend"] for data in shards})
+    return _report("+".join(backends), first["sites"], round(sum(data["seconds"] for data in shards), 1),
+                   first["scenarios"], mutants, unmatched)
 
 
 def equivalents_yaml(verdicts: list[Verdict]) -> str:

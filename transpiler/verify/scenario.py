@@ -811,13 +811,21 @@ def _check_names(data: Mapping[str, Any], names: NameTable, spans: Mapping[tuple
 def load_scenario(path: Path, names: NameTable) -> Scenario:
     """Read, validate and bind a scenario file; raises ScenarioError with every E-SCENARIO problem found."""
     path = Path(path)
-    file = str(path)
-    diags = Diagnostics()
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        diags.report("E-SCENARIO", Span(file, 1, 1), f"cannot read scenario file: {exc}")
-        raise ScenarioError(diags.items) from None
+        raise ScenarioError([Diagnostic.of("E-SCENARIO", Span(str(path), 1, 1),
+                                           f"cannot read scenario file: {exc}")]) from None
+    scenario = scenario_from_text(text, str(path), path.parent, names, path.stem)
+    scenario._source = path
+    return scenario
+
+
+def scenario_from_text(text: str, file: str, folder: Path, names: NameTable, default_name: str = "scenario"
+                       ) -> Scenario:
+    """A scenario from YAML text (`file` names it in diagnostics, `folder` is where its relative machine-parameter
+    file is looked for); validated and bound like a scenario file, but with no source file."""
+    diags = Diagnostics()
     node = _compose(text, file, diags)
     if node is None:
         if not diags.has_errors():
@@ -828,13 +836,13 @@ def load_scenario(path: Path, names: NameTable) -> Scenario:
     if not isinstance(data, dict):
         diags.report("E-SCENARIO", tree.spans[()], "a scenario is a mapping of keys (name, cycles, events, ...)")
         raise ScenarioError(diags.items)
-    data.setdefault("name", path.stem)
+    data.setdefault("name", default_name)
     cycles = data.get("cycles")
     if isinstance(cycles, int) and not isinstance(cycles, bool) and cycles > MAX_CYCLES:
-        diags.report("E-SCENARIO", tree.spans[("cycles",)], f"cycles: {_number_text(cycles)} is more than a scenario file may run "
-                     f"({MAX_CYCLES} cycles); split the run into scenarios of fewer cycles")
+        diags.report("E-SCENARIO", tree.spans[("cycles",)], f"cycles: {_number_text(cycles)} is more than a scenario "
+                     f"file may run ({MAX_CYCLES} cycles); split the run into scenarios of fewer cycles")
     _convert_mp(data, tree)
-    _resolve_mp_file(data, path.parent, tree)
+    _resolve_mp_file(data, folder, tree)
     refs = _check_names(data, names, tree.spans, tree.key_spans, Span(file, 1, 1), diags)
     scenario: Scenario | None = None
     try:
@@ -844,7 +852,6 @@ def load_scenario(path: Path, names: NameTable) -> Scenario:
             _schema_diagnostic(err, tree, diags)
     if scenario is None or diags.has_errors():
         raise ScenarioError(diags.items)
-    scenario._source = path
     scenario._spans = tree.spans
     scenario._key_spans = tree.key_spans
     scenario._refs = refs

@@ -123,7 +123,8 @@ def _not_translated(result: StResult) -> list[str]:
     return [f"- {span}: {text}" for span, text in result.untranslated]
 
 
-def render_report(program: Program, result: StResult, diags: Diagnostics, mp_file: str | None = None) -> str:
+def render_report(program: Program, result: StResult, diags: Diagnostics, mp_file: str | None = None,
+                  st_text: str | None = None) -> str:  # (`st_text`: render_st's text of result.project, if printed)
     user = user_pous(result)
     fallback_names = {f.pou for f in result.fallbacks}
     structured = len([p for p in user if p.name not in fallback_names])
@@ -169,7 +170,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += ["", "### Submit jobs", "", f"`{result.jobs_program}` runs in the same task right after the main "
                   "program and calls the queued jobs one after the other (keep that order on the target):", ""]
         lines += [f"- job {number}: `{pou}` ({span.file}:{span.line})" for number, pou, span in result.submit_jobs]
-    lines += ["", "### Readability", "", measure(render_st(result.project), program.instruction_count()).line() + "."]
+    lines += ["", "### Readability", "", measure(st_text if st_text is not None else render_st(result.project), program.instruction_count()).line() + "."]
     lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
               "|---|---|---|---|---|---|"]
     for r in result.layout.rows:
@@ -188,8 +189,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
-    lines += ["", "## Target limits", ""]
-    lines += _target_limits(program) or ["none"]
+    lines += ["", "## Target limits", ""] + ((limits := _target_limits(program)) or ["none"])
     lines += ["", "## Auto-assigned operands", ""]
     lines += [f"- `{s.name}` -> {s.operand_text}" for s in program.auto_assigned] or ["none"]
     lines += _names(program, result)
@@ -199,7 +199,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     lines += [f"- {r.file}:{r.first_line}-{r.last_line} (`{r.condition}`)" for r in program.inactive_regions] or ["none"]
     lines += ["", "## Warnings", ""]
     lines += [f"- {d.render()}" for d in diags.warnings] or ["none"]
-    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file)
+    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file, bool(limits))
     return "\n".join(lines) + "\n"
 
 
@@ -229,9 +229,11 @@ def _data_tables(result: StResult) -> list[str]:
                      f"`{name}` ({typ}) | `{operand_vars.get(row.operand_text, '(byte memory)')}` |")
     return lines
 
-def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list[str]:
+
+def _next_steps(program: Program, result: StResult, mp_file: str | None, limited: bool) -> list[str]:
     """What a porting engineer does with this output: wire the I/O, provide the NC interface and the PLC task,
-    confirm the assumptions the program depends on, and what is still open."""
+    confirm the assumptions the program depends on, and what is still open (`limited`: the program meets a
+    target limit)."""
     rows = result.layout.rows
     inputs = sum(1 for r in rows if r.operand[0] == "I")
     outputs = sum(1 for r in rows if r.operand[0] == "O")
@@ -258,7 +260,7 @@ def _next_steps(program: Program, result: StResult, mp_file: str | None) -> list
         ids = ", ".join(sorted(set(confirm) | set(changed)))
         steps.append(f"- Confirm on the machine the assumptions this program depends on: {ids} (section Assumptions "
                      "applied; docs/assumptions.md says what each means and how to switch it with -S).")
-    if _target_limits(program):
+    if limited:
         steps.append("- Check the target limits above on the chosen target (string lengths).")
     if result.untranslated:
         steps.append(f"- Translate by hand the {len(result.untranslated)} places left out (section Not translated).")

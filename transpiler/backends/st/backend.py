@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import re
 from decimal import Decimal
 from typing import Mapping
@@ -12,7 +13,7 @@ from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, Ie
                          Task, VarSection)
 from transpiler.ir import CallTarget, DataRow, Operand, Program
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
-from transpiler.frontend.resolve import routine_body
+from transpiler.frontend.flow import RoutineBodies
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import jobs, library, modcalls
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
@@ -78,6 +79,8 @@ class StBackend:
         self.untranslated: list[tuple[Span, str]] = []
         self.kfields: dict[str, str] = {}          # KFIELD key -> name of its constant array
         self.types: list[DataType] = []
+        self._taken_names: set[str] | None = None    # see _names_taken_by_globals_and_pous
+        self._taken_globals = 0
 
     # ---- naming
 
@@ -105,15 +108,16 @@ class StBackend:
         layout = Layout(self.program, self.names, self.helpers_used.add, self.dialect)
         self.layout = layout
         self._name_instances()
-        self.liveness = Liveness(self.program)
+        self.bodies = RoutineBodies(self.program.files)
+        self.liveness = Liveness(self.program, self.bodies)
         self.stack: tuple[str, str] | None = None
-        self.stack_analysis = StackAnalysis(self.program, _module_effect)
+        self.stack_analysis = StackAnalysis(self.program, _module_effect, bodies=self.bodies)
         self._stack_depth_read()
         self.modules_used: set[int] = set()
         self.interface_names: dict[tuple[int, int], tuple[tuple[str, ...], tuple[str, ...]]] = {}
         self.real_stack_users: dict[str, tuple[int, int]] = {}
         self.current_key: tuple[int, int] = (0, 0)
-        self.job_plan = jobs.plan_jobs(self.program)
+        self.job_plan = jobs.plan_jobs(self.program, self.bodies)
         self.job_queue: str | None = None
         # Routine entries by file: op indices are per file, so one dict keyed by index alone let the routines of
         # different files that start at the same index overwrite each other.
@@ -146,7 +150,8 @@ class StBackend:
         # Only the POUs translated from the program read globals: the library ones use their own variables
         # (and a FUNCTION may not declare VAR_EXTERNAL).
         globals_by_upper = {v.name.upper(): (v, s.comment) for s in config.globals for v in s.vars}
-        program_pous = [_with_externals(p, globals_by_upper)
+        area_order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
+        program_pous = [_with_externals(p, globals_by_upper, area_order)
                         for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
@@ -194,20 +199,35 @@ class StBackend:
         """VAR_INPUT and VAR_OUTPUT names: legal, distinct, and no global or POU name (a local would hide it)."""
         if key not in self.interface_names:
             iface = self._interface(key)
-            taken = {g.upper() for g in self.layout.globals} | RESERVED | {n.upper() for n in self.pou_names.values()}
-            taken |= {n.upper() for n in self.instance_names.values()} | {self.main_pou.upper()}
+            taken = self._names_taken_by_globals_and_pous()
+            chosen_upper: set[str] = set()
             chosen: list[str] = []
             for wanted, _ in iface.params + iface.results:
                 name = legalise(wanted)[0]
                 base, n = name, 2
-                while name.upper() in taken or name.upper().startswith(TEMP_PREFIX.upper()) and name[3:].isdigit():
+                while name.upper() in taken or name.upper() in chosen_upper \
+                        or name.upper().startswith(TEMP_PREFIX.upper()) and name[3:].isdigit():
                     name = f"{base}_{n}"
                     n += 1
-                taken.add(name.upper())
+                chosen_upper.add(name.upper())
                 chosen.append(name)
             k = len(iface.params)
             self.interface_names[key] = (tuple(chosen[:k]), tuple(chosen[k:]))
         return self.interface_names[key]
+
+    def _names_taken_by_globals_and_pous(self) -> set[str]:
+        """Upper-case names a VAR_INPUT or VAR_OUTPUT may not take: the reserved words, every POU and instance
+        name and every global declared so far. Globals are only ever added (in dict order), so the set grows
+        with the newest ones instead of being rebuilt for each routine (thousands of routines, as many globals)."""
+        if self._taken_names is None:
+            self._taken_names = set(RESERVED) | {n.upper() for n in self.pou_names.values()}
+            self._taken_names |= {n.upper() for n in self.instance_names.values()} | {self.main_pou.upper()}
+            self._taken_globals = 0
+        globals_ = self.layout.globals
+        if len(globals_) > self._taken_globals:
+            self._taken_names.update(g.upper() for g in itertools.islice(globals_, self._taken_globals, None))
+            self._taken_globals = len(globals_)
+        return self._taken_names
 
     def _header(self) -> str:
         p = self.program
@@ -274,9 +294,9 @@ class StBackend:
         # Kept whole (~80 lines): the closures below share this routine's temporaries, callees and accessors.
         program = self.program
         is_main = key == (0, 0)
-        entry = CallTarget(0, 0, "<main>") if is_main else next(r for r in program.routines if r.key == key)
+        entry = CallTarget(0, 0, "<main>") if is_main else file_entries[key[1]]
         file = program.files[key[0]]
-        body = routine_body(program.files, entry)
+        body = self.bodies(entry)
         temps: list[tuple[str, str]] = []
 
         def scratch(name: str) -> bool:
@@ -640,11 +660,41 @@ def _module_effect(number: int) -> Effect | None:
     return Effect(*effect) if effect is not None else None
 
 
-def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]]) -> Pou:
+def _names_used(pou: Pou) -> set[str]:
+    """Every name the POU's statements hold (upper case), from its statement tree: the lvalue, callee and input
+    names of its statements and the names its expressions were built from. A POU written as text alone is read
+    from its text (names in comments do not count)."""
+    if not pou.statements:
+        return {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
+    found: set[str] = set()
+    targets: set[str] = set()       # lvalue, callee and input texts, each looked at once
+    for s in S.walk(pou.statements):
+        kind = type(s)
+        if kind is S.Assign:
+            targets.add(s.target)
+            found |= E.names_of(s.value)
+        elif kind is S.Call:
+            targets.add(s.callee)
+            for name, value in s.args:
+                targets.add(name)
+                found |= E.names_of(value)
+        elif kind is S.If or kind is S.While:
+            found |= E.names_of(s.cond)
+        elif kind is S.Case:
+            found |= E.names_of(s.selector)
+        elif kind is S.Repeat:
+            found |= E.names_of(s.until)
+    for text in targets:
+        found |= E.text_names(text)
+    return found
+
+
+def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],
+                    area_order: Mapping[str | None, int]) -> Pou:
     """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
-    one block per area of the configuration's globals, titled like it: matiec needs these declarations (a POU
-    sees no global without one), the blocks make the long lists readable."""
-    used = {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
+    one block per area of the configuration's globals (`area_order`: their order), titled like it: matiec needs
+    these declarations (a POU sees no global without one), the blocks make the long lists readable."""
+    used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
     for u in sorted(used - local):
@@ -653,7 +703,6 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
             by_area.setdefault(area, []).append(IecVar(var.name, var.type))
     if not by_area:
         return pou
-    order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)
-                      for area, vars_ in sorted(by_area.items(), key=lambda item: order[item[0]]))
+                      for area, vars_ in sorted(by_area.items(), key=lambda item: area_order[item[0]]))
     return dataclasses.replace(pou, sections=pou.sections + externals)

@@ -17,7 +17,13 @@ PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_EQ, PREC_AND, PREC_XOR
 
 @dataclasses.dataclass(frozen=True)
 class Expr:
-    """ST text of a value, its IEC type, the variables it reads, and (for integers) its value range."""
+    """ST text of a value, its IEC type, the variables it reads, and (for integers) its value range.
+
+    `parts` is what the constructors below joined into the text: the function or operator word and the operand
+    expressions (a tree of them); `names_of` walks it for the names the text holds, so that the clean-up passes
+    and the VAR_EXTERNAL declarations look names up instead of scanning printed text. A variable's names come from
+    its reference; an expression made from text alone (no parts, no variable) is read from its text. `names` keeps
+    the answer once asked."""
 
     text: str
     typ: str
@@ -28,15 +34,18 @@ class Expr:
     var: str | None = None          # set when the expression is exactly one variable (an lvalue)
     const: int | None = None        # set for integer literals
     bool_const: bool | None = None  # set for TRUE/FALSE
+    parts: tuple[str | Expr, ...] | None = dataclasses.field(default=None, compare=False, repr=False)
+    names: frozenset[str] | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         # An integer expression built without a range may hold any value of its type: assuming less would let
         # range-based simplifications (overflow checks left out) go wrong.
-        full = RANGES.get(self.typ, (0, 0))
-        if self.lo is None:
-            object.__setattr__(self, "lo", full[0])
-        if self.hi is None:
-            object.__setattr__(self, "hi", full[1])
+        if self.lo is None or self.hi is None:
+            full = RANGES.get(self.typ, (0, 0))
+            if self.lo is None:
+                object.__setattr__(self, "lo", full[0])
+            if self.hi is None:
+                object.__setattr__(self, "hi", full[1])
 
     def wrap(self, prec: int) -> str:
         return self.text if self.prec >= prec else f"({self.text})"
@@ -49,6 +58,58 @@ class Expr:
 def var(name: str, typ: str, deps_name: str | None = None) -> Expr:
     lo, hi = RANGES.get(typ, (0, 0))
     return Expr(name, typ, frozenset([deps_name or base_name(name)]), lo, hi, PREC_ATOM, var=name)
+
+
+def names_of(e: Expr) -> frozenset[str]:
+    """`names_in(e.text)`, from the parts `e` was built of (its variable's reference, its words and operands), or
+    read from its text when it has neither; kept with `e` once worked out."""
+    found = e.names
+    if found is not None:
+        return found
+    if e.parts is not None:
+        found = frozenset().union(*(_word_names(p) if isinstance(p, str) else names_of(p) for p in e.parts))
+    elif e.var is not None and e.var == e.text:
+        found = text_names(e.text)
+    else:
+        found = frozenset(names_in(e.text))
+    object.__setattr__(e, "names", found)     # (a memo of a fact of the text, which never changes)
+    return found
+
+
+def reference_names(text: str) -> frozenset[str] | None:
+    """names_in of a variable reference as the layout writes one: `name`, `member.path` or either behind a list
+    qualifier (`GVL_IO.I5`); None for other text (an array element, a deeper path), which is read as text."""
+    if _ident(text):
+        return frozenset((text.upper(),))
+    parts = text.split(".")
+    if len(parts) > 1 and parts[0] in GVL_NAMES and _ident(parts[1][:1]):
+        parts = parts[1:]       # the list qualifier (as _QUALIFIED takes it: spelled as declared, a name after it)
+    if len(parts) == 1 and _ident(parts[0]):
+        return frozenset((parts[0].upper(),))
+    if len(parts) == 2 and _ident(parts[0]) and _ident(parts[1]):
+        return frozenset((parts[0].upper(), f"{parts[0]}.{parts[1]}".upper()))
+    return None
+
+
+def text_names(text: str) -> frozenset[str]:
+    """names_in of lvalue or callee text: a plain reference without reading it, other text read."""
+    found = reference_names(text)
+    return found if found is not None else frozenset(names_in(text))
+
+
+def _ident(text: str) -> bool:
+    """An ASCII identifier, as _PATH reads one."""
+    return text.isascii() and text.isidentifier()
+
+
+def _word_names(word: str) -> frozenset[str]:
+    """names_in of a function name or operator joined into an expression's text (`HH_BIT`, `AND`; `+`: none)."""
+    if _ident(word):
+        return frozenset((word.upper(),))
+    return text_names(word) if any(ch.isalnum() or ch == "_" for ch in word) else _NONE
+
+
+_NONE: frozenset[str] = frozenset()
 
 
 def base_name(text: str) -> str:
@@ -95,20 +156,25 @@ def written_name(lvalue: Expr) -> str:
 
 
 def int_const(value: int, typ: str = "DINT") -> Expr:
-    text = str(value) if value >= 0 else f"{typ}#{value}" if typ != "DINT" else str(value)
+    typed = value < 0 and typ != "DINT"
+    text = f"{typ}#{value}" if typed else str(value)
     prec = PREC_ATOM if value >= 0 else PREC_UNARY
-    return Expr(text, typ, frozenset(), value, value, prec, const=value)
+    return Expr(text, typ, frozenset(), value, value, prec, const=value, parts=(typ,) if typed else ())
+
+
+_TRUE, _FALSE = frozenset(("TRUE",)), frozenset(("FALSE",))
 
 
 def bool_const(value: bool) -> Expr:
-    return Expr("TRUE" if value else "FALSE", "BOOL", frozenset(), int(value), int(value), bool_const=value)
+    return Expr("TRUE" if value else "FALSE", "BOOL", frozenset(), int(value), int(value), bool_const=value,
+                names=_TRUE if value else _FALSE)
 
 
 def call(fn: str, args: list[Expr], typ: str, lo: int | None = None, hi: int | None = None) -> Expr:
     deps = frozenset().union(*(a.deps for a in args)) if args else frozenset()
     rlo, rhi = RANGES.get(typ, (0, 0))
     return Expr(f"{fn}({', '.join(a.text for a in args)})", typ, deps,
-                rlo if lo is None else lo, rhi if hi is None else hi)
+                rlo if lo is None else lo, rhi if hi is None else hi, parts=(fn, *args))
 
 
 def to_dint(e: Expr) -> Expr:
@@ -118,8 +184,8 @@ def to_dint(e: Expr) -> Expr:
     if e.const is not None:
         return int_const(e.const)
     if e.typ == "BOOL":
-        return Expr(f"BOOL_TO_DINT({e.text})", "DINT", e.deps, 0, 1)
-    return Expr(f"{e.typ}_TO_DINT({e.text})", "DINT", e.deps, e.lo, e.hi)
+        return Expr(f"BOOL_TO_DINT({e.text})", "DINT", e.deps, 0, 1, parts=("BOOL_TO_DINT", e))
+    return Expr(f"{e.typ}_TO_DINT({e.text})", "DINT", e.deps, e.lo, e.hi, parts=(f"{e.typ}_TO_DINT", e))
 
 
 _COMPARE = MappingProxyType({"=": lambda x, y: x == y, "<>": lambda x, y: x != y, "<": lambda x, y: x < y,
@@ -133,7 +199,8 @@ def binop(op: str, a: Expr, b: Expr, typ: str, prec: int, lo: int | None = None,
     # Left-associative: the right operand needs parentheses at equal precedence.
     text = f"{a.wrap(prec)} {op} {b.wrap(prec + 1)}"
     rlo, rhi = RANGES.get(typ, (0, 0))
-    return Expr(text, typ, a.deps | b.deps, rlo if lo is None else lo, rhi if hi is None else hi, prec)
+    return Expr(text, typ, a.deps | b.deps, rlo if lo is None else lo, rhi if hi is None else hi, prec,
+                parts=(op, a, b))
 
 
 def b_not(a: Expr) -> Expr:
@@ -143,8 +210,10 @@ def b_not(a: Expr) -> Expr:
         inner = a.text[4:]
         if inner.startswith("(") and inner.endswith(")") and _balanced(inner[1:-1]):
             inner = inner[1:-1]
-        return Expr(inner, "BOOL", a.deps, 0, 1, PREC_OR if inner != a.text[4:] else PREC_ATOM)
-    return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY)
+        # (the operand of a NOT built here: the text is its text, parentheses aside)
+        parts = a.parts[1:] if a.parts is not None and a.parts[:1] == ("NOT",) else None
+        return Expr(inner, "BOOL", a.deps, 0, 1, PREC_OR if inner != a.text[4:] else PREC_ATOM, parts=parts)
+    return Expr(f"NOT {a.wrap(PREC_UNARY)}", "BOOL", a.deps, 0, 1, PREC_UNARY, parts=("NOT", a))
 
 
 def bit_of(word: Expr, k: int, access: bool) -> Expr:
@@ -152,10 +221,12 @@ def bit_of(word: Expr, k: int, access: bool) -> Expr:
     access, else the HH_BIT helper on its DINT value. A SINT or INT repeats its sign bit above its width, so a
     higher bit of it is its top bit."""
     if not access:
-        return Expr(f"HH_BIT({to_dint(word).text}, {k})", "BOOL", word.deps, 0, 1)
+        wide = to_dint(word)
+        return Expr(f"HH_BIT({wide.text}, {k})", "BOOL", word.deps, 0, 1, parts=("HH_BIT", wide))
     narrow = unwiden(word) or word
     top = {"SINT": 7, "INT": 15}.get(narrow.typ, 31)
-    return Expr(f"{narrow.text}.{min(k, top)}", "BOOL", word.deps, 0, 1)
+    # (a bit number after the dot is no name: `w.3` names what `w` names)
+    return Expr(f"{narrow.text}.{min(k, top)}", "BOOL", word.deps, 0, 1, parts=(narrow,))
 
 
 def unwiden(e: Expr) -> Expr | None:

@@ -21,7 +21,7 @@ from typing import Callable, Mapping
 
 from transpiler.diagnostics import Span
 from transpiler.ir import CallTarget, FileCode, Op, Program
-from transpiler.frontend.flow import routine_body
+from transpiler.frontend.flow import RoutineBodies
 
 BIT, VAL = "bit", "val"
 WORDS = MappingProxyType({BIT: 1, VAL: 2})
@@ -95,8 +95,9 @@ class StackAnalysis:
     """Effect and interface of every routine of `program` (keys as CallTarget.key; the main program is (0, 0))."""
 
     def __init__(self, program: Program, module_effect: Callable[[int], Effect | None] = lambda number: None,
-                 capacity_words: int | None = None):
+                 capacity_words: int | None = None, bodies: RoutineBodies | None = None):
         self.program = program
+        self.bodies = bodies or RoutineBodies(program.files)
         self.module_effect = module_effect
         self.capacity = capacity_words if capacity_words is not None else int(program.semantics["data_stack_words"])
         self.effects: dict[tuple[int, int], Effect] = {}
@@ -153,7 +154,7 @@ class StackAnalysis:
 
         for key, entry in self._entries.items():
             file = self.program.files[entry.file]
-            for i in routine_body(self.program.files, entry):
+            for i in self.bodies(entry):
                 op = file.ops[i]
                 if op.code in ("CALLT", "CALLF"):
                     mark(op.call, "called conditionally", op)
@@ -197,7 +198,7 @@ class StackAnalysis:
         # Kept whole (~60 lines): one worklist over the ops; each op's stack effect is a few lines of the same loop.
         walk = _Walk({}, {})
         self._walks[key] = walk
-        body = set(routine_body(self.program.files, entry))
+        body = set(self.bodies(entry))
         others = {i for i in self._by_file.get(entry.file, {}) if i != entry.index} if key != MAIN else set()
         exits: list[tuple[int, tuple]] = []
         todo = [(entry.index, (0, ()))]

@@ -24,7 +24,7 @@ import dataclasses
 from typing import Callable
 
 from transpiler.backends.iec_model import ArrayDim, DataType, IecVar, Pou, VarSection
-from transpiler.frontend.flow import routine_body, routines_entered
+from transpiler.frontend.flow import RoutineBodies, routines_entered
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import printer
 from transpiler.backends.st import stmt as S
@@ -93,8 +93,9 @@ class RoutineJobs:
         return self._plan.numbers[op.call.key]
 
 
-def plan_jobs(program: Program) -> JobPlan:
+def plan_jobs(program: Program, bodies: RoutineBodies | None = None) -> JobPlan:
     """Number the SUBM targets of `program` and find the routines the jobs call."""
+    bodies = bodies or RoutineBodies(program.files)
     entries = {r.key: r for r in program.routines}
     roots: dict[tuple[int, int], CallTarget] = {}
     for f in program.files:
@@ -112,7 +113,7 @@ def plan_jobs(program: Program) -> JobPlan:
             continue
         seen.add(r.key)
         ops = program.files[r.file].ops
-        for i in routine_body(program.files, r):
+        for i in bodies(r):
             entered = routines_entered(ops[i])
             # Falling through into another routine's label runs that routine as a callee as well.
             if i != r.index and (r.file, i) in entries:

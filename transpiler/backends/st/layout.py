@@ -68,6 +68,8 @@ class Layout:
         self.rows: list[OperandVar] = []
         self._bit_var: dict[tuple[str, int], str] = {}
         self._mem_var: dict[tuple[str, int], str] = {}
+        self._bit_exprs: dict[tuple[str, int], E.Expr] = {}     # bit_lvalue's and read_value's expressions
+        self._mem_exprs: dict[tuple[str, int], E.Expr] = {}
         self.bit_arrays: dict[str, str] = {}          # kind -> array of the addresses that have no name of their own
         self.bit_access: dict[str, str] = {}          # kind -> accessor FB type for indexed access
         self.mem_array: str | None = None
@@ -367,13 +369,18 @@ class Layout:
     def ref(self, name: str) -> str:
         """How a POU body names the global `name` on the target (`GVL_Markers.name` where lists are qualified); a
         member path (`ML_ax.inpos`) is qualified by the list of its STRUCT global."""
-        return self.dialect.reference(name, group_title(self.globals[name.split(".", 1)[0]].group))
+        var = self.globals[name.split(".", 1)[0]]      # (KeyError: not a global, a bug of the caller)
+        return self.dialect.reference(name, group_title(var.group)) if self.dialect.qualified_only else name
 
     def bit_lvalue(self, op: Operand, offset: int = 0) -> E.Expr:
         """The BOOL variable of a (non-indexed) bit operand, offset for LB/B= sequences."""
-        name = self._declare_bit(op.kind, op.addr + offset)
-        text = self.ref(name)
-        return E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
+        key = (op.kind, op.addr + offset)
+        known = self._bit_exprs.get(key)
+        if known is None:       # (an expression is immutable: one per operand serves every read and write of it)
+            name = self._declare_bit(*key)
+            text = self.ref(name)
+            known = self._bit_exprs[key] = E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
+        return known
 
     def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:
         """The operand address of an indexed bit operand (for the accessor FB)."""
@@ -393,7 +400,11 @@ class Layout:
         """A B/W/D operand as a typed expression (SINT/INT/DINT, i.e. sign-extended by type)."""
         if self._in_array(op):
             return self._array_read(op, x)
-        return E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
+        key = (op.kind, op.addr)
+        known = self._mem_exprs.get(key)
+        if known is None:
+            known = self._mem_exprs[key] = E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
+        return known
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:
         """(lvalue, DINT expression) assignments that store `value` truncated to the operand width."""
@@ -474,4 +485,5 @@ def _narrow(value: E.Expr, typ: str) -> E.Expr:
     narrow = E.unwiden(value)
     if narrow is not None and narrow.typ == typ and value.typ in ("SINT", "INT", "DINT") and E.fits(value, *E.RANGES[typ]):
         return narrow
-    return E.Expr(f"{value.typ}_TO_{typ}({value.text})", typ, value.deps, *E.RANGES[typ])
+    return E.Expr(f"{value.typ}_TO_{typ}({value.text})", typ, value.deps, *E.RANGES[typ],
+                  parts=(f"{value.typ}_TO_{typ}", value))

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from transpiler.ir import CallTarget, Op, Program
-from transpiler.frontend.flow import routines_entered
-from transpiler.frontend.resolve import routine_body, successors
+from transpiler.frontend.flow import RoutineBodies, routines_entered, successors
 
 REGS = ("LA", "WA", "SA", "X")
 _LA_USE = frozenset({"AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN",
@@ -63,18 +62,39 @@ def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
 class Liveness:
     """live_in[(routine key, op index)] for every routine body; exit sets solved to a fixed point."""
 
-    def __init__(self, program: Program):
+    def __init__(self, program: Program, bodies: RoutineBodies | None = None):
         self.program = program
+        bodies = bodies or RoutineBodies(program.files)
         self.main = CallTarget(0, 0, "<main>")
         roots = [self.main] + list(program.routines)
-        self.bodies = {r.key: routine_body(program.files, r) for r in roots}
+        self.bodies = {r.key: bodies(r) for r in roots}
         self.routines = {r.key: r for r in roots}
         self.entry_use: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
         self.exit_live: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
         self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
         self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
         self.fall_into = self._fall_throughs(roots)
+        self._use_def: dict[tuple, tuple[frozenset[str], frozenset[str]]] = {}
+        self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
         self._solve()
+
+    def _steps(self, key: tuple[int, int], body: list[int]) -> list[tuple]:
+        """What the data-flow rounds read of each op of a body, last op first, worked out once instead of in every
+        round: (index, use, def, successors, entry keys of the routines it calls, whether it ends the routine)."""
+        ops = self.program.files[key[0]].ops
+        out = []
+        for i in reversed(body):
+            op = ops[i]
+            # use_def reads only these facts of an op: worked out once per distinct combination
+            o = op.operand
+            facts = (op.code, op.bracket, None if o is None else (o.kind, o.indexed))
+            known = self._use_def.get(facts)
+            if known is None:
+                known = self._use_def[facts] = use_def(op)
+            use, d = known
+            out.append((i, use, d, successors(ops, i), tuple(c.key for c in routines_entered(op)),
+                        op.code in ("EM", "EMT", "EMF")))
+        return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
         """For each routine, the routines whose entry label its body reaches without a call (falling through or
@@ -96,12 +116,12 @@ class Liveness:
                 if entry != self.entry_use[key]:
                     self.entry_use[key] = entry
                     changed = True
-                ops = self.program.files[key[0]].ops
-                for i in body:
-                    for callee in routines_entered(ops[i]):
-                        after = live.get(i + 1, frozenset()) if i + 1 < len(ops) else frozenset()
-                        if callee.key in new_exit:
-                            new_exit[callee.key] = new_exit[callee.key] | after
+                n_ops = len(self.program.files[key[0]].ops)
+                for i, _, _, _, callees, _ in reversed(self.steps[key]):
+                    for callee in callees:
+                        after = live.get(i + 1, frozenset()) if i + 1 < n_ops else frozenset()
+                        if callee in new_exit:
+                            new_exit[callee] = new_exit[callee] | after
                 # The structured translation turns a fall-through into another routine's label into a call of that
                 # routine followed by a return: what is live at this routine's exit is live at the callee's exit too.
                 for other in self.fall_into[key]:
@@ -115,22 +135,20 @@ class Liveness:
                 return
 
     def _routine(self, key: tuple[int, int], body: list[int]) -> dict[int, frozenset[str]]:
-        ops = self.program.files[key[0]].ops
         exit_live = self.exit_live[key]
-        live: dict[int, frozenset[str]] = {i: frozenset() for i in body}
+        empty: frozenset[str] = frozenset()
+        live: dict[int, frozenset[str]] = {i: empty for i in body}
+        entry_use = self.entry_use
+        steps = self.steps[key]
         for _ in range(len(body) + 2):
             changed = False
-            for i in reversed(body):
-                op = ops[i]
-                out: frozenset[str] = frozenset()
-                if op.code in ("EM", "EMT", "EMF"):
-                    out = exit_live
-                for s in successors(ops, i):
-                    out = out | live.get(s, frozenset())
-                use, d = use_def(op)
-                extra = frozenset()
-                for callee in routines_entered(op):
-                    extra = extra | self.entry_use.get(callee.key, frozenset())
+            for i, use, d, succ, callees, ends in steps:
+                out = exit_live if ends else empty
+                for s in succ:
+                    out = out | live.get(s, empty)
+                extra = empty
+                for callee in callees:
+                    extra = extra | entry_use.get(callee, empty)
                 value = use | extra | (out - d)
                 if value != live[i]:
                     live[i] = value

@@ -61,8 +61,34 @@ def _texts(stmt: S.Stmt) -> list[str]:
     return []
 
 
-def _uses(block: list[S.Stmt] | tuple[S.Stmt, ...], word: re.Pattern[str]) -> int:
-    return sum(len(word.findall(text)) for stmt in S.walk(block) for text in _texts(stmt))
+def _parts(stmt: S.Stmt) -> list[str | E.Expr]:
+    """What `_texts` reads, with the expressions as expressions (their names known without reading the text)."""
+    if isinstance(stmt, S.Assign):
+        return [stmt.target, stmt.value]
+    if isinstance(stmt, S.Call):
+        return [stmt.callee] + [value for _, value in stmt.args]
+    if isinstance(stmt, S.If):
+        return [stmt.cond]
+    if isinstance(stmt, S.Case):
+        return [stmt.selector]
+    if isinstance(stmt, S.While):
+        return [stmt.cond]
+    if isinstance(stmt, S.Repeat):
+        return [stmt.until]
+    return []
+
+
+def _uses(block: list[S.Stmt] | tuple[S.Stmt, ...], word: re.Pattern[str], name: str) -> int:
+    """How often `word` (built from the temporary `name`) occurs; an expression whose names lack it is not read."""
+    upper = name.upper()
+    count = 0
+    for stmt in S.walk(block):
+        for part in _parts(stmt):
+            if isinstance(part, str):
+                count += len(word.findall(part))
+            elif upper in E.names_of(part):
+                count += len(word.findall(part.text))
+    return count
 
 
 class _Substitution:
@@ -90,7 +116,7 @@ class _Substitution:
         name = self.word.search(expr.text).group(0).upper()
         return dataclasses.replace(expr, text=self.word.sub(lambda _: self.text, expr.text, count=1),
                                    deps=(expr.deps - {name}) | self.value.deps, var=None, const=None,
-                                   bool_const=None)
+                                   bool_const=None, parts=None, names=None)
 
     def in_statement(self, stmt: S.Stmt) -> S.Stmt:
         if isinstance(stmt, S.Assign):
@@ -132,7 +158,8 @@ def _propagate_one(root: list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
             if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
                 word = _word(stmt.target)
                 j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
-                if j is not None and _uses(root, word) == 2 and not _uses(root, _bit_read(stmt.target)) \
+                if j is not None and _uses(root, word, stmt.target) == 2 \
+                        and not _uses(root, _bit_read(stmt.target), stmt.target) \
                         and _reads_first(block[j], word, stmt.value):
                     new = list(block)
                     new[j] = _Substitution(word, stmt.value).in_statement(block[j])

@@ -43,21 +43,27 @@ def measure(st_text: str, instructions: int) -> Readability:
         if name.upper().startswith("HH_"):
             continue
         for line in body.split("\n"):
-            code = _COMMENT.sub("", line).strip()
+            code = _code_of(line)
             if not code:
                 continue
             statements += 1
-            stack += bool(_STACK.search(code))
             temps += bool(_TEMP.search(code))
-            helpers += len(_HELPER.findall(code))
+            if "HH_" in code:       # (both patterns start with it)
+                stack += bool(_STACK.search(code))
+                helpers += len(_HELPER.findall(code))
     externals = 0
     inside = False
     for line in st_text.split("\n"):
-        code = _COMMENT.sub("", line).strip()       # a block may carry its title as a comment
+        code = _code_of(line)       # a block may carry its title as a comment
         if code == "VAR_EXTERNAL":
             inside = True
         elif code == "END_VAR":
             inside = False
-        elif inside and _COMMENT.sub("", line).strip():
+        elif inside and code:
             externals += 1
     return Readability(instructions, statements, stack, temps, helpers, externals)
+
+
+def _code_of(line: str) -> str:
+    """The line without its comments, stripped."""
+    return (_COMMENT.sub("", line) if "(*" in line else line).strip()

@@ -56,7 +56,7 @@ def _same_condition(first: S.If, second: S.If) -> bool:
     if not all(isinstance(s, (S.Assign, S.Comment)) for s in first.then):
         return False
     written = {E.target_name(s.target) for s in first.then if isinstance(s, S.Assign)}
-    return not written & {d.upper() for d in first.cond.deps} and not written & E.names_in(first.cond.text)
+    return not written & {d.upper() for d in first.cond.deps} and not written & E.names_of(first.cond)
 
 
 def _joined(first: S.If, second: S.If) -> S.If:
@@ -105,7 +105,7 @@ def _reads(stmt: S.Stmt) -> set[str]:
         elif isinstance(s, S.Repeat):
             exprs = [s.until]
         for e in exprs:
-            found |= set(e.deps) | E.names_in(e.text)
+            found |= e.deps | E.names_of(e)
     return found
 
 
@@ -125,7 +125,7 @@ def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
     condition does not read it and whose two branches each overwrite it (a division's zero check sets its error
     marker on both)."""
     for stmt in block:
-        if (isinstance(stmt, S.If) and stmt.orelse and reg not in set(stmt.cond.deps) | E.names_in(stmt.cond.text)
+        if (isinstance(stmt, S.If) and stmt.orelse and reg not in stmt.cond.deps | E.names_of(stmt.cond)
                 and _overwritten(stmt.then, reg, registers) and _overwritten(stmt.orelse, reg, registers)):
             return True
         if reg in _reads(stmt) or _leaves_or_calls(stmt):

@@ -34,6 +34,7 @@ import sys
 import types
 from typing import Callable
 
+from transpiler.exec.interp.decisions import decision_table
 from transpiler.exec.interp.gen_access import AccessCode
 from transpiler.exec.interp.gen_flow import FlowCode
 from transpiler.exec.interp.gen_stack import StackStringCode
@@ -71,8 +72,16 @@ class CompiledProgram:
     branch_slots: tuple[tuple[int, int], ...] = ()
     branch_ops: tuple[tuple[int, ...], ...] = ()
     stretch_ops: tuple[tuple[int, ...], ...] = ()
-    # Value-profile slots (compiled with value_profile only, see value_slots): word compares and bit gates.
+    # Value-profile slots (compiled with value_profile only, see value_slots): bit gates, divisors.
     value_slots: tuple[tuple[int, int], ...] = ()
+    # With coverage: boundary slots of the word compares (boundary_slots) and how many decisions record their
+    # condition vectors (decisions.decision_table; a vector is recorded as decision + (vector << decision_shift)).
+    bound_slots: tuple[tuple[int, int], ...] = ()
+    decision_ops: tuple[int, ...] = ()             # decision number -> op id of its consumer
+
+    @property
+    def decision_count(self) -> int:
+        return len(self.decision_ops)
 
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
         """Instantiate against a machine: (file functions, get_registers, set_registers)."""
@@ -92,10 +101,13 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     that overruns or faults with an exact variant that also records coverage (Machine.program_phase), so coverage
     costs little more than the fast variant.
 
-    `value_profile` (with coverage) also marks each word compare whose operands come out one apart or equal and
-    each pair of values a bit gate combines (see value_slots): a stimulus search counts those as features of their
-    own, since a mutated compare, constant or gate differs from the original only there. Bit logic is then not
-    folded into one expression per run. The exact re-run of a cycle does not mark them."""
+    With coverage the code also marks each word compare whose operands come out one apart or equal (boundary_slots),
+    and records the distinct vectors of condition values and outcome of every decision (decisions.py, MC/DC); bit
+    logic is then not folded into one expression per run, each condition is read into a local of its own.
+
+    `value_profile` (with coverage) also marks each pair of values a bit gate combines and each zero or non-zero
+    divisor (see value_slots): a stimulus search counts those as features of their own, since a mutated gate
+    differs from the original only there. The exact re-run of a cycle does not mark them."""
     if exact is None:
         exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
@@ -105,7 +117,8 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     code = compile(source, GENERATED_FILENAME, "exec")
     branch_ops = tuple(gen.branch_ops.get(opid, ()) for opid, _ in gen.branch_slots)
     return CompiledProgram(source, code, tuple(gen.line_ops), tuple(gen.op_index), exact, coverage,
-                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops), tuple(gen.value_slots))
+                           tuple(gen.branch_slots), branch_ops, tuple(gen.stretch_ops), tuple(gen.value_slots),
+                           tuple(gen.bound_slots), tuple(gen.decision_ops))
 
 
 def branch_slots(program: Program) -> list[tuple[int, int]]:
@@ -125,20 +138,32 @@ def branch_slots(program: Program) -> list[tuple[int, int]]:
 
 
 _GATES = frozenset({"AND", "ANDN", "OR", "ORN"})
+_LA_CONDITIONS = frozenset({"CMP", "SCMP", "BT", "PLL", "BCLOSE"})    # conditions whose value is the LA they make
+_PLAIN_CHAIN = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
 
 
-def value_slots(program: Program) -> list[tuple[int, int]]:
-    """The value profile's slots in op order: (op id, left - right) for -1, 0 and 1 of every word compare (the
-    generated code finds the slot of a difference d by adding d + 1 to the first), (op id, LA) for LA 0 and 1
-    of every AND/OR gate whose operand differs from LA (an AND that became an OR differs only there), and (op id,
-    divisor != 0) of every DIV and MOD (the translation checks the divisor where the original has no branch)."""
+def boundary_slots(program: Program) -> list[tuple[int, int]]:
+    """The boundary slots in op order: (op id, left - right) for -1, 0 and 1 of every word compare (the generated
+    code finds the slot of a difference d by adding d + 1 to the first)."""
     slots: list[tuple[int, int]] = []
     opid = 0
     for code in program.files:
         for op in code.ops:
             if op.code == "CMP":
                 slots += [(opid, -1), (opid, 0), (opid, 1)]
-            elif op.code in _GATES or op.code in ("DIV", "MOD"):
+            opid += 1
+    return slots
+
+
+def value_slots(program: Program) -> list[tuple[int, int]]:
+    """The value profile's slots in op order: (op id, LA) for LA 0 and 1 of every AND/OR gate whose operand differs
+    from LA (an AND that became an OR differs only there), and (op id, divisor != 0) of every DIV and MOD (the
+    translation checks the divisor where the original has no branch). Word compares have boundary_slots."""
+    slots: list[tuple[int, int]] = []
+    opid = 0
+    for code in program.files:
+        for op in code.ops:
+            if op.code in _GATES or op.code in ("DIV", "MOD"):
                 slots += [(opid, 0), (opid, 1)]
             opid += 1
     return slots
@@ -238,12 +263,43 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         for f, code in enumerate(program.files):
             self.op_base.append(len(self.op_index))
             self.op_index.extend((f, i) for i in range(len(code.ops)))
+        self.bound_slots = boundary_slots(program) if coverage else []
+        self.bound_slot = {key: slot for slot, key in enumerate(self.bound_slots)}
+        # MC/DC (with coverage): op id of a condition read -> its slot `_q<slot>` in its chain; op id of a decision's
+        # consumer -> (decision number, the slots of its conditions in order)
+        self.cond_slot: dict[int, int] = {}
+        self.record: dict[int, tuple[int, tuple[str, ...]]] = {}
+        self.decision_ops: list[int] = []
+        if coverage:
+            self._decisions(program)
+        self.decision_shift = max(1, len(self.decision_ops)).bit_length()
         self.branch_slots = branch_slots(program)
         self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
         self.value_slots = value_slots(program) if value_profile else []
         self.value_slot = {key: slot for slot, key in enumerate(self.value_slots)}
         self.branch_ops: dict[int, tuple[int, ...]] = {}    # op id of a conditional exit -> its stretch's op ids
         self.stretch_ops: list[tuple[int, ...]] = []
+
+    def _decisions(self, program: Program) -> None:
+        """The MC/DC recording: per decision, the expressions of its condition values at its consumer. A chain of
+        named bit loads and gates alone (the common case) writes nothing between its reads and its consumer, so the
+        consumer reads its operands again (and the fast variant still folds it into one expression); any other
+        chain reads each condition into a local `_q<slot>` where the condition is evaluated."""
+        table = decision_table(program)
+        for d in table.decisions:
+            ops = program.files[d.file].ops
+            base = self.op_base[d.file]
+            first = min(c.index for c in d.conditions)
+            plain = all(op.code in _PLAIN_CHAIN and not op.operand.indexed for op in ops[first:d.index])
+            if plain:
+                values = tuple(self.bit(c.operand) for c in d.conditions)
+            else:
+                slots = table.records[d.key][1]
+                values = tuple(f"_q{slot}" for slot in slots)
+                for c, slot in zip(d.conditions, slots):
+                    self.cond_slot[base + c.index] = slot
+            self.record[base + d.index] = (len(self.decision_ops), values)
+            self.decision_ops.append(base + d.index)
 
     # ------------------------------------------------------------------ output
 
@@ -272,7 +328,8 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                 self.out(1, f"_p{name[3]} = env[{name!r}].pack_into")
         helpers = ("rb", "wb", "rx", "wx", "packx", "unpackx", "pack", "unpack", "kf", "div", "mod", "shl", "shr",
                    "sat", "overflow", "underflow", "module", "subm", "rply", "can", "scat", "six", "srx",
-                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "vp", "ixw")
+                   "watchdog", "depth_fault", "case_fault", "falloff", "BudgetExceeded", "hit", "bh", "sh", "vp", "ixw",
+                   "bd", "mc")
         for name in helpers:
             self.out(1, f"_{name} = env[{name!r}]")
         self.out(1, "LA = 0; WA = 0; X = 0; SA = ''; n = 0; d = 0; _em = -1")
@@ -442,9 +499,17 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         """Generate the op; returns the indentation of the code that follows (deeper after a jump that nests it)."""
         c = op.code
         o = op.operand
+        if opid in self.record:
+            # MC/DC: the chain's condition values and its outcome (LA), before the consumer acts on it
+            number, values = self.record[opid]
+            bits = " | ".join([value + (f" << {n}" if n else "") for n, value in enumerate(values)]
+                              + [f"{self.la()} << {len(values)}"])
+            self.out(ind, f"_mc[({bits}) << {self.decision_shift} | {number}] = 1", opid)
         handler = getattr(self, f"_op_{c}", None)
         if handler is not None:
             follow = handler(op, opid, ind, f, seg_of)
+            if opid in self.cond_slot and c in _LA_CONDITIONS:
+                self.out(ind, f"_q{self.cond_slot[opid]} = {self.la()}", opid)
             return ind if follow is None else follow
         if c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN"):
             self._bit_logic(c, o, opid, ind)

@@ -162,13 +162,18 @@ class AccessCode:
 
     def _bit_logic(self, c: str, o: Operand, opid: int, ind: int) -> None:
         """LD LDN AND ANDN OR ORN XOR XORN, ST STN, SET RES SETN RESN."""
-        if self.fuse_la and not o.indexed and c in _CHAIN_OPS:
+        if self.fuse_la and not o.indexed and c in _CHAIN_OPS and opid not in self.cond_slot:
             self._chain(c, o, opid, ind)
         elif self.fuse_la and not o.indexed and c == "ST" and self.la_chain is not None:
             chain, self.la_chain = self.la_chain, None
             self.out(ind, f"{self.bit(o)} = LA = {chain.text}", chain.opid)
         elif c in ("LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"):
             b = self.bit(o)
+            if opid in self.cond_slot:
+                # MC/DC: the condition is the operand's value, read once into the local its decision records
+                slot = self.cond_slot[opid]
+                self.out(ind, f"_q{slot} = {b}", opid)
+                b = f"_q{slot}"
             if c.endswith("N"):
                 b = f"({b} ^ 1)"
             sym = {"LD": "", "AND": "&", "OR": "|", "XOR": "^"}[c.rstrip("N")]

@@ -67,11 +67,11 @@ class WordCode:
             left, right = f"(WA & {m})", self.value(o, "mask") if n < 32 else f"({self.value(o)} & {m})"
         else:
             left, right = sext_expr('WA', n), self.value(o)
-        if self.value_slots:
-            # value profile: mark left - right when it is -1, 0 or 1 (slots opid/-1, 0, 1 are consecutive); each
-            # operand is read once, as without the profile (an indexed read may fault)
+        if (opid, 0) in self.bound_slot:
+            # boundaries (coverage): mark left - right when it is -1, 0 or 1 (slots opid/-1, 0, 1 are consecutive);
+            # each operand is read once, as without the marks (an indexed read may fault)
             self.out(ind, f"_cl = {left}; _cr = {right}", opid)
-            self.out(ind, f"if -1 <= _cl - _cr <= 1: _vp[_cl - _cr + {self.value_slot[opid, 0]}] = 1", opid)
+            self.out(ind, f"if -1 <= _cl - _cr <= 1: _bd[_cl - _cr + {self.bound_slot[opid, 0]}] = 1", opid)
             left, right = "_cl", "_cr"
         self.set_la(ind, f"{left} {rel} {right}", opid)
 

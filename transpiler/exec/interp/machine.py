@@ -45,6 +45,11 @@ class Coverage:
 
     executed: frozenset[tuple[int, int]]
     branches: Mapping[tuple[int, int], frozenset[int]]
+    # MC/DC: the consumer (file, op index) of each decision -> the distinct vectors recorded (bit i = condition i of
+    # decisions.Decision, the bit above them the outcome); boundaries: each compare -> the values of left - right
+    # among -1, 0, 1 it took
+    vectors: Mapping[tuple[int, int], frozenset[int]] = dataclasses.field(default_factory=dict)
+    bounds: Mapping[tuple[int, int], frozenset[int]] = dataclasses.field(default_factory=dict)
 
 
 def normalize_mp(mp: Mapping[Any, Any] | None) -> dict[tuple[int, int], Decimal]:
@@ -315,7 +320,8 @@ class Machine:
             self._run_programs(self._primary, self._primary_funcs, self._get, self._set, cycle, report)
             return
         self._snapshot = self.state.snapshot(self._snapshot)
-        snap = (self._snapshot, self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings))
+        snap = (self._snapshot, self._get(), self.jobs.state(), dict(rt.unknown_modules), len(report.warnings),
+                rt.marks.vector_count() if rt.marks is not None else 0)
         rt.module_log = []
         rt.replay = None
         faults = len(report.faults)
@@ -334,7 +340,10 @@ class Machine:
                 del self.faults[len(self.faults) - (len(report.faults) - faults):]
                 del report.faults[faults:]
                 self.halted = False
-            state, regs, jobs, unknown, warned = snap
+            state, regs, jobs, unknown, warned, vectors = snap
+            if rt.marks is not None:
+                # the fast code may have run past the budget before it noticed: its decisions there never happened
+                rt.marks.forget_vectors_after(vectors)
             self.state.restore(state)
             self.jobs.restore(jobs)
             rt.unknown_modules = unknown
@@ -464,14 +473,41 @@ class Machine:
 
     @property
     def value_outcome_count(self) -> int:
-        """How many distinct (op id, outcome) pairs of the value profile (compile.value_slots: word compares, bit
-        gates) are marked (it only grows; 0 unless the program was compiled with value_profile)."""
+        """How many distinct (op id, outcome) pairs of the value profile (compile.value_slots: bit gates,
+        divisors) are marked (it only grows; 0 unless the program was compiled with value_profile)."""
         marks = self.runtime.marks
         return 0 if marks is None else marks.value_outcome_count()
 
     def value_outcomes(self) -> frozenset[tuple[int, int]]:
         marks = self.runtime.marks
         return frozenset() if marks is None else marks.value_outcomes()
+
+    @property
+    def boundary_outcome_count(self) -> int:
+        """How many distinct (op id, left - right) of word compares within one of each other are marked (it only
+        grows; 0 without coverage)."""
+        marks = self.runtime.marks
+        return 0 if marks is None else marks.boundary_outcome_count()
+
+    def boundary_outcomes(self) -> frozenset[tuple[int, int]]:
+        marks = self.runtime.marks
+        return frozenset() if marks is None else marks.boundary_outcomes()
+
+    @property
+    def vector_count(self) -> int:
+        """How many distinct condition vectors of decisions are recorded (MC/DC; it grows, 0 without coverage)."""
+        marks = self.runtime.marks
+        return 0 if marks is None else marks.vector_count()
+
+    def decision_vectors_since(self, count: int) -> list[tuple[int, int]]:
+        """(decision number, vector) of every vector recorded after the first `count` (see vector_count)."""
+        marks = self.runtime.marks
+        return [] if marks is None else marks.vectors_since(count)
+
+    def decision_vectors(self) -> dict[int, frozenset[int]]:
+        """Decision number (decisions.decision_table order) -> the distinct vectors recorded so far."""
+        marks = self.runtime.marks
+        return {} if marks is None else marks.decision_vectors()
 
     @property
     def coverage(self) -> Coverage:
@@ -483,7 +519,13 @@ class Machine:
         branches: dict[tuple[int, int], set[int]] = {}
         for opid, outcome in marks.branch_outcomes():
             branches.setdefault(index[opid], set()).add(outcome)
-        return Coverage(executed, {k: frozenset(v) for k, v in branches.items()})
+        bounds: dict[tuple[int, int], set[int]] = {}
+        for opid, difference in marks.boundary_outcomes():
+            bounds.setdefault(index[opid], set()).add(difference)
+        consumers = self._primary.decision_ops
+        vectors = {index[consumers[k]]: v for k, v in marks.decision_vectors().items()}
+        return Coverage(executed, {k: frozenset(v) for k, v in branches.items()}, vectors,
+                        {k: frozenset(v) for k, v in bounds.items()})
 
     @property
     def unknown_modules(self) -> dict[int, int]:

@@ -58,10 +58,12 @@ class Runtime:
         branch_hits: list[int] | None = None
         stretch_hits: list[int] | None = None
         value_hits: list[int] | None = None
+        bound_hits: list[int] | None = None
+        vectors: dict[int, int] | None = None
         if coverage:
             if self.marks is None:
                 self.marks = CoverageMarks(compiled)
-            hits, branch_hits, stretch_hits, value_hits = self.marks.arrays_for(compiled)
+            hits, branch_hits, stretch_hits, value_hits, bound_hits, vectors = self.marks.arrays_for(compiled)
         env: dict[str, object] = {
             "M": st.M, "I": st.I, "O": st.O, "T": st.T, "C": st.C, "mem": st.mem, "mb": st.mb, "S": st.S,
             "stk": self.stack, "valid": st.valid, "st_h": st.st_h, "st_H": st.st_H, "st_i": st.st_i, "st_I": st.st_I,
@@ -74,7 +76,7 @@ class Runtime:
             "srx": self.read_string_indexed,
             "watchdog": self.watchdog, "depth_fault": self.depth_fault, "case_fault": case_fault,
             "falloff": falloff, "BudgetExceeded": BudgetExceeded, "hit": hits, "bh": branch_hits,
-            "sh": stretch_hits, "vp": value_hits,
+            "sh": stretch_hits, "vp": value_hits, "bd": bound_hits, "mc": vectors,
             "ixw": self.indexed_writes.setdefault,
         }
         if st.native:

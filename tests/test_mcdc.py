@@ -1,0 +1,248 @@
+"""MC/DC and boundary values: the decisions found over the IR, the condition vectors the interpreter records, the
+pairs that show a condition (unique-cause, masking for coupled conditions), boundaries at an operand's limit, and
+the items explained as infeasible."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+
+from transpiler.cli import main
+from transpiler.exec.interp import Machine, compile_program
+from transpiler.exec.interp.decisions import decision_table
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
+from transpiler.language.semantics import make_semantics
+from transpiler.verify.mcdc import decision_coverage, shown_masking, shown_unique
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _program(folder: Path, text: str, **semantics):
+    (folder / "main.src").write_text(text)
+    result = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", semantics))
+    assert result.ok
+    return result.program
+
+
+def _run(program, rows: list[dict[str, int]], exact: bool = False) -> Machine:
+    """One cycle per row; a row names inputs I<n> and their values."""
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=exact), coverage=True)
+    for cycle, row in enumerate(rows):
+        machine.run_cycle(cycle, [("I", int(name[1:]), value) for name, value in row.items()])
+    return machine
+
+
+def _status(program, machines, driven=frozenset()):
+    cov = decision_coverage(program, [m.coverage for m in machines], set(driven))
+    return {(i.condition.text, i.decision.op.operand.display() if i.decision.op.operand else i.decision.op.mnemonic,
+             i.number): i for i in cov.conditions}, cov
+
+
+def test_complete_branch_coverage_is_not_complete_mcdc(tmp_path: Path) -> None:
+    # I1 AND I2 decides a jump: (1, 1) and (0, 0) take it both ways, but no pair shows either condition alone.
+    # Catches: MC/DC counted from branch outcomes, a pair accepted that differs in two conditions.
+    program = _program(tmp_path, "L I1\nA I2\nJPF Skip\nL I3\n= O1\nLBL Skip\nEM\n")
+    both_ways = _run(program, [{"I1": 1, "I2": 1}, {"I1": 0, "I2": 0}])
+    assert both_ways.coverage.branches[(0, 2)] == {0, 1}
+    items, cov = _status(program, [both_ways])
+    assert items[("I1", "JPF", 0)].status == "missing" and items[("I2", "JPF", 1)].status == "missing"
+    assert cov.summary()["mcdc"]["conditions_shown"] == 0
+    # the two rows that complete it, in a second run: pairs are found across runs
+    more = _run(program, [{"I1": 1, "I2": 0}, {"I1": 0, "I2": 1}, {"I1": 0, "I2": 0}])
+    items, cov = _status(program, [both_ways, more])
+    assert items[("I1", "JPF", 0)].status == "shown" and items[("I2", "JPF", 1)].status == "shown"
+    jump = cov.summary()["mcdc"]
+    assert jump["not_shown"] == [{"at": "main.src:4:1", "what": "condition I3 of I3 = O1"}]
+
+
+def test_coupled_condition_needs_masking_mcdc(tmp_path: Path) -> None:
+    # (I1 AND I2) OR (NOT I1 AND I3): I1 is read twice, so it can never change alone (no unique-cause pair); with
+    # I2 = 1, I3 = 0 the second read is masked and I1 decides the outcome: a masking pair.
+    program = _program(tmp_path, "L I1\nA I2\nO[\nLN I1\nA I3\n]\n= O1\nEM\n")
+    decision = decision_table(program).decisions[0]
+    assert [c.text for c in decision.conditions] == ["I1", "I2", "I1", "I3"]
+    assert decision.coupled == (True, False, True, False)
+    machine = _run(program, [{"I1": 1, "I2": 1, "I3": 0}, {"I1": 0, "I2": 1, "I3": 0}])
+    vectors = machine.coverage.vectors[decision.key]
+    assert not shown_unique(vectors, 4, 0)
+    assert shown_masking(vectors, 4, 0, decision.function())
+    items, _ = _status(program, [machine])
+    first = items[("I1", "O1", 0)]
+    assert first.status == "shown" and first.masking and "(masking MC/DC)" in first.what()
+    # The pair (I2 = 0, I3 = 1) vs (I2 = 1, I3 = 0) at I1 = 1 differs in I2 and I3 with different outcomes? No:
+    # I1 = 1 masks I3. A masking pair must not accept a second differing condition that is not masked.
+    other = _run(program, [{"I1": 0, "I2": 0, "I3": 0}, {"I1": 1, "I2": 1, "I3": 1}])
+    assert not shown_masking(other.coverage.vectors[decision.key], 4, 0, decision.function())
+
+
+def test_bracket_and_xor_chains(tmp_path: Path) -> None:
+    # Catches: a bracket's inner chain taken for a new chain, AN[ not negating, XO treated as OR.
+    program = _program(tmp_path, "L I1\nAN[\nL I2\nO I3\n]\n= O1\nL I4\nXO I5\n= O2\nEM\n")
+    table = decision_table(program)
+    assert [d.text() for d in table.decisions] == ["I1 AND NOT (I2 OR I3) = O1", "I4 XOR I5 = O2"]
+    rows = [{"I1": 1, "I2": 0, "I3": 0, "I4": 0, "I5": 0}, {"I1": 0, "I2": 0, "I3": 0, "I4": 1, "I5": 0},
+            {"I1": 1, "I2": 1, "I3": 0, "I4": 0, "I5": 1}, {"I1": 1, "I2": 0, "I3": 1, "I4": 1, "I5": 1}]
+    fast, exact = _run(program, rows), _run(program, rows, exact=True)
+    assert fast.coverage.vectors == exact.coverage.vectors
+    items, _ = _status(program, [fast])
+    assert {key[0]: i.status for key, i in items.items()} == {c: "shown" for c in ("I1", "I2", "I3", "I4", "I5")}
+    for d in table.decisions:
+        n = len(d.conditions)
+        assert all(d.function()(v & ((1 << n) - 1)) == v >> n for v in fast.coverage.vectors[d.key])
+    # XO: without a row in which I5 changes alone, I5 is not shown
+    items, _ = _status(program, [_run(program, rows[:2])])
+    assert items[("I5", "O2", 1)].status == "missing"
+
+
+def test_boundary_values_at_the_limit_of_a_byte(tmp_path: Path) -> None:
+    # B10 == K127: c+1 = 128 is no value of a byte (infeasible), c-1 and c are reached; the compare of two words
+    # counts its difference.
+    program = _program(tmp_path, "L B10\n== K127\n= M1\nL W20\n< W22\n= M2\nEM\n")
+    machine = Machine(program, compiled=compile_program(program, coverage=True, exact=False), coverage=True)
+    for cycle, (b10, w20, w22) in enumerate([(126, 5, 6), (127, 6, 6), (0, 0, 9)]):
+        machine.write("B", 10, b10)
+        machine.write("W", 20, w20)
+        machine.write("W", 22, w22)
+        machine.run_cycle(cycle, [])
+    cov = decision_coverage(program, [machine.coverage])
+    found = {item.what(): (item.status, item.reason) for item in cov.boundaries}
+    assert found["boundary B10 == K127: B10 = c-1 (126)"] == ("reached", "")
+    assert found["boundary B10 == K127: B10 = c (127)"] == ("reached", "")
+    status, reason = found["boundary B10 == K127: B10 = c+1 (128)"]
+    assert status == "infeasible" and "-128..127" in reason
+    assert found["boundary W20 < W22: W20 - W22 = -1"][0] == "reached"
+    assert found["boundary W20 < W22: W20 - W22 = +0"][0] == "reached"
+    assert found["boundary W20 < W22: W20 - W22 = +1"][0] == "missing"
+    summary = cov.summary()["boundaries"]
+    assert (summary["values"], summary["values_reached"], summary["values_infeasible"]) == (6, 4, 1)
+
+
+def test_infeasible_conditions_have_their_reason(tmp_path: Path) -> None:
+    # M5 is only ever reset (power-on 0): always 0, and it masks I2. M6 is only ever set: it is 0 before and 1
+    # after, so it is NOT infeasible. M7 is never written, but a scenario sets it: not constant either.
+    program = _program(tmp_path, "L I1\nR M5\nL M5\nA I2\n= O1\nL I3\nS M6\nL M6\nA I4\n= O2\n"
+                                 "L M7\nA I5\n= O3\nEM\n")
+    machine = _run(program, [{"I1": 1, "I2": 1, "I3": 0, "I4": 1}, {"I2": 0}])
+    items, cov = _status(program, [machine], driven={("M", 7)})
+    m5, i2 = items[("M5", "O1", 0)], items[("I2", "O1", 1)]
+    assert m5.status == "infeasible" and m5.reason.startswith("M5 is always 0: the program writes only 0 to it")
+    assert i2.status == "infeasible" and i2.reason == "masked by the constant M5 = 0"
+    assert items[("M6", "O2", 0)].status == "missing"
+    assert items[("M7", "O3", 0)].status == "missing"
+    # without the scenario that sets it, M7 is never written: always 0
+    items, _ = _status(program, [machine])
+    assert items[("M7", "O3", 0)].status == "infeasible"
+    assert "nothing in the program writes it" in items[("M7", "O3", 0)].reason
+    summary = cov.summary()["mcdc"]
+    assert summary["conditions_infeasible"] == 2 and len(summary["infeasible"]) == 2
+    assert all(item["reason"] for item in summary["infeasible"])
+
+
+def test_redundant_condition_is_infeasible_and_inputs_never_are(tmp_path: Path) -> None:
+    # (I1 AND I2) OR I1 is I1: neither I2 nor the first read of I1 can ever decide the outcome (the second read
+    # of I1 masks them); the second read can. Inputs themselves are never constant.
+    program = _program(tmp_path, "L I1\nA I2\nO I1\n= O1\nEM\n")
+    items, _ = _status(program, [_run(program, [{"I1": 0, "I2": 0}])])
+    assert items[("I2", "O1", 1)].status == "infeasible"
+    assert "never depends on it" in items[("I2", "O1", 1)].reason
+    assert items[("I1", "O1", 0)].status == "infeasible" and "coupled" in items[("I1", "O1", 0)].reason
+    assert items[("I1", "O1", 2)].status == "missing"
+    items, _ = _status(program, [_run(program, [{"I1": 0, "I2": 0}, {"I1": 1}])])
+    assert items[("I1", "O1", 2)].status == "shown"
+
+
+@pytest.mark.parametrize("semantics", [{}, {"accumulator_model": "shared_bit7"}, {"chain_model": "dynamic"}],
+                         ids=["default", "shared_bit7", "dynamic"])
+@pytest.mark.parametrize("project", ["logic_chain", "brackets_logic", "chain_start", "compare", "edges", "stack",
+                                     "ift_while_repeat", "jumps_loop", "calls_cmt_cmf"])
+def test_recorded_outcome_is_the_function_of_the_recorded_conditions(project: str, semantics: dict) -> None:
+    # The decision's formula (decisions.py) and the generated code agree on every vector recorded, in the fast and
+    # the exact variant alike. Catches: a condition read at the wrong place, a negation lost, a bracket mis-modelled.
+    result = compile_project(ProjectOptions(main=ROOT / "samples" / "constructs" / project / "main.src"),
+                             make_semantics("itnc530", semantics))
+    program = result.program
+    table = decision_table(program)
+    recorded = []
+    for exact in (False, True):
+        machine = Machine(program, compiled=compile_program(program, coverage=True, exact=exact), coverage=True)
+        rng = random.Random(7)
+        for cycle in range(200):
+            machine.run_cycle(cycle, [("I", rng.randrange(16), rng.randrange(2)) for _ in range(3)])
+        recorded.append(machine.coverage.vectors)
+    assert recorded[0] == recorded[1] and recorded[0]
+    for decision in table.decisions:
+        n = len(decision.conditions)
+        function = decision.function()
+        for v in recorded[0].get(decision.key, ()):
+            assert function(v & ((1 << n) - 1)) == v >> n, decision.text()
+
+
+def test_equiv_prints_and_reports_mcdc_and_boundaries(tmp_path: Path, capsys) -> None:
+    (tmp_path / "main.src").write_text("L I1\nA I2\n= O1\nL B4\n> K10\n= O2\nEM\n")
+    (tmp_path / "s.yaml").write_text("cycles: 4\nevents:\n  - cycle: 1\n    set: {I1: 1, I2: 1}\n"
+                                     "  - cycle: 2\n    set: {I2: 0, B4: 11}\n")
+    report = tmp_path / "r.json"
+    args = ["equiv", str(tmp_path / "main.src"), "--scenario", str(tmp_path / "s.yaml"), "--backend", "builtin",
+            "--report", str(report)]
+    assert main(args) == 0
+    quiet = capsys.readouterr().out
+    line = next(text for text in quiet.splitlines() if text.startswith("coverage: "))
+    assert line.endswith("CASE entries 0/0, MC/DC 2/3 conditions, boundaries 1/3")
+    assert "3 MC/DC conditions or boundary values no run covered, 0 infeasible (-v lists them)" in quiet
+    assert main(args + ["-v"]) == 0
+    loud = capsys.readouterr().out.splitlines()
+    assert "  not covered: main.src:1:1: condition I1 of I1 AND I2 = O1" in loud
+    assert "  not covered: main.src:5:1: boundary B4 > K10: B4 = c-1 (9)" in loud
+    import json
+    coverage = json.loads(report.read_text())["coverage"]
+    assert coverage["branches"] == 0 and "never_taken" in coverage          # existing keys stay
+    assert coverage["mcdc"]["conditions"] == 3 and coverage["mcdc"]["conditions_shown"] == 2
+    assert coverage["boundaries"]["values_reached"] == 1
+
+
+def test_marker_set_first_thing_in_every_cycle_is_constant(tmp_path: Path) -> None:
+    # The "always one" idiom: M10 = I0 OR NOT I0 is assigned before anything reads it, in every cycle, so no read
+    # sees its power-on 0; M11 = NOT M10 is always 0. A marker assigned after a read (M12) keeps its power-on value
+    # for that read: not constant.
+    program = _program(tmp_path, "L I0\nON I0\n= M10\nLN M10\n= M11\nL M12\nA I2\n= O3\nL I1\n= M12\n"
+                                 "LBL Go\nL M10\nA I1\n= O1\nL M11\nO I1\n= O2\nEM\n")
+    machine = _run(program, [{"I0": 0, "I1": 0}, {"I1": 1}])
+    items, _ = _status(program, [machine], driven={("M", 10)})     # a scenario setting it changes nothing
+    m10 = items[("M10", "O1", 0)]
+    assert m10.status == "infeasible" and "first thing in every cycle" in m10.reason and "always 1" in m10.reason
+    assert items[("I1", "O1", 1)].status == "shown"
+    assert items[("M11", "O2", 0)].status == "infeasible" and "always 0" in items[("M11", "O2", 0)].reason
+    assert items[("M12", "O3", 0)].status == "missing"
+    tautology = [i for key, i in items.items() if key[1] == "M10"]
+    assert {i.status for i in tautology} == {"infeasible"} and all("coupled" in i.reason for i in tautology)
+
+
+def test_a_test_entered_by_a_jump_is_no_decision_of_the_chain_before_it(tmp_path: Path) -> None:
+    # ENDW jumps back to the WHILET test with the LA of the loop's last chain: the test consumes two chains, and
+    # recording it as a decision of the chain before WHILET paired that chain's values with another chain's outcome.
+    program = _program(tmp_path, "L K0\n= X\nL X\n< K3\nWHILET\nINCX\nL X\n< K2\nA I2\n= O1\nENDW\nEM\n")
+    table = decision_table(program)
+    assert [d.op.mnemonic for d in table.decisions] == ["="]
+    machine = _run(program, [{"I2": 0}, {"I2": 1}])
+    decision = table.decisions[0]
+    assert all(decision.function()(v & 3) == v >> 2 for v in machine.coverage.vectors[decision.key])
+
+
+def test_an_indexed_marker_write_leaves_no_marker_constant(tmp_path: Path) -> None:
+    # M5 is never named by a write, but `= M100[X]` may reach it: claiming it constant would be unsound.
+    program = _program(tmp_path, "L I1\n= M100[X]\nL M5\nA I2\n= O1\nEM\n")
+    items, _ = _status(program, [_run(program, [{"I2": 1}])])
+    assert items[("M5", "O1", 0)].status == "missing" and items[("I2", "O1", 1)].status == "missing"
+
+
+def test_generated_stimulus_completes_mcdc_of_a_chain_without_branches(tmp_path: Path, capsys) -> None:
+    # No branch to take: only the MC/DC pairs (besides the output's two states) tell the search which inputs
+    # matter. Catches: MC/DC pairs not counted as features of the search (then this seed shows 4 of the 6).
+    (tmp_path / "main.src").write_text("L I1\nAN I2\nA I3\nAN I4\nA I5\nAN I6\n= O1\nEM\n")
+    args = ["equiv", str(tmp_path / "main.src"), "--random-cycles", "400", "--seed", "1", "--backend", "builtin"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "MC/DC 6/6 conditions" in out, out

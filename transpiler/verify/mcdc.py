@@ -1,0 +1,420 @@
+"""MC/DC of every decision and boundary values of every word compare, from the condition vectors and compare
+differences the reference interpreter recorded (machine.Coverage), with the items no run can reach explained.
+
+MC/DC: a condition is shown when two recorded evaluations of its decision have different outcomes and differ in
+it alone (unique-cause MC/DC). A condition whose operand appears more than once in its chain (coupled: it cannot
+change alone) is shown by masking MC/DC instead: two evaluations with different outcomes in which it differs, the
+outcome depends on it in both (flipping it alone would change the outcome), and every other condition that differs
+is masked in both (flipping it alone would not). Condition values are the values read, before the instruction's
+negation (`AN M5` has the condition M5).
+
+Boundaries: for a compare of a word with a constant c, whether the word took c-1, c and c+1 (a value the word
+cannot hold, such as 128 for a byte, is infeasible); for a compare of two words, whether their difference took
+-1, 0 and +1.
+
+Infeasible, and so neither counted as missing nor dropped: a condition whose operand can hold only one value under
+the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface
+operand or operand a scenario sets; power-on memory is 0), a condition the outcome cannot depend on given those
+constants and the coupling of its chain (masked by a constant, or redundant), and a boundary value the word cannot
+hold. Only these reasons are claimed; a condition that is merely hard to reach stays missing."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
+from transpiler.frontend.opcodes import implicit_writes
+from transpiler.ir import Program
+from transpiler.verify.corners import NC_MODEL_OWNED
+
+MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
+_ENUMERATE = 14             # free conditions up to which unique-cause feasibility is decided by enumeration
+_ENUMERATE_PAIRS = 6        # free conditions up to which masking feasibility is decided by enumerating pairs
+
+
+@dataclasses.dataclass(frozen=True)
+class ConditionItem:
+    """One condition of one decision: `status` is shown, missing or infeasible (with `reason`)."""
+
+    decision: Decision
+    number: int
+    masking: bool
+    status: str
+    reason: str = ""
+
+    @property
+    def condition(self):
+        return self.decision.conditions[self.number]
+
+    @property
+    def at(self) -> str:
+        return str(self.condition.op.span)
+
+    def what(self) -> str:
+        mode = " (masking MC/DC)" if self.masking else ""
+        return f"condition {self.condition.text} of {self.decision.text()}{mode}"
+
+
+@dataclasses.dataclass(frozen=True)
+class BoundaryItem:
+    """One boundary value of one compare: `offset` -1, 0, +1 from the constant (c-1, c, c+1), or the difference of
+    the two words; `status` reached, missing or infeasible."""
+
+    compare: Compare
+    offset: int
+    status: str
+    reason: str = ""
+
+    @property
+    def at(self) -> str:
+        return str(self.compare.op.span)
+
+    def what(self) -> str:
+        cmp = self.compare
+        head = f"boundary {cmp.left} {cmp.op.rel} {cmp.right}"
+        if cmp.constant is None:
+            return f"{head}: {cmp.left} - {cmp.right} = {self.offset:+d}"
+        word = cmp.right if cmp.constant_left else cmp.left
+        name = {-1: "c-1", 0: "c", 1: "c+1"}[self.offset]
+        return f"{head}: {word} = {name} ({cmp.constant + self.offset})"
+
+
+@dataclasses.dataclass(frozen=True)
+class DecisionCoverage:
+    conditions: tuple[ConditionItem, ...]
+    boundaries: tuple[BoundaryItem, ...]
+
+    def summary(self) -> dict[str, Any]:
+        """The figures and lists of the JSON report (coverage.mcdc, coverage.boundaries)."""
+        def count(items, status):
+            return sum(1 for i in items if i.status == status)
+
+        def listed(items, status):
+            return [{"at": i.at, "what": i.what(), **({"reason": i.reason} if i.reason else {})}
+                    for i in items if i.status == status]
+        return {
+            "mcdc": {"mode": MODE, "conditions": len(self.conditions),
+                     "conditions_shown": count(self.conditions, "shown"),
+                     "conditions_infeasible": count(self.conditions, "infeasible"),
+                     "not_shown": listed(self.conditions, "missing"),
+                     "infeasible": listed(self.conditions, "infeasible")},
+            "boundaries": {"values": len(self.boundaries), "values_reached": count(self.boundaries, "reached"),
+                           "values_infeasible": count(self.boundaries, "infeasible"),
+                           "not_reached": listed(self.boundaries, "missing"),
+                           "infeasible": listed(self.boundaries, "infeasible")},
+        }
+
+
+def shown_unique(vectors: Iterable[int], n: int, c: int) -> bool:
+    """A pair of recorded vectors (condition bits, outcome at bit n) that differ in condition c alone and in the
+    outcome."""
+    recorded = set(vectors)
+    bit = 1 << c
+    out = 1 << n
+    return any(v & bit == 0 and (v ^ bit ^ out) in recorded for v in recorded)
+
+
+def shown_masking(vectors: Iterable[int], n: int, c: int, function) -> bool:
+    """A masking MC/DC pair for condition c among the recorded vectors (see the module docstring)."""
+    if shown_unique(vectors, n, c):
+        return True             # a pair that differs in c alone is a masking pair too (nothing else differs)
+    mask = (1 << n) - 1
+    rows = sorted({(v & mask, v >> n) for v in vectors})
+    bit = 1 << c
+    return any(_masking_pair(a, b, bit, n, function) for (a, oa), (b, ob) in itertools.combinations(rows, 2)
+               if oa != ob and (a ^ b) & bit)
+
+
+def _masking_pair(a: int, b: int, bit: int, n: int, function) -> bool:
+    for v in (a, b):
+        out = function(v)
+        if function(v ^ bit) == out:
+            return False
+        others = (a ^ b) & ~bit
+        for d in range(n):
+            if others >> d & 1 and function(v ^ (1 << d)) != out:
+                return False
+    return True
+
+
+# ----------------------------------------------------------------------------------------------------- constants
+
+def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
+    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs)."""
+    driven: set[tuple[str, int]] = set()
+    for scenario in scenarios:
+        written = list(scenario.initial)
+        for event in scenario.events:
+            written += list(event.set)
+        if scenario.random is not None:
+            written += list(scenario.random.inputs)
+        for name in written:
+            try:
+                ref = names.resolve(name)
+            except ValueError:          # a glob of random inputs (inputs are driven anyway)
+                continue
+            driven.add((ref.kind, ref.addr))
+    return driven
+
+
+@dataclasses.dataclass
+class _Values:
+    """The values each bit operand can hold under the program's own logic, with why (see constant_bits)."""
+
+    values: dict[tuple[str, int], set[int]]
+    writers: dict[tuple[str, int], list[str]]
+    free_kinds: set[str]                            # kinds written through an index: any address, any value
+    start: Callable[[str, int], set[int]]           # the values an operand has without a write of the program
+    prefix: set[tuple[str, int]]                    # assigned first thing in every cycle (_written_first)
+
+    def of(self, kind: str, addr: int) -> set[int]:
+        if kind in self.free_kinds:
+            return {0, 1}
+        found = self.values.get((kind, addr))
+        return found if found is not None else self.start(kind, addr)
+
+
+def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str, int]]) -> _Values:
+    """A fixpoint over the program's writes: every bit operand starts at its power-on value 0 (inputs, timers,
+    counters, NC-interface operands and `driven` ones at anything), a store adds the values its chain can give, S
+    adds 1 and R adds 0 (where their chain can be 1), any other write both values. An operand the main program
+    assigns first thing in every cycle, before anything reads it, has no start value a read can see."""
+    profile = program.semantics.profile
+    values: dict[tuple[str, int], set[int]] = {}
+    writers: dict[tuple[str, int], list[str]] = {}
+    free_kinds: set[str] = set()
+    first = int(program.semantics["first_cycle_marker"] or -1)
+    by_consumer = {d.key: d for d in table.decisions}
+    outside = {"I", "T", "C"}
+
+    prefix = _written_first(program)
+
+    def start(kind: str, addr: int) -> set[int]:
+        if kind in outside or (kind, addr) in NC_MODEL_OWNED or addr == first and kind == "M" \
+                or profile.is_interface(kind, addr):
+            return {0, 1}
+        if (kind, addr) in prefix:
+            return set()            # no read sees the value it had before the cycle
+        return {0, 1} if (kind, addr) in driven else {0}
+
+    stores: list[tuple[tuple[str, int], object, str]] = []      # (operand, op, span text)
+    flag = program.semantics["add_overflow"] == "flag"
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            for kind, addr in implicit_writes(op, profile.interface, flag):
+                stores.append(((kind, addr), None, str(op.span)))
+            o = op.operand
+            if o is None or op.code not in ("ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC", "DEC",
+                                            "STBITS"):
+                continue
+            if not o.is_bit:
+                continue
+            if o.indexed:
+                free_kinds.add(o.kind)
+                continue
+            if op.code == "STBITS":
+                for a in range(o.addr, o.addr + op.nbits):
+                    stores.append(((o.kind, a), None, str(op.span)))
+                continue
+            stores.append(((o.kind, o.addr), (op, by_consumer.get((f, i))), str(op.span)))
+    for key, _, span in stores:
+        values.setdefault(key, start(*key))
+        writers.setdefault(key, []).append(span)
+    state = _Values(values, writers, free_kinds, start, prefix)
+    changed = True
+    while changed:
+        changed = False
+        for key, what, _ in stores:
+            if what is None:
+                new = {0, 1}
+            else:
+                op, decision = what
+                outcomes = _outcomes(decision, state) if decision is not None else {0, 1}
+                code = op.code
+                if code == "ST":
+                    new = outcomes
+                elif code == "STN":
+                    new = {1 - v for v in outcomes}
+                elif code in ("SET", "RES"):
+                    new = ({1 if code == "SET" else 0} if 1 in outcomes else set())
+                elif code in ("SETN", "RESN"):
+                    new = ({1 if code == "SETN" else 0} if 0 in outcomes else set())
+                else:
+                    new = {0, 1}
+            if not new <= values[key]:
+                values[key] |= new
+                changed = True
+    return state
+
+
+_PREFIX_END = frozenset({"LBL", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE", "EM", "EMT", "EMF", "SUBM",
+                         "RPLY", "CAN"})
+
+
+def _written_first(program: Program) -> set[tuple[str, int]]:
+    """Bit operands the main program assigns (= or =N) in its first straight-line stretch, which runs first in every
+    cycle, before any instruction reads them there (every other read comes later in the cycle)."""
+    read: set[tuple[str, int]] = set()
+    first: set[tuple[str, int]] = set()
+    indexed_read: set[str] = set()
+    for op in program.main.ops:
+        if op.code in _PREFIX_END:
+            break
+        o = op.operand
+        if o is None or not o.is_bit:
+            continue
+        if o.indexed:
+            indexed_read.add(o.kind)
+            continue
+        key = (o.kind, o.addr)
+        if op.code in ("ST", "STN"):
+            if key not in read and o.kind not in indexed_read:
+                first.add(key)
+        elif op.code not in ("SET", "RES", "SETN", "RESN"):
+            read.add(key)
+    return first
+
+
+def _fixed(decision: Decision, state: _Values) -> tuple[dict[int, int], list[list[int]]]:
+    """The constant conditions of `decision` (number -> value) and the groups of conditions that move together
+    (one group per distinct operand not constant, coupled conditions in one group)."""
+    fixed: dict[int, int] = {}
+    groups: dict[object, list[int]] = {}
+    for n, cond in enumerate(decision.conditions):
+        o = cond.operand
+        if o is not None and not o.indexed:
+            held = state.of(o.kind, o.addr)
+            if len(held) == 1:
+                fixed[n] = next(iter(held))
+                continue
+        groups.setdefault(cond.key if cond.key is not None else ("alone", n), []).append(n)
+    return fixed, list(groups.values())
+
+
+def _assignments(decision: Decision, fixed: dict[int, int], groups: list[list[int]]) -> Iterable[int]:
+    base = sum(1 << n for n, v in fixed.items() if v)
+    for bits in itertools.product((0, 1), repeat=len(groups)):
+        v = base
+        for value, group in zip(bits, groups):
+            if value:
+                for n in group:
+                    v |= 1 << n
+        yield v
+
+
+def _outcomes(decision: Decision, state: _Values) -> set[int]:
+    fixed, groups = _fixed(decision, state)
+    if len(groups) > _ENUMERATE:
+        return {0, 1}
+    function = decision.function()
+    found: set[int] = set()
+    for v in _assignments(decision, fixed, groups):
+        found.add(function(v))
+        if len(found) == 2:
+            break
+    return found
+
+
+def _infeasible_reason(decision: Decision, number: int, masking: bool, state: _Values) -> str:
+    """Why condition `number` can never be shown, or "" where it may be (or where that is not decided)."""
+    cond = decision.conditions[number]
+    fixed, groups = _fixed(decision, state)
+    o = cond.operand
+    if number in fixed:
+        written = state.writers.get((o.kind, o.addr))
+        why = (f"the program writes only {fixed[number]} to it ({', '.join(written[:3])})" if written else
+               "nothing in the program writes it")
+        if (o.kind, o.addr) in state.prefix:
+            return (f"{o.display()} is always {fixed[number]}: {why}, first thing in every cycle, before anything "
+                    "reads it")
+        return (f"{o.display()} is always {fixed[number]}: {why}, and it is no input, timer, counter, NC-interface "
+                "operand or operand a scenario sets")
+    function = decision.function()
+    constants = ", ".join(f"{decision.conditions[n].text} = {v}" for n, v in sorted(fixed.items()))
+    because = f"masked by the constant {constants}" if constants else "the chain's outcome never depends on it"
+    if not masking:
+        if len(groups) > _ENUMERATE:
+            return ""
+        bit = 1 << number
+        if any(function(v) != function(v ^ bit) for v in _assignments(decision, fixed, groups)):
+            return ""
+        return because
+    if len(groups) > _ENUMERATE_PAIRS:
+        return ""
+    every = list(_assignments(decision, fixed, groups))
+    bit = 1 << number
+    n = len(decision.conditions)
+    for a, b in itertools.combinations(every, 2):
+        if (a ^ b) & bit and function(a) != function(b) and _masking_pair(a, b, bit, n, function):
+            return ""
+    return (f"{because}; it is coupled with the other reads of {cond.text} in the chain" if constants else
+            f"no two evaluations can show it: it is coupled with the other reads of {cond.text} in the chain")
+
+
+# ----------------------------------------------------------------------------------------------------- figures
+
+def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, int]] = frozenset(),
+                      table: DecisionTable | None = None) -> DecisionCoverage:
+    """MC/DC and boundaries over the runs' coverage sets (machine.Coverage); `driven`: operands the scenarios set."""
+    table = table or decision_table(program)
+    vectors: dict[tuple[int, int], set[int]] = {}
+    bounds: dict[tuple[int, int], set[int]] = {}
+    for cov in sets:
+        for key, found in cov.vectors.items():
+            vectors.setdefault(key, set()).update(found)
+        for key, found in cov.bounds.items():
+            bounds.setdefault(key, set()).update(found)
+    state: _Values | None = None
+    conditions: list[ConditionItem] = []
+    for decision in table.decisions:
+        recorded = vectors.get(decision.key, set())
+        n = len(decision.conditions)
+        function = decision.function()
+        for number, coupled in enumerate(decision.coupled):
+            shown = (shown_masking(recorded, n, number, function) if coupled else
+                     shown_unique(recorded, n, number))
+            if shown:
+                conditions.append(ConditionItem(decision, number, coupled, "shown"))
+                continue
+            if state is None:
+                state = constant_bits(program, table, set(driven))
+            reason = _infeasible_reason(decision, number, coupled, state)
+            conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
+    boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
+    return DecisionCoverage(tuple(conditions), tuple(boundaries))
+
+
+def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
+    items = []
+    for offset in (-1, 0, 1):
+        if cmp.constant is None:
+            status = "reached" if offset in seen else "missing"
+            items.append(BoundaryItem(cmp, offset, status))
+            continue
+        difference = -offset if cmp.constant_left else offset
+        value = cmp.constant + offset
+        if difference in seen:
+            items.append(BoundaryItem(cmp, offset, "reached"))
+        elif cmp.constants_only:
+            items.append(BoundaryItem(cmp, offset, "infeasible", "both sides are constants"))
+        elif not cmp.low <= value <= cmp.high:
+            word = cmp.right if cmp.constant_left else cmp.left
+            items.append(BoundaryItem(cmp, offset, "infeasible",
+                                      f"{word} holds {cmp.low}..{cmp.high} in this compare, not {value}"))
+        else:
+            items.append(BoundaryItem(cmp, offset, "missing"))
+    return items
+
+
+def figures(cov: Mapping[str, Any]) -> str:
+    """`MC/DC 412/430 conditions (3 infeasible), boundaries 80/95 (2 infeasible)` from a coverage summary."""
+    m, b = cov.get("mcdc"), cov.get("boundaries")
+    if m is None or b is None:
+        return ""
+
+    def part(shown: int, total: int, infeasible: int, unit: str) -> str:
+        return f"{shown}/{total - infeasible}{unit}" + (f" ({infeasible} infeasible)" if infeasible else "")
+    return (f"MC/DC {part(m['conditions_shown'], m['conditions'], m['conditions_infeasible'], ' conditions')}, "
+            f"boundaries {part(b['values_reached'], b['values'], b['values_infeasible'], '')}")
