@@ -246,3 +246,21 @@ def test_generated_stimulus_completes_mcdc_of_a_chain_without_branches(tmp_path:
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "MC/DC 6/6 conditions" in out, out
+
+
+def test_an_indexed_write_reaches_only_the_markers_its_index_can_hold(tmp_path: Path) -> None:
+    # A loop writes M100[X] with X = 0..3 only: M5 and M104 stay constant (never written), M103 does not (the loop
+    # writes it). Catches: an indexed write taken as one of any marker (M5, M104 missing), or of its base alone
+    # (M103 infeasible: unsound).
+    loop = "L K0\n= X\nREPEAT\nL I1\n= M100[X]\nINCX\nL X\n>= K4\nUNTILT\n"
+    reads = "L M5\nA I2\n= O1\nL M103\nA I2\n= O2\nL M104\nA I2\n= O3\nEM\n"
+    program = _program(tmp_path, loop + reads)
+    items, _ = _status(program, [_run(program, [{"I1": 0, "I2": 1}])])
+    assert items[("M5", "O1", 0)].status == "infeasible"
+    assert items[("M104", "O3", 0)].status == "infeasible"
+    assert items[("M103", "O2", 0)].status == "missing"
+    # the same loop after a call: X at the write is unknown, so the write may reach any marker
+    unbounded = _program(tmp_path, "L K0\n= X\nREPEAT\nCM Sub\nL I1\n= M100[X]\nINCX\nL X\n>= K4\nUNTILT\n" + reads
+                         + "LBL Sub\nEM\n")
+    items, _ = _status(unbounded, [_run(unbounded, [{"I1": 0, "I2": 1}])])
+    assert {items[(m, o, 0)].status for m, o in (("M5", "O1"), ("M103", "O2"), ("M104", "O3"))} == {"missing"}

@@ -686,6 +686,35 @@ def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list,
     return plan, {mutants[i - 1]: i for i in plan.selected(share)}
 
 
+def _mutant_side_factories(backend: str, iec) -> tuple[Callable, Callable | None]:
+    """How a mutant's ST text becomes an executor on the chosen backend, and (built-in only) how one build of the
+    text with every mutation as a switch (mutant schemata) does."""
+    if backend == "matiec":
+        from transpiler.backends.st.check import find_iec2c
+        from transpiler.exec.compiled.matiec_side import matiec_side_factory
+        iec2c = find_iec2c()
+        return (lambda text: matiec_side_factory(text, iec, iec2c)), None
+    from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory
+    return ((lambda text: builtin_side_factory(text, "project.st")),
+            (lambda text, mutations: BuiltinSchema(text, mutations, "project.st")))
+
+
+def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None) -> list:
+    """The verdicts of `mutants` (see verify/mutate.py judge_all); raises CompileFailed when the unmutated
+    translation does not agree with the reference under the stimulus."""
+    from transpiler.verify.mutate import judge_all, prepare
+    judging = prepare(judge, mutants, jobs)
+    if judging.problems:
+        raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
+                     "would mean nothing (run hh2iec equiv): " + "; ".join(judging.problems[:5]))
+    verdicts = []
+    for verdict in judge_all(judge, mutants, jobs, judging):
+        verdicts.append(verdict)
+        if progress is not None:
+            progress(len(verdicts), len(mutants))
+    return verdicts
+
+
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
@@ -698,11 +727,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     import os
     import tempfile
     import time
-    from transpiler.backends.st.check import find_iec2c
-    from transpiler.verify.cosim import builtin_side_factory
     from transpiler.verify.equiv import choose_backend
-    from transpiler.verify.mutate import (Judge, MutationResult, apply_equivalents, baseline_problems, choose,
-                                          judge_all, load_equivalents, mutation_sites)
+    from transpiler.verify.mutate import Judge, MutationResult, apply_equivalents, choose, load_equivalents, mutation_sites
     from transpiler.verify.simulate import project_names
     from transpiler.exec.interp import compile_program
     scenarios = [Path(p) for p in scenarios]
@@ -718,12 +744,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     chosen = choose_backend(backend, st_text, "project.st", iec)
     if chosen.factory is None:
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
-    if chosen.name == "matiec":
-        from transpiler.exec.compiled.matiec_side import matiec_side_factory
-        iec2c = find_iec2c()
-        side_factory = lambda text: matiec_side_factory(text, iec, iec2c)  # noqa: E731
-    else:
-        side_factory = lambda text: builtin_side_factory(text, "project.st")  # noqa: E731
+    side_factory, schema_factory = _mutant_side_factories(chosen.name, iec)
     names = project_names(project.program)
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
@@ -734,26 +755,18 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     loaded += generated
     from transpiler.backends.report.report import io_map_of
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), base_mp)
+                  st_text, side_factory, compile_program(project.program), base_mp, schema_factory)
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.
         os.environ["HH2IEC_CACHE"] = cache
         try:
-            problems = baseline_problems(judge)
-            if problems:
-                raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
-                             "would mean nothing (run hh2iec equiv): " + "; ".join(problems[:5]))
             sites = mutation_sites(st_text)
             mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
             plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
             mutants = list(unit_ids)
             start = time.perf_counter()
-            verdicts = []
-            for verdict in judge_all(judge, mutants, jobs):
-                verdicts.append(verdict)
-                if progress is not None:
-                    progress(len(verdicts), len(mutants))
+            verdicts = _judged(judge, mutants, jobs, progress)
             seconds = time.perf_counter() - start
         finally:
             if saved_cache is None:

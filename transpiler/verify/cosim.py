@@ -16,6 +16,7 @@ from transpiler.backends.report.iomap import Accessor, IoMap, Place
 from transpiler.ir import Program
 from transpiler.verify import pipeline
 from transpiler.verify.rundata import DataWrite, run_data, write_data
+from transpiler.verify.recording import RecordedReference, Recording, record
 from transpiler.verify.scenario import NameTable, OperandRef, Scenario
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.verify.simulate import (apply_machine_data, build_machine, effective_machine_parameters, operand_writers,
@@ -98,6 +99,8 @@ class Comparison:
     # the translation lacks is `missing`, never excluded.
     excluded: tuple[tuple[str, str], ...] = ()
     sweep: tuple[OperandRef, ...] = ()      # compared once after the last cycle (sweep_refs)
+    accessors: tuple[Accessor, ...] = ()    # of the columns, in order
+    sweep_accessors: tuple[Accessor, ...] = ()
 
 
 def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparison:
@@ -120,7 +123,10 @@ def comparison_for(program: Program, names: NameTable, iomap: IoMap) -> Comparis
     missing = tuple(MissingOperand(str(r), names.display_name(r), tuple(writers.get(r, ())))
                     for r in ordered if iomap.accessor(str(r)) is None and r.kind != "I")
     inputs = tuple(sorted((r for r in used if r.kind == "I"), key=lambda r: r.addr))
-    return Comparison(tuple(cols), inputs, missing, sweep=sweep_refs(program, iomap, (ref for _, ref in cols)))
+    sweep = sweep_refs(program, iomap, (ref for _, ref in cols))
+    return Comparison(tuple(cols), inputs, missing, sweep=sweep,
+                      accessors=tuple(iomap.accessor(str(ref)) for _, ref in cols),
+                      sweep_accessors=tuple(iomap.accessor(str(ref)) for ref in sweep))
 
 
 def sweep_refs(program: Program, iomap: IoMap, static: Iterable[OperandRef]) -> tuple[OperandRef, ...]:
@@ -342,9 +348,9 @@ class _TranslatedHalf:
     def values(self) -> tuple[list, list]:
         return self.static(), self.indexed()
 
-    def final_values(self, refs: tuple[OperandRef, ...]) -> list:
-        """The values at `refs`, read once: in one call where the side can (its snapshot or bulk reader)."""
-        accessors = [self.driver.iomap.accessor(str(ref)) for ref in refs]
+    def final_values(self, accessors: Sequence[Accessor]) -> list:
+        """The values at the accessors' places, read once: in one call where the side can (its snapshot or bulk
+        reader)."""
         snapshot = getattr(self.side, "snapshot", None)
         if snapshot is not None:
             return snapshot([acc.place for acc in accessors])
@@ -411,7 +417,8 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
                progress: Callable[[int, int], None] | None = None,
                record: Callable[[int, list, list], None] | None = None,
                compiled: CompiledProgram | None = None, base_mp: Mapping | None = None,
-               pipelined: bool = False, inspect: Callable[[int, Callable, Callable], None] | None = None) -> CosimResult:
+               pipelined: bool = False, inspect: Callable[[int, Callable, Callable], None] | None = None,
+               recording: Recording | None = None, comparison: Comparison | None = None) -> CosimResult:
     """Run both programs on one stimulus; stop at the first divergence, runtime fault or after `cycles`. Callers
     that co-simulate one program many times pass it `compiled` once (see build_machine).
 
@@ -430,7 +437,11 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     (rundata.run_data; what it cannot hold: rundata.UNREPRESENTABLE). `expect` is checked on the original.
 
     `inspect(cycle, original, translated)` is called after each cycle both sides ran, with a lookup `(kind, addr) ->
-    value` into each side (None where the translation holds no such operand); it runs the halves in lockstep."""
+    value` into each side (None where the translation holds no such operand); it runs the halves in lockstep.
+
+    `recording` (record_reference of this scenario) replays the reference half instead of running it: the result
+    is the one the run with the reference interpreter gives (recording.py), without coverage and without
+    `inspect`; `comparison` is comparison_for(program, names, iomap), for callers that run one program many times."""
     diags = Diagnostics()
     stimulus = stimulus or build_stimulus(scenario, names)
     parameters = effective_machine_parameters(scenario, diags, base_mp)
@@ -438,9 +449,9 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     side = make_side()
     getattr(side, "attach_machine", lambda m: None)(machine)    # HH_Sys models: a copy of the machine's context
     cycle_time = machine.cycle_time_ms
-    comparison = comparison_for(program, names, iomap)
+    comparison = comparison or comparison_for(program, names, iomap)
     data = run_data(side, iomap, program, parameters[0], cycle_time, base_mp, table_values(program, scenario))
-    accessors = [iomap.accessor(str(ref)) for _, ref in comparison.columns]
+    accessors = list(comparison.accessors)
     driver = _StDriver(side, iomap, program, cycle_time, comparison.inputs, data.writes)
     translated = _TranslatedHalf(side, driver, stimulus, accessors)
     total = min(stimulus.cycles, cycles) if cycles is not None else stimulus.cycles
@@ -456,17 +467,20 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     sweep = comparison.sweep
     half = _ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names)
     if inspect is not None:
+        if recording is not None:
+            raise ValueError("a replayed reference has no machine to inspect")
         record = _with_inspection(record, inspect, machine.read, st_lookup(side, iomap))
-    pipelined = pipelined and record is None and total > pipeline.BATCH and pipeline.fork_available()
-    reference = pipeline.PipelinedReference(half, total) if pipelined else _LocalReference(half)
+    pipelined = (pipelined and record is None and recording is None and total > pipeline.BATCH
+                 and pipeline.fork_available())
+    reference = _reference(half, total, pipelined, recording)
     try:
         _compare_cycles(result, reference, translated, comparison, total, progress, record)
         complete = result.cycles_run == total
         if complete and result.divergence is None and result.error is None:
             result.swept = len(sweep)
             result.divergence = _swept_divergence(total - 1, sweep, reference.final_values(),
-                                                  translated.final_values(sweep), names)
-        if coverage and (complete or not pipelined):
+                                                  translated.final_values(comparison.sweep_accessors), names)
+        if coverage and recording is None and (complete or not pipelined):
             result.coverage = reference.coverage()
     finally:
         reference.close()
@@ -476,15 +490,20 @@ def cosimulate(program: Program, make_side: Callable[[], StSide], iomap: IoMap, 
     result.expectation_failures = tuple(f for f in reference.failures if f.cycle <= last)
     result.compared_indexed = len(translated.columns)
     if pipelined:
-        result.machine = None           # this process's machine did not run
-        if coverage and not complete:
-            # The reference process ran on beyond the end; coverage counts the cycles the reference ran before
-            # the run ended (the cycle that ended it by a fault included), as in lockstep, so they run again here.
-            for cycle in range(result.cycles_run + (result.error is not None)):
-                half.step(cycle)
-            result.coverage = half.coverage()
-            result.machine = machine
+        _after_pipelined(result, half, machine, coverage and not complete)
     return result
+
+
+def _after_pipelined(result: CosimResult, half: _ReferenceHalf, machine, rerun: bool) -> None:
+    """This process's machine did not run; with `rerun` (coverage of a run that ended early) the reference process
+    ran on beyond the end, and coverage counts the cycles it ran before the run ended (the cycle that ended it by a
+    fault included), as in lockstep, so they run again here."""
+    result.machine = None
+    if rerun:
+        for cycle in range(result.cycles_run + (result.error is not None)):
+            half.step(cycle)
+        result.coverage = half.coverage()
+        result.machine = machine
 
 
 def st_lookup(side: StSide, iomap: IoMap) -> Callable[[str, int], object]:
@@ -502,6 +521,28 @@ def _with_inspection(record, inspect, original, translated):
             record(cycle, a, b)
         inspect(cycle, original, translated)
     return both
+
+
+def _reference(half: _ReferenceHalf, total: int, pipelined: bool, recording: Recording | None):
+    """The reference half as the cycle loop reads it: replayed, in a process of its own, or in this one."""
+    if recording is not None:
+        return RecordedReference(recording)
+    if pipelined:
+        return pipeline.PipelinedReference(half, total)
+    return _LocalReference(half)
+
+
+def record_reference(program: Program, iomap: IoMap, scenario: Scenario, names: NameTable,
+                     stimulus: Stimulus | None = None, *, compiled: CompiledProgram | None = None,
+                     base_mp: Mapping | None = None, comparison: Comparison | None = None) -> Recording:
+    """The reference half of cosimulate's run of `scenario`, run once through all its cycles and kept, for
+    cosimulate(..., recording=) to replay against many translated sides."""
+    diags = Diagnostics()
+    stimulus = stimulus or build_stimulus(scenario, names)
+    parameters = effective_machine_parameters(scenario, diags, base_mp)
+    machine = build_machine(program, scenario, diags, compiled=compiled, parameters=parameters)
+    comparison = comparison or comparison_for(program, names, iomap)
+    return record(_ReferenceHalf(machine, stimulus, scenario, comparison, iomap, names), stimulus.cycles)
 
 
 def _swept_divergence(cycle: int, refs: tuple[OperandRef, ...], a_values: list, b_values: list,
@@ -599,16 +640,36 @@ def runtime_snapshot(rt, places: list[Place]) -> list:
 
 def builtin_side_factory(st_text: str, filename: str = "project.st") -> Callable[[], StSide]:
     """The built-in ST executor: the ST text is parsed once, every call gives a fresh runtime."""
-    from transpiler.exec.stexec import StRuntimeError, load_st
+    from transpiler.exec.stexec import load_st
+    return _builtin_sides(load_st(st_text, filename), st_text, 0)
+
+
+class BuiltinSchema:
+    """Many mutants of one ST text compiled once by the built-in executor (a mutant schema, stexec/schema.py):
+    `factory(number)` gives fresh runtimes of mutant `number` (0 the original, stexec.PROBE the original recording
+    the mutants it infects); `unswitched` are the mutants the schema does not hold."""
+
+    def __init__(self, st_text: str, mutations: Sequence, filename: str = "project.st"):
+        from transpiler.exec.stexec import load_st
+        from transpiler.exec.compiled.sysfb import modules_in
+        self.st_text = st_text
+        self.project = load_st(st_text, filename, mutations=mutations, impure=modules_in(st_text))
+        self.unswitched = self.project.unswitched
+
+    def factory(self, number: int) -> Callable[[], StSide]:
+        return _builtin_sides(self.project, self.st_text, number)
+
+
+def _builtin_sides(project, st_text: str, mutant: int) -> Callable[[], StSide]:
+    from transpiler.exec.stexec import StRuntimeError
     from transpiler.exec.compiled.sysfb import SysBinding
-    project = load_st(st_text, filename)
 
     class _Side:
         name = "builtin"
 
         def __init__(self) -> None:
             self.sys = SysBinding(st_text)
-            self.rt = project.instantiate(self.sys.externals() or None)
+            self.rt = project.instantiate(self.sys.externals() or None, mutant)
 
         def attach_machine(self, machine) -> None:
             self.sys.attach(machine)

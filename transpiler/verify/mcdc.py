@@ -14,7 +14,8 @@ cannot hold, such as 128 for a byte, is infeasible); for a compare of two words,
 
 Infeasible, and so neither counted as missing nor dropped: a condition whose operand can hold only one value under
 the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface
-operand or operand a scenario sets; power-on memory is 0), a condition the outcome cannot depend on given those
+operand or operand a scenario sets; power-on memory is 0; a write through the index register counts for every operand
+the values the register can hold there reach), a condition the outcome cannot depend on given those
 constants and the coupling of its chain (masked by a constant, or redundant), and a boundary value the word cannot
 hold. Only these reasons are claimed; a condition that is merely hard to reach stays missing."""
 
@@ -28,9 +29,11 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.corners import NC_MODEL_OWNED
+from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
 _ENUMERATE = 14             # free conditions up to which unique-cause feasibility is decided by enumeration
+_INDEXED_SPAN = 4096        # values of X up to which an indexed write counts as a write of each operand it reaches
 _ENUMERATE_PAIRS = 6        # free conditions up to which masking feasibility is decided by enumerating pairs
 
 
@@ -179,8 +182,10 @@ class _Values:
 def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str, int]]) -> _Values:
     """A fixpoint over the program's writes: every bit operand starts at its power-on value 0 (inputs, timers,
     counters, NC-interface operands and `driven` ones at anything), a store adds the values its chain can give, S
-    adds 1 and R adds 0 (where their chain can be 1), any other write both values. An operand the main program
-    assigns first thing in every cycle, before anything reads it, has no start value a read can see."""
+    adds 1 and R adds 0 (where their chain can be 1), any other write both values. A write through the index
+    register writes each operand base + X can reach for the values X can hold there (index_range); where those are
+    not known, every operand of its kind can hold both values. An operand the main program assigns first thing in
+    every cycle, before anything reads it, has no start value a read can see."""
     profile = program.semantics.profile
     values: dict[tuple[str, int], set[int]] = {}
     writers: dict[tuple[str, int], list[str]] = {}
@@ -190,6 +195,7 @@ def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str,
     outside = {"I", "T", "C"}
 
     prefix = _written_first(program)
+    ranges = index_ranges(program)
 
     def start(kind: str, addr: int) -> set[int]:
         if kind in outside or (kind, addr) in NC_MODEL_OWNED or addr == first and kind == "M" \
@@ -211,14 +217,20 @@ def constant_bits(program: Program, table: DecisionTable, driven: set[tuple[str,
                 continue
             if not o.is_bit:
                 continue
+            width = op.nbits if op.code == "STBITS" else 1
             if o.indexed:
-                free_kinds.add(o.kind)
-                continue
-            if op.code == "STBITS":
-                for a in range(o.addr, o.addr + op.nbits):
-                    stores.append(((o.kind, a), None, str(op.span)))
-                continue
-            stores.append(((o.kind, o.addr), (op, by_consumer.get((f, i))), str(op.span)))
+                # base + X for every value X can hold there; a write outside the operand range faults instead
+                x = ranges.get((f, i))
+                if x is None or x[1] - x[0] > _INDEXED_SPAN:
+                    free_kinds.add(o.kind)
+                    continue
+                targets = range(o.addr + x[0], o.addr + x[1] + width)
+            else:
+                targets = range(o.addr, o.addr + width)
+            what = None if op.code == "STBITS" else (op, by_consumer.get((f, i)))
+            for a in targets:
+                if a >= 0:
+                    stores.append(((o.kind, a), what, str(op.span)))
     for key, _, span in stores:
         values.setdefault(key, start(*key))
         writers.setdefault(key, []).append(span)

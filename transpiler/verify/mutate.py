@@ -8,11 +8,19 @@ scenario first: it is KILLED by a divergence, an operand
 missing in the translation, or a fault of the translated side (what `equiv` calls NOT EQUIVALENT); ST the
 executor rejects makes it INVALID (excluded); a mutant whose runs end only in harness exceptions is an ERROR
 (never a kill); else it SURVIVED. A file of judged-equivalent mutants (each with its reason) takes those out of
-the denominator: score = killed / (killed + survived + error - judged equivalent)."""
+the denominator: score = killed / (killed + survived + error - judged equivalent).
+
+Judging saves work without changing a verdict (prepare, Judging): each scenario's reference run is recorded once
+(recording.py); where the backend builds mutant schemata, all mutants are built at once and a probing run of the
+original per scenario tells which mutants it infects; a mutant then runs only under the runs that infect it (a
+run that does not is the original's run, which agrees with the reference), and one no run infects survives
+without a run. judge_all judges any list of mutants this way, so a subset (a shard) gets the verdicts it would
+get among all."""
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import multiprocessing
 import random
@@ -20,7 +28,7 @@ import re
 import time
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Iterable, Iterator, Mapping
+from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -32,8 +40,9 @@ from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
 from transpiler.verify import pipeline
+from transpiler.verify.cosim import Comparison, StSide, comparison_for, cosimulate, record_reference
+from transpiler.verify.recording import Recording
 from transpiler.verify.rundata import SHIPPED
-from transpiler.verify.cosim import StSide, cosimulate
 from transpiler.verify.scenario import NameTable, Scenario
 
 KILLED, SURVIVED, INVALID, ERROR, EQUIVALENT = "killed", "survived", "invalid", "error", "equivalent"
@@ -276,12 +285,31 @@ class Verdict:
     by: str                      # the killing scenario and how, a message, or the reason of a judged equivalent
     seconds: float
     runs: int = 0                # scenarios run on it, shortest first: a killed mutant's killer is the last of them
+    ran: tuple[int, ...] | None = None     # which scenarios (by index) those were; None: the first `runs` of them
+
+    @property
+    def scenarios_run(self) -> tuple[int, ...]:
+        return self.ran if self.ran is not None else tuple(range(self.runs))
+
+
+class MutantSides(Protocol):
+    """Many mutants of the ST text built once (a mutant schema): `factory(number)` makes ST sides of the mutant
+    numbered `number` in the judged list (1, 2, ...; 0 the original, PROBE the original recording in each side's
+    `rt.infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
+
+    unswitched: frozenset
+
+    def factory(self, number: int) -> Callable[[], StSide]: ...
+
+
+PROBE = -1                    # the mutant number of a probing run (stexec.PROBE)
 
 
 @dataclasses.dataclass
 class Judge:
     """Everything a worker needs to judge a mutant: the program, its scenarios (validated on the unmutated ST)
-    and how to build an ST executor from a text (`side_factory(text)`; raises on a text it cannot build)."""
+    and how to build an ST executor from a text (`side_factory(text)`; raises on a text it cannot build) or, where
+    the backend can, all mutants at once (`schema_factory(text, [TextMutation, ...])`, a MutantSides)."""
 
     program: Program
     iomap: IoMap
@@ -291,9 +319,13 @@ class Judge:
     side_factory: Callable[[str], Callable[[], StSide]]
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
-    pipelined: bool = False             # the reference in a process of its own (judging one mutant at a time)
+    schema_factory: Callable[[str, list], MutantSides] | None = None
+    # per scenario, its reference run recorded once (see prepare): mutants then run only their own half
+    recordings: tuple[Recording, ...] | None = None
+    comparison: Comparison | None = None        # what every run compares (comparison_for, made once by prepare)
 
     def __call__(self, mutant: Mutant) -> Verdict:
+        """The mutant's text built on its own and run under every scenario (against the recordings if any)."""
         start = time.perf_counter()
         try:
             factory = self.side_factory(mutant.apply(self.st_text))
@@ -302,11 +334,19 @@ class Judge:
                            time.perf_counter() - start)
         except Exception as exc:  # noqa: BLE001 - a mutant that cannot be built is invalid, with its message
             return Verdict(mutant, INVALID, f"rejected: {_message(exc)}", time.perf_counter() - start)
+        return self.run(mutant, factory, range(len(self.scenarios)), start)
+
+    def run(self, mutant: Mutant, factory: Callable[[], StSide], runs: Iterable[int], start: float) -> Verdict:
+        """Judge the built mutant under the scenarios numbered `runs` (in that order) until one kills it."""
         first_error = None
-        for runs, scenario in enumerate(self.scenarios, 1):
+        done: list[int] = []
+        for index in runs:
+            scenario = self.scenarios[index]
+            recording = self.recordings[index] if self.recordings is not None else None
+            done.append(index)
             try:
                 result = cosimulate(self.program, factory, self.iomap, scenario, self.names, compiled=self.compiled,
-                                    base_mp=self.base_mp, pipelined=self.pipelined)
+                                    base_mp=self.base_mp, recording=recording, comparison=self.comparison)
             except Exception as exc:  # noqa: BLE001 - a crash is an error of this mutant, never a kill
                 first_error = first_error or f"{scenario.name}: {_message(exc)}"
                 continue
@@ -320,12 +360,17 @@ class Judge:
             elif result.error_code == SHIPPED:
                 how = "its machine-parameter values differ from the project's"
             if how is not None:
-                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, runs)
+                return Verdict(mutant, KILLED, f"{scenario.name}: {how}", time.perf_counter() - start, len(done),
+                               tuple(done))
             if result.error is not None:
                 first_error = first_error or f"{scenario.name}: {result.error}"
         if first_error is not None:
-            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, len(self.scenarios))
-        return Verdict(mutant, SURVIVED, "", time.perf_counter() - start, len(self.scenarios))
+            return Verdict(mutant, ERROR, first_error, time.perf_counter() - start, len(done), tuple(done))
+        return Verdict(mutant, SURVIVED, "" if done else NEVER_INFECTED, time.perf_counter() - start, len(done),
+                       tuple(done))
+
+
+NEVER_INFECTED = "no run reaches the mutated code with a value the mutation changes"
 
 
 def _message(exc: BaseException) -> str:
@@ -334,52 +379,117 @@ def _message(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0][:200]}" if text else type(exc).__name__
 
 
-def baseline_problems(judge: Judge) -> list[str]:
-    """Runs of the unmutated translation that are not equivalent: mutation results would mean nothing."""
-    factory = judge.side_factory(judge.st_text)
-    problems = []
-    for scenario in judge.scenarios:
-        r = cosimulate(judge.program, factory, judge.iomap, scenario, judge.names, compiled=judge.compiled,
-                       base_mp=judge.base_mp)
-        if not r.equivalent:
-            problems.append(f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}")
-    return problems
+@dataclasses.dataclass
+class Judging:
+    """A list of mutants ready to be judged (prepare): the scenarios' reference runs recorded, the mutants built
+    once where the backend has schemata, and per scenario the mutants its run of the original infects. A mutant
+    is then judged (`judging(index)`) only under the runs that infect it, shortest first, until one kills it: a
+    run that does not infect it runs as the original's, which agrees with the reference; never infected, it
+    survives without a run. Mutants outside the schema are built from their text and run under every scenario."""
+
+    judge: Judge
+    mutants: list[Mutant]
+    sides: MutantSides | None = None
+    infected: tuple[frozenset[int], ...] | None = None      # per scenario: numbers (index + 1) its run infects
+    # runs of the unmutated translation that do not agree with the reference: mutation results would mean nothing
+    problems: tuple[str, ...] = ()
+
+    def __call__(self, index: int) -> Verdict:
+        mutant, number = self.mutants[index], index + 1
+        if self.sides is None or number in self.sides.unswitched:
+            return self.judge(mutant)
+        start = time.perf_counter()
+        runs = range(len(self.judge.scenarios))
+        if self.infected is not None:
+            runs = [i for i in runs if number in self.infected[i]]
+        return self.judge.run(mutant, self.sides.factory(number), runs, start)
 
 
-def _worker(judge: Judge, mutants: list[Mutant], tasks, results) -> None:
-    """A forked process: judges mutants by index until it takes the end marker."""
-    while (index := tasks.get()) is not None:
-        verdict = judge(mutants[index])
-        results.put((index, verdict.outcome, verdict.by, verdict.seconds, verdict.runs))
+def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1) -> Judging:
+    """Record every scenario's reference run, build the mutant schema (where the backend has one) and probe each
+    scenario with it; the scenarios are shared out over `jobs` forked processes."""
+    judge = dataclasses.replace(judge, comparison=judge.comparison or comparison_for(judge.program, judge.names,
+                                                                                    judge.iomap))
+    sides = None
+    if judge.schema_factory is not None:
+        from transpiler.exec.stexec import TextMutation
+        sides = judge.schema_factory(judge.st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(mutants)])
+    original = judge.side_factory(judge.st_text) if sides is None else None
+    task = functools.partial(_prepare_scenario, judge, sides, original)
+    found = dict(_each(task, range(len(judge.scenarios)), jobs))
+    ordered = [found[i] for i in range(len(judge.scenarios))]
+    problems = tuple(problem for _, _, problem in ordered if problem is not None)
+    infected = None
+    if sides is not None and not problems:
+        infected = tuple(runs for _, runs, _ in ordered)
+    return Judging(dataclasses.replace(judge, recordings=tuple(recording for recording, _, _ in ordered)), mutants,
+                   sides, infected, problems)
 
 
-def judge_all(judge: Judge, mutants: list[Mutant], jobs: int) -> Iterator[Verdict]:
-    """Verdicts as they come in; with jobs > 1 the judge is shared with forked workers (only results are pickled)."""
-    if jobs <= 1 or len(mutants) <= 1:
-        # One mutant at a time leaves a CPU for the reference interpreter of each run.
-        one_at_a_time = dataclasses.replace(judge, pipelined=pipeline.worthwhile())
-        for mutant in mutants:
-            yield one_at_a_time(mutant)
+def _prepare_scenario(judge: Judge, sides: MutantSides | None, original: Callable[[], StSide] | None, index: int
+                      ) -> tuple[Recording, frozenset | None, str | None]:
+    """One scenario's reference run recorded, the unmutated translation run against it (with a schema, its
+    probing run, which also finds the mutants the run infects) and what is wrong if that run does not agree."""
+    scenario = judge.scenarios[index]
+    recording = record_reference(judge.program, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                                 base_mp=judge.base_mp, comparison=judge.comparison)
+    made: list = []
+    factory = sides.factory(PROBE) if sides is not None else original
+
+    def side():
+        made.append(factory())
+        return made[-1]
+    r = cosimulate(judge.program, side, judge.iomap, scenario, judge.names, compiled=judge.compiled,
+                   base_mp=judge.base_mp, recording=recording, comparison=judge.comparison)
+    if not r.equivalent:
+        return recording, None, f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}"
+    return recording, frozenset(made[0].rt.infected) if sides is not None else None, None
+
+
+def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int) -> Iterator[tuple[int, Any]]:
+    """(item, task(item)) for every item, in `jobs` forked processes when jobs > 1 (results are pickled)."""
+    items = list(items)
+    if jobs <= 1 or len(items) <= 1:
+        for item in items:
+            yield item, task(item)
         return
     context = multiprocessing.get_context("fork")
     tasks, results = context.Queue(), context.Queue()
-    for index in range(len(mutants)):
-        tasks.put(index)
+    for item in items:
+        tasks.put(item)
     for _ in range(jobs):
         tasks.put(None)
-    workers = [context.Process(target=_worker, args=(judge, mutants, tasks, results), daemon=True)
-               for _ in range(jobs)]
+    workers = [context.Process(target=_worker, args=(task, tasks, results), daemon=True) for _ in range(jobs)]
     for w in workers:
         w.start()
     try:
-        for _ in mutants:
-            index, outcome, by, seconds, runs = results.get()
-            yield Verdict(mutants[index], outcome, by, seconds, runs)
+        for _ in items:
+            yield results.get()
     finally:
         for w in workers:
             if w.is_alive():
                 w.terminate()
             w.join()
+
+
+def _worker(task: Callable[[int], Any], tasks, results) -> None:
+    """A forked process: runs the task on items until it takes the end marker."""
+    while (item := tasks.get()) is not None:
+        results.put((item, task(item)))
+
+
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None) -> Iterator[Verdict]:
+    """Verdicts of the given mutants as they come in (prepare, unless `judging` is that of these mutants, then judge
+    each; with jobs > 1 in forked workers, which share what was prepared and send back only verdicts). Any list of
+    mutants can be given: a subset judges exactly as it would among all."""
+    judging = judging or prepare(judge, mutants, jobs)
+    for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
+        yield Verdict(mutants[index], *verdict)
+
+
+def _verdict_fields(judging: Judging, index: int) -> tuple:
+    verdict = judging(index)
+    return verdict.outcome, verdict.by, verdict.seconds, verdict.runs, verdict.ran
 
 
 @dataclasses.dataclass

@@ -117,11 +117,12 @@ def _mutant(v: Verdict, st_text: str, ids: list[str],
              "status": STATUS[v.outcome], "statusReason": _reason(v),
              "description": f"{v.mutant.description} ({origin(st_text, v.mutant, pou_sources)})",
              "duration": round(v.seconds * 1000, 1)}
-    if v.outcome != INVALID and v.runs:
-        entry["coveredBy"] = ids[:v.runs]
-        entry["testsCompleted"] = v.runs
-    if v.outcome == KILLED and v.runs:
-        entry["killedBy"] = [ids[v.runs - 1]]
+    ran = [ids[i] for i in v.scenarios_run]
+    if v.outcome != INVALID and ran:
+        entry["coveredBy"] = ran
+        entry["testsCompleted"] = len(ran)
+    if v.outcome == KILLED and ran:
+        entry["killedBy"] = [ran[-1]]
     return entry
 
 

@@ -10,6 +10,10 @@ Public API
         lists every error as Diagnostic(code "E-ST-PARSE", span file:line:col). Never a traceback for bad input.
     rt = project.instantiate(externals=None)
         A fresh runtime of the file's single CONFIGURATION (StError if there is none).
+    schema = load_st(text, mutations=[TextMutation(number, changes), ...], impure=names)
+        A mutant schema (schema.py): the file compiled once with each mutation behind a switch;
+        schema.unswitched are the mutations it could not switch. schema.instantiate(externals, mutant=k) runs
+        mutant k (0: the original; PROBE: the original, recording in rt.infected the mutations it infects).
     rt.run_cycle()
         One cycle: CURRENT_TIME (what TON/TOF/TP read) is cycle_index * cycle_time_ms, every program instance whose
         task interval divides into the elapsed time runs (in the order of the PROGRAM lines of the resource,
@@ -68,15 +72,16 @@ strict matiec's verdict on a corpus of small files; this checker must agree with
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Callable, Iterable, Optional, Sequence
 
 from transpiler.diagnostics import Span
 from transpiler.exec.stexec.compiler import compile_st
 from transpiler.exec.stexec.errors import StError, StRuntimeError, st_diag
 from transpiler.exec.stexec.model import CompiledProject
 from transpiler.exec.stexec.runtime import Runtime
+from transpiler.exec.stexec.schema import PROBE, TextMutation
 
-__all__ = ["load_st", "StError", "StRuntimeError", "StProject", "Runtime"]
+__all__ = ["load_st", "StError", "StRuntimeError", "StProject", "Runtime", "TextMutation", "PROBE"]
 
 
 class StProject:
@@ -90,14 +95,21 @@ class StProject:
         """The generated Python module (for debugging the executor)."""
         return self.compiled.source
 
-    def instantiate(self, externals: Optional[dict[str, Callable]] = None) -> Runtime:
-        return Runtime(self.compiled, externals)
+    @property
+    def unswitched(self) -> frozenset:
+        """The mutations of a mutant schema that are not in it (their text must be compiled on its own)."""
+        return self.compiled.unswitched
+
+    def instantiate(self, externals: Optional[dict[str, Callable]] = None, mutant: int = 0) -> Runtime:
+        return Runtime(self.compiled, externals, mutant)
 
 
-def load_st(text: str, filename: str = "project.st", *, loop_limit: int = 1_000_000) -> StProject:
-    """Parse, type-check and compile an ST file; raises StError with E-ST-PARSE diagnostics."""
+def load_st(text: str, filename: str = "project.st", *, loop_limit: int = 1_000_000,
+            mutations: Sequence[TextMutation] = (), impure: Iterable[str] = ()) -> StProject:
+    """Parse, type-check and compile an ST file; raises StError with E-ST-PARSE diagnostics. With `mutations`,
+    a mutant schema of them; `impure` names the POUs whose calls probing must not repeat (externals with state)."""
     try:
-        compiled = compile_st(text, filename, loop_limit)
+        compiled = compile_st(text, filename, loop_limit, tuple(mutations), tuple(impure))
     except RecursionError:
         raise StError([st_diag(Span(filename, 1, 1), "expression nesting too deep for the built-in executor")]) from None
     return StProject(compiled)

@@ -18,6 +18,7 @@ from transpiler.exec.stexec.model import CompiledProject, PouInfo, TaskInfo
 from transpiler.exec.stexec.parser import parse
 from transpiler.exec.stexec.prelude import prelude_text
 from transpiler.exec.stexec.pysource import PySource
+from transpiler.exec.stexec.schema import TextMutation, plan
 
 PRELUDE_FILE = "<iec-standard-library>"
 
@@ -30,8 +31,11 @@ def _prelude() -> n.SourceFile:
 class Compiler(ConfigDeclarer, VarDeclarer, TypeDeclarer, PythonEmitter):
     """Parses, declares, checks and emits one ST file."""
 
-    def run(self, text: str) -> CompiledProject:
+    def run(self, text: str, mutations: tuple[TextMutation, ...] = (), impure: tuple[str, ...] = ()
+            ) -> CompiledProject:
         user = parse(text, self.filename)
+        if mutations:
+            self.ctx.schema = plan(user, text, mutations, impure)
         elements = [(el, True) for el in _prelude().elements] + [(el, False) for el in user.elements]
         pous: list[PouInfo] = []
         configs: list[tuple[n.Configuration, int]] = []
@@ -75,11 +79,13 @@ class Compiler(ConfigDeclarer, VarDeclarer, TypeDeclarer, PythonEmitter):
             pous=self.ctx.pous, globals=self.ctx.globals,
             locations={a: (t, attr) for a, (t, attr, _s) in self.locations.items()},
             programs=self.programs, tasks=self.tasks, has_configuration=self.has_configuration,
-            loop_limit=self.ctx.loop_limit)
+            loop_limit=self.ctx.loop_limit,
+            unswitched=frozenset(self.ctx.schema.unswitched) if self.ctx.schema is not None else frozenset())
 
 
-def compile_st(text: str, filename: str, loop_limit: int) -> CompiledProject:
-    return Compiler(filename, loop_limit).run(text)
+def compile_st(text: str, filename: str, loop_limit: int, mutations: tuple[TextMutation, ...] = (),
+               impure: tuple[str, ...] = ()) -> CompiledProject:
+    return Compiler(filename, loop_limit).run(text, mutations, impure)
 
 
 def base_tick(tasks: list[TaskInfo]) -> int:

@@ -6,7 +6,7 @@ from typing import Optional
 
 from transpiler.exec.stexec import nodes as n
 from transpiler.exec.stexec import typesys as T
-from transpiler.exec.stexec.pou_base import PouBase
+from transpiler.exec.stexec.gen_schema import SwitchCompiler
 from transpiler.exec.stexec.pycode import Ex
 
 
@@ -16,7 +16,7 @@ _CASE_TREE_MIN = 8
 _CASE_LEAF = 4
 
 
-class StatementCompiler(PouBase):
+class StatementCompiler(SwitchCompiler):
     """Statements other than loops and calls: assignment, IF, CASE, EXIT, CONTINUE and RETURN."""
 
     def stmts(self, body: list[n.Stmt]) -> None:
@@ -27,12 +27,25 @@ class StatementCompiler(PouBase):
             self.emit("pass")
 
     def stmt(self, s: n.Stmt) -> None:
+        variants = self.variants_of(s)
+        if variants:
+            self.switched_stmt(s, variants)
+        else:
+            self.plain_stmt(s)
+
+    def plain_stmt(self, s: n.Stmt) -> None:
         self.cur_span = s.span
         self.pre = []
         handler = getattr(self, "s_" + type(s).__name__.lower())
         handler(s)
 
     def cond(self, node: n.Expr, what: str) -> Ex:
+        variants = self.variants_of(node)
+        if variants:
+            return self.switched_expr(node, lambda x: self.plain_cond(x, what), variants)
+        return self.plain_cond(node, what)
+
+    def plain_cond(self, node: n.Expr, what: str) -> Ex:
         ex = self.expr(node)
         if ex.ty is not T.ERR and T.base(ex.ty) is not T.BOOL:
             return self.err(node.span, f"{what} must be BOOL, not {ex.ty}")
@@ -81,7 +94,9 @@ class StatementCompiler(PouBase):
         self.indent -= opened
 
     def s_case(self, s: n.Case) -> None:
-        sel = self.expr(s.selector)
+        selector_variants = self.variants_of(s.selector)
+        sel = (self.switched_expr(s.selector, self.expr, selector_variants) if selector_variants
+               else self.expr(s.selector))
         if sel.ty is T.ERR:
             return
         sty = T.base(sel.ty)
@@ -94,6 +109,9 @@ class StatementCompiler(PouBase):
         var = self.temp("_c")
         self.flush_pre()
         self.emit(f"{var} = {sel.code}")
+        swaps = self.variants_of(s)
+        if swaps:
+            self.case_swaps(s, var, swaps)
         arms = self.case_intervals(s, sel.ty, is_enum)
         if arms is not None and len(arms) > _CASE_TREE_MIN:
             self.case_tree(s, var, arms, sel.ty)

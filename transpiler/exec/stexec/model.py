@@ -97,3 +97,4 @@ class CompiledProject:
     tasks: list[TaskInfo]
     has_configuration: bool
     loop_limit: int
+    unswitched: frozenset = frozenset()      # mutations of a mutant schema compiled without a switch (schema.py)

@@ -140,6 +140,8 @@ class Context:
         self.enum_values: dict[str, list[tuple[T.EnumT, int]]] = {}
         # address -> (type, attribute); set by the compiler so that code may use %QX0.1 without a declaration
         self.use_address: Optional[Callable[[str, Span], Optional[tuple[T.Type, str]]]] = None
+        # the mutations to switch (schema.SchemaPlan) when the file is compiled as a mutant schema
+        self.schema: Any = None
 
 
 _ADDR = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$", re.I)
