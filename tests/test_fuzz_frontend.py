@@ -274,3 +274,75 @@ def test_the_table_reader_answers_any_text_with_diagnostics_at_real_places(lines
         assert d.span.file == "MP_Data.tab" and 1 <= d.span.line <= max(len(lines), 1) and d.span.col >= 1, d.render()
     for row in rows:
         assert row.symbol in symbols and row.kind in "MBWDS"
+
+
+# ------------------------------------------------------------------------------------------ scenario files
+
+SCENARIO_SEEDS = fuzz.scenario_seeds(SAMPLE_SEEDS)
+needs_scenarios = pytest.mark.skipif(not SCENARIO_SEEDS, reason="no sample project with scenarios")
+
+
+@pytest.fixture(scope="module")
+def compiled_projects():
+    """The sample projects compiled once for all scenario mutants (a scenario mutant changes no source file)."""
+    return fuzz.ProjectCache()
+
+
+@needs_scenarios
+@settings(max_examples=36, deadline=timedelta(seconds=2 * LIMIT), derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(index=st.integers(min_value=0, max_value=2 ** 40))
+def test_mutated_scenario_files_give_only_diagnostics(tmp_path, compiled_projects, index):
+    chosen, data, _ = fuzz._scenario_mutant(SCENARIO_SEEDS, 7, index)
+    fuzz.check_scenario(tmp_path / "p", chosen.project.files, chosen.project.main, chosen.name, data, LIMIT,
+                        compiled_projects)
+
+
+@needs_scenarios
+def test_scenario_mutants_are_reproducible_and_reach_both_outcomes(tmp_path, compiled_projects):
+    """Mutants both run and fail to load (a harness whose every mutant is broken YAML would prove little)."""
+    outcomes, unchanged = set(), 0
+    for index in range(24):
+        chosen, data, description = fuzz._scenario_mutant(SCENARIO_SEEDS, 5, index)
+        assert fuzz._scenario_mutant(SCENARIO_SEEDS, 5, index) == (chosen, data, description)
+        unchanged += data == chosen.text           # (a line swapped with itself, say)
+        diagnostics = fuzz.check_scenario(tmp_path / "p", chosen.project.files, chosen.project.main, chosen.name,
+                                          data, LIMIT, compiled_projects)
+        outcomes.add(any(d.severity.value == "error" for d in diagnostics))
+    assert outcomes == {True, False} and unchanged < 4
+
+
+@needs_scenarios
+def test_the_scenario_harness_reports_crashes_and_hangs(tmp_path, monkeypatch, compiled_projects):
+    import transpiler.verify.scenario as scenario_module
+    chosen = SCENARIO_SEEDS[0]
+
+    def crash(*args, **kwargs):
+        raise ZeroDivisionError("planted")
+
+    def hang(*args, **kwargs):
+        while True:
+            pass
+
+    check = lambda limit: fuzz.check_scenario(tmp_path / "p", chosen.project.files, chosen.project.main,  # noqa: E731
+                                              chosen.name, chosen.text, limit, compiled_projects)
+    assert not [d for d in check(LIMIT) if d.severity.value == "error"]      # the seed itself runs
+    monkeypatch.setattr(scenario_module, "load_scenario", crash)
+    with pytest.raises(ZeroDivisionError):
+        check(LIMIT)
+    monkeypatch.setattr(scenario_module, "load_scenario", hang)
+    with pytest.raises(fuzz.InputTimeout):
+        check(0.5)
+
+
+@needs_scenarios
+def test_simulate_refuses_an_alias_bomb_with_exit_2_at_its_line(tmp_path):
+    bomb = ["lol0: &lol0 [x, x, x, x, x, x, x, x, x, x]"]
+    bomb += [f"lol{i}: &lol{i} [" + ", ".join([f"*lol{i - 1}"] * 10) + "]" for i in range(1, 10)]
+    path = tmp_path / "bomb.yaml"
+    path.write_text("cycles: 5\n" + "\n".join(bomb) + "\n", encoding="utf-8")
+    main = fuzz.ROOT / SCENARIO_SEEDS[0].project.name / SCENARIO_SEEDS[0].project.main
+    proc = subprocess.run([sys.executable, "-m", "transpiler.cli", "simulate", str(main), "--scenario", str(path)],
+                          cwd=fuzz.ROOT, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stderr.startswith(f"{path}:1:1: error[E-SCENARIO]: scenario refused") and "Traceback" not in proc.stderr

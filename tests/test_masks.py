@@ -341,3 +341,46 @@ def test_equiv_fails_when_the_screens_differ_though_every_compared_operand_agree
     text = capsys.readouterr().out
     assert " original:\n  |IN 1 OUT 1\n  |VALUE     0\n translated:\n  |IN 1 OUT 1\n  |VALUE ?????\n" in text
     assert "hh2iec equiv: SCREENS DIFFER: screen.msk after cycle 2 of s; compared operands: EQUIVALENT (1 runs" in text
+
+
+def test_equiv_reports_carry_the_screens(tmp_path, capsys):
+    """--report gets a `screens` key (which mask, cycle, scenario, both drawings, whether they differ); in --junit
+    each screen is a test case: a failure where the screens differ, skipped where the run never reached the cycle."""
+    import xml.etree.ElementTree as ET
+    (tmp_path / "Main.src").write_text("#define /g d.def\nL I_a\n= O_b\nEM\n")
+    (tmp_path / "d.def").write_text("I_a I 1\nO_b O 2\nWG_shown W 100\n")
+    (tmp_path / "screen.msk").write_text('"IN %d OUT %d\\n", $I_a$/c, $O_b$/c;\n"VALUE %5D\\n", $WG_shown$/c;\n')
+    (tmp_path / "s.yaml").write_text("name: s\ncycles: 4\nevents:\n  - cycle: 1\n    set: {I_a: 1}\n")
+    out = tmp_path / "out"
+    assert hh2iec(["transpile", str(tmp_path / "Main.src"), "--out", str(out), "--format", "st"]) == 0
+    report, junit = tmp_path / "r.json", tmp_path / "j.xml"
+    args = ["equiv", str(tmp_path / "Main.src"), "--scenario", str(tmp_path / "s.yaml"), "--backend", "builtin",
+            "--st", str(out / "project.st"), "--show-mask", "screen@2", "--show-mask", "screen@9",
+            "--report", str(report), "--junit", str(junit)]
+    assert hh2iec(args) == 0
+    capsys.readouterr()
+    data = json.loads(report.read_text())
+    assert data["verdict"] == "EQUIVALENT" and len(data["runs"]) == 1          # the keys of before are still there
+    assert data["screens"] == [
+        {"scenario": "s", "mask": "screen.msk", "cycle": 2, "drawn": True, "differs": False,
+         "original": ["IN 1 OUT 1", "VALUE     0"], "translated": ["IN 1 OUT 1", "VALUE     0"], "note": ""},
+        {"scenario": "s", "mask": "screen.msk", "cycle": 9, "drawn": False, "differs": False, "original": None,
+         "translated": None, "note": data["screens"][1]["note"]}]
+    assert "4 cycles" in data["screens"][1]["note"]
+    suite = ET.parse(junit).getroot()
+    assert (suite.get("tests"), suite.get("failures"), suite.get("skipped")) == ("3", "0", "1")
+    cases = {c.get("name"): c for c in suite.iter("testcase")}
+    assert "IN 1 OUT 1" in cases["screen.msk after cycle 2 of s"].find("system-out").text
+    assert cases["screen.msk after cycle 9 of s"].find("skipped") is not None
+
+    rows = (out / "io_map.csv").read_text().splitlines()
+    (out / "io_map.csv").write_text("\n".join(r for r in rows if ",W100," not in r) + "\n")
+    assert hh2iec(args) == 1
+    capsys.readouterr()
+    data = json.loads(report.read_text())
+    assert data["verdict"] == "EQUIVALENT"                       # the compared operands still agree ...
+    assert data["screens"][0]["differs"] and data["screens"][0]["translated"] == ["IN 1 OUT 1", "VALUE ?????"]
+    suite = ET.parse(junit).getroot()
+    assert suite.get("failures") == "1"                          # ... but the screens are a failure of their own
+    failure = {c.get("name"): c for c in suite.iter("testcase")}["screen.msk after cycle 2 of s"].find("failure")
+    assert failure is not None and "VALUE ?????" in failure.text

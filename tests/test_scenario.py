@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import random
 import textwrap
+import time
 from decimal import Decimal
 from pathlib import Path
 
 import pytest
 
 from transpiler.diagnostics import CompileFailed, Diagnostics, Severity
-from transpiler.verify.scenario import NameTable, OperandRef, Scenario, ScenarioError, bind, load_scenario
+from transpiler.verify.scenario import MAX_CYCLES, NameTable, OperandRef, Scenario, ScenarioError, bind, load_scenario
 from transpiler.verify.stimulus import (ExpectationFailure, build_stimulus, check_expectations, materialize_random,
                                  observed_operands, scenario_to_yaml)
 
@@ -499,3 +500,61 @@ def test_machine_data_loads_applies_per_cycle_and_round_trips(tmp_path: Path, na
     assert update.axes[0].position == -7
     again = write(tmp_path, scenario_to_yaml(scenario, tmp_path), "again.yaml")
     assert load_scenario(again, names) == scenario
+
+
+# ---------------------------------------------------------------------------------------------
+# hostile files (found by the scenario fuzzer, tests/fuzz.py): a bounded answer with the line, never a traceback
+
+
+def _alias_bomb(levels: int) -> str:
+    lines = ["lol0: &lol0 [x, x, x, x, x, x, x, x, x, x]"]
+    lines += [f"lol{i}: &lol{i} [" + ", ".join([f"*lol{i - 1}"] * 10) + "]" for i in range(1, levels)]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("label, text, line, fragment", [
+    ("billion laughs", "cycles: 5\n" + _alias_bomb(10), 1, "alias bomb"),
+    ("an alias inside its own anchor", "cycles: 5\ninitial: &a {x: [*a]}\n", 2, "cannot contain itself"),
+    ("nested 20000 levels", "cycles: 5\ninitial: " + "[" * 20_000 + "]" * 20_000 + "\n", 2, "deeper than 32"),
+    ("mappings nested 5000 levels", "cycles: 5\nevents: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n", 2, "deeper"),
+    ("block lists nested 3000 levels", "cycles: 5\nexpect:\n" + "- " * 3000 + "x\n", 3, "deeper than 32"),
+    ("nested deeply by aliases", "cycles: 5\n" + "".join(
+        f"a{i}: &a{i} [[[[[[[[[[{f'*a{i - 1}' if i else 0}]]]]]]]]]]\n" for i in range(8)), 1, "aliases expanded"),
+    ("cycles beyond the limit", "cycles: 99999999999999\n", 1, "more than a scenario file may run"),
+    ("cycles one beyond the limit", f"cycles: {MAX_CYCLES + 1}\n", 1, f"({MAX_CYCLES} cycles)"),
+])
+def test_hostile_scenario_is_refused_at_its_line(tmp_path: Path, names: NameTable, label: str, text: str, line: int,
+                                                 fragment: str) -> None:
+    path = write(tmp_path, text)
+    started = time.perf_counter()
+    diags = errors_of(path, names)
+    assert time.perf_counter() - started < 5, label
+    assert diags and all(d.code == "E-SCENARIO" and d.span.file == str(path) for d in diags)
+    assert (diags[0].span.line, fragment in diags[0].message) == (line, True), diags[0].render()
+
+
+def test_aliases_that_do_not_explode_are_fine(tmp_path: Path, names: NameTable) -> None:
+    path = write(tmp_path, """
+        cycles: 10
+        initial: &start {I_key_M3: 1}
+        events:
+          - {cycle: 2, set: *start}
+          - {cycle: 4, set: *start}
+        """)
+    scenario = load_scenario(path, names)
+    assert [e.set for e in scenario.events] == [{"I_key_M3": 1}] * 2
+
+
+def test_the_cycle_limit_is_inclusive(tmp_path: Path, names: NameTable) -> None:
+    assert load_scenario(write(tmp_path, f"cycles: {MAX_CYCLES}\n"), names).cycles == MAX_CYCLES
+
+
+@pytest.mark.parametrize("text", ["cycles: 5\nsemantics: " + "[" * 20_000 + "]" * 20_000 + "\n",
+                                  "cycles: 5\nsemantics: &s {byte_order: [*s]}\n",
+                                  "cycles: 5\n" + _alias_bomb(9) + "semantics: {byte_order: *lol8}\n"])
+def test_the_settings_read_before_compiling_are_bounded_too(tmp_path: Path, text: str) -> None:
+    """The profile and semantics keys are read before the project is compiled (scenario_settings): the same bounds."""
+    from transpiler.verify.simulate import scenario_settings
+    started = time.perf_counter()
+    assert scenario_settings(write(tmp_path, text)) == (None, {}, None)
+    assert time.perf_counter() - started < 5

@@ -88,9 +88,10 @@ def cmd_equiv(args: argparse.Namespace) -> int:
         section = None if args.shard is None else shard_section(
             "equiv", args.shard, check.plan.digest, __version__, argv, (check.plan.names, check.plan.costs),
             result.run_ids, plan_file=plan_file)
-        files[args.report] = report_json(result, lambda run: reproduce_command("equiv", argv, run, plan_file), section)
+        files[args.report] = report_json(result, lambda run: reproduce_command("equiv", argv, run, plan_file), section,
+                                         check.screens)
     if args.junit:
-        files[args.junit] = report_junit(result)
+        files[args.junit] = report_junit(result, check.screens)
     if args.cobertura or args.lcov:
         from transpiler.verify.coverage_export import coverage_files
         try:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 from xml.sax.saxutils import escape, quoteattr
 
 from transpiler.backends.iec_model import IecProject
@@ -22,6 +22,7 @@ from transpiler.verify.mcdc import DecisionCoverage, decision_coverage, driven_o
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
+from transpiler.verify.screens import Screen, render_text
 from transpiler.verify.shard import decode_coverage, encode_coverage
 from transpiler.verify.stimulus import materialize_random, scenario_to_yaml
 from transpiler.verify.traces import TraceRecorder, write_vcd_scopes
@@ -331,12 +332,29 @@ def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]]
             decisions)
 
 
+def screen_json(screen: Screen) -> dict[str, Any]:
+    """One screen of `--show-mask` as report data: which mask after which cycle of which scenario, both drawings
+    (None where a side drew nothing), whether they differ, and why nothing was drawn."""
+    return {"scenario": screen.scenario, "mask": screen.mask, "cycle": screen.cycle,
+            "drawn": screen.original is not None, "differs": screen.differs,
+            "original": list(screen.original) if screen.original is not None else None,
+            "translated": list(screen.translated) if screen.translated is not None else None,
+            "note": screen.note}
+
+
+def _screen_of(data: Mapping[str, Any]) -> Screen:
+    return Screen(data["scenario"], data["mask"], data["cycle"],
+                  tuple(data["original"]) if data["original"] is not None else None,
+                  tuple(data["translated"]) if data["translated"] is not None else None, data["note"])
+
+
 def report_data(result: EquivalenceResult, reproduce: Callable[[int], str] | None = None,
-                shard: Mapping[str, Any] | None = None) -> dict[str, Any]:
+                shard: Mapping[str, Any] | None = None, screens: Sequence[Screen] = ()) -> dict[str, Any]:
     """The machine-readable report (`--report`) as data: every run with its number in the plan, verdict, divergence
-    and shrunk stimulus; `reproduce(run)` gives the command line that runs one failing run alone. A shard's report
-    carries `shard` (see verify/shard.py) with each run's coverage sets, from which merge_reports recomputes the
-    coverage of all runs."""
+    and shrunk stimulus; `reproduce(run)` gives the command line that runs one failing run alone; the screens
+    `--show-mask` drew (`screens`: empty without it, and in shards, which draw none). A shard's report carries
+    `shard` (see verify/shard.py) with each run's coverage sets, from which merge_reports recomputes the coverage of
+    all runs."""
     ids = result.run_ids or tuple(range(1, len(result.outcomes) + 1))
     runs = []
     for run_id, o in zip(ids, result.outcomes):
@@ -362,6 +380,7 @@ def report_data(result: EquivalenceResult, reproduce: Callable[[int], str] | Non
         runs.append(entry)
     data = _report(result.backend, runs, [{"at": str(span), "what": text} for span, text in result.untranslated],
                    result.coverage, result.source)
+    data["screens"] = [screen_json(screen) for screen in screens]
     if shard is not None:
         # each run's sets as one compact JSON text: thousands of items per run, one line each in the indented report
         data["shard"] = {**shard, "driven": sorted([kind, addr] for kind, addr in result.driven),
@@ -379,7 +398,7 @@ def _report(backend: str, runs: list[dict[str, Any]], untranslated: list[dict[st
             source: SourceCoverage | None) -> dict[str, Any]:
     verdict = verdict_of([_state_of(run) for run in runs], bool(untranslated))
     data = {"backend": backend, "verdict": verdict, "equivalent": verdict == "EQUIVALENT", "runs": runs,
-            "not_translated": untranslated, "coverage": coverage}
+            "not_translated": untranslated, "coverage": coverage, "screens": []}
     if source is not None:
         data["coverage"] = {**coverage, "files": [
             {"file": f.path, "lines": f.lines_valid, "lines_executed": f.lines_covered,
@@ -389,29 +408,35 @@ def _report(backend: str, runs: list[dict[str, Any]], untranslated: list[dict[st
 
 
 def report_json(result: EquivalenceResult, reproduce: Callable[[int], str] | None = None,
-                shard: Mapping[str, Any] | None = None) -> str:
+                shard: Mapping[str, Any] | None = None, screens: Sequence[Screen] = ()) -> str:
     """The machine-readable report (`--report`): report_data as JSON."""
-    return data_json(report_data(result, reproduce, shard))
+    return data_json(report_data(result, reproduce, shard, screens))
 
 
 def data_json(data: Mapping[str, Any]) -> str:
     return json.dumps(data, indent=2) + "\n"
 
 
-def report_junit(result: EquivalenceResult) -> str:
-    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error."""
-    return junit_of(report_data(result))
+def report_junit(result: EquivalenceResult, screens: Sequence[Screen] = ()) -> str:
+    """One JUnit test case per run (`--junit`): a divergence is a failure, a harness or runtime error an error; and
+    one per screen of `--show-mask` (see junit_of)."""
+    return junit_of(report_data(result, screens=screens))
 
 
 def junit_of(data: Mapping[str, Any]) -> str:
-    """The JUnit file of a report's data (report_data, or merged shards)."""
+    """The JUnit file of a report's data (report_data, or merged shards). Each screen is a test case too: screens
+    that differ are a failure, one not drawn (the run ended before its cycle) is skipped."""
     runs, backend = data["runs"], data["backend"]
+    screens = [_screen_of(screen) for screen in data.get("screens", ())]
     failures = sum(1 for r in runs if r["divergence"] or r["missing_in_translation"] or r["expectation_failures"])
+    failures += sum(1 for screen in screens if screen.differs)
     errors = sum(1 for r in runs if r["error"])
+    skipped = sum(1 for screen in screens if screen.original is None)
     total = sum(r["seconds"] for r in runs)
+    skipped_attr = f' skipped="{skipped}"' if skipped else ""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(runs)}" '
-             f'failures="{failures}" errors="{errors}" time="{total:.3f}">']
+             f'<testsuite name={quoteattr("hh2iec equiv (" + backend + ")")} tests="{len(runs) + len(screens)}" '
+             f'failures="{failures}" errors="{errors}"{skipped_attr} time="{total:.3f}">']
     for r in runs:
         lines.append(f'  <testcase classname="hh2iec.equiv" name={quoteattr(r["scenario"])} time="{r["seconds"]:.3f}">')
         if r["divergence"]:
@@ -433,8 +458,27 @@ def junit_of(data: Mapping[str, Any]) -> str:
         elif r["error"]:
             lines.append(f"    <error message={quoteattr(r['error'])}/>")
         lines.append("  </testcase>")
+    lines += _screen_cases(screens)
     lines.append("</testsuite>")
     return "\n".join(lines) + "\n"
+
+
+def _screen_cases(screens: Sequence[Screen]) -> list[str]:
+    """The JUnit test cases of the screens, each with its drawing(s) as the command line prints them."""
+    lines = []
+    for screen in screens:
+        name = f"{screen.mask} after cycle {screen.cycle} of {screen.scenario}"
+        lines.append(f'  <testcase classname="hh2iec.equiv.screens" name={quoteattr(name)} time="0.000">')
+        text = escape(render_text(screen))
+        if screen.original is None:
+            lines.append(f"    <skipped message={quoteattr('not drawn: ' + screen.note)}/>")
+        elif screen.differs:
+            lines.append(f"    <failure message={quoteattr('the original and the translation draw different screens')}>"
+                         f"{text}</failure>")
+        else:
+            lines.append(f"    <system-out>{text}</system-out>")
+        lines.append("  </testcase>")
+    return lines
 
 
 def merge_reports(shards: list[Mapping[str, Any]], program: Program) -> dict[str, Any]:

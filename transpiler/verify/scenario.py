@@ -463,13 +463,110 @@ class _Tree:
             return node.value
 
 
+def _number_text(number: int) -> str:
+    """A number for a message: written out unless it is absurdly long."""
+    text = str(number)
+    return text if len(text) <= 24 else f"{text[:8]}... ({len(text)} digits)"
+
+
 def _codepoint(character: int | str) -> str:
     return f"U+{character if isinstance(character, int) else ord(character):04X}"
 
 
+# Bounds of what a scenario file may be, so that no file makes the loader recurse without end or expand aliases
+# without end (a "billion laughs" file is a few lines long). The scenario format itself nests 6 levels deep.
+MAX_NESTING = 32                 # levels of mappings and lists, aliases expanded
+MAX_ALIAS_VALUES = 100_000       # values of a file whose aliases make it larger than it is written
+MAX_CYCLES = 1_000_000           # cycles of one scenario file: about 5.5 hours of machine time at 20 ms
+
+
+class _Refused(yaml.MarkedYAMLError):
+    """Well-formed YAML the scenario loader does not compose (too deep, an alias inside itself, an alias bomb)."""
+
+    def __init__(self, mark: yaml.Mark, problem: str):
+        super().__init__(problem=problem, problem_mark=mark)
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """The safe YAML loader with bounded nesting and without values that contain themselves. (PyYAML composes
+    recursively: a file nested thousands of levels deep would otherwise exhaust Python's stack.)"""
+
+    def __init__(self, stream: str):
+        super().__init__(stream)
+        self.depth = 0
+        self.open_anchors: set[str] = set()      # anchors whose value is being composed
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            if event.anchor in self.open_anchors:
+                raise _Refused(event.start_mark, f"alias *{event.anchor} is inside the value of its own anchor "
+                                                 f"&{event.anchor}: a value cannot contain itself")
+            return super().compose_node(parent, index)
+        if self.depth >= MAX_NESTING:
+            raise _Refused(event.start_mark, f"nested deeper than {MAX_NESTING} levels")
+        anchor = getattr(event, "anchor", None)
+        self.depth += 1
+        if anchor is not None:
+            self.open_anchors.add(anchor)
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
+            self.open_anchors.discard(anchor)
+
+
+def _expansion(root: yaml.Node) -> tuple[int, int, int]:
+    """(values, nesting levels) of the document with every alias expanded, and its distinct nodes. Each node is
+    visited once (aliases make a DAG of the nodes, never a cycle: _BoundedLoader refuses those)."""
+    size: dict[int, int] = {}
+    height: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, children_done = stack.pop()
+        if id(node) in size:
+            continue
+        if isinstance(node, yaml.MappingNode):
+            children = [n for pair in node.value for n in pair]
+        elif isinstance(node, yaml.SequenceNode):
+            children = list(node.value)
+        else:
+            children = []
+        if not children_done:
+            stack.append((node, True))
+            stack.extend((child, False) for child in children if id(child) not in size)
+            continue
+        size[id(node)] = 1 + sum(size[id(child)] for child in children)
+        height[id(node)] = 1 + max((height[id(child)] for child in children), default=0)
+    return size[id(root)], height[id(root)], len(size)
+
+
+def compose_yaml(text: str) -> yaml.Node | None:
+    """The YAML node tree of a scenario text within the bounds above; raises yaml.YAMLError (a MarkedYAMLError
+    with a position for a refused file)."""
+    loader = _BoundedLoader(text)
+    try:
+        root = loader.get_single_node()
+    finally:
+        loader.dispose()
+    if root is None:
+        return None
+    values, levels, distinct = _expansion(root)
+    if levels > MAX_NESTING:
+        raise _Refused(root.start_mark, f"with its aliases expanded, the scenario is nested deeper than {MAX_NESTING} "
+                                        "levels")
+    if values > max(MAX_ALIAS_VALUES, distinct):
+        raise _Refused(root.start_mark, f"its aliases expand the scenario to {values} values, more than the "
+                                        f"{MAX_ALIAS_VALUES} a scenario may have (an alias bomb?)")
+    return root
+
+
 def _compose(text: str, file: str, diags: Diagnostics) -> yaml.Node | None:
     try:
-        return yaml.compose(text, Loader=yaml.SafeLoader)
+        return compose_yaml(text)
+    except _Refused as exc:
+        mark = exc.problem_mark
+        diags.report("E-SCENARIO", Span(file, mark.line + 1, mark.column + 1), f"scenario refused: {exc.problem}")
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         span = Span(file, mark.line + 1, mark.column + 1) if mark else Span(file, 1, 1)
@@ -740,6 +837,10 @@ def scenario_from_text(text: str, file: str, folder: Path, names: NameTable, def
         diags.report("E-SCENARIO", tree.spans[()], "a scenario is a mapping of keys (name, cycles, events, ...)")
         raise ScenarioError(diags.items)
     data.setdefault("name", default_name)
+    cycles = data.get("cycles")
+    if isinstance(cycles, int) and not isinstance(cycles, bool) and cycles > MAX_CYCLES:
+        diags.report("E-SCENARIO", tree.spans[("cycles",)], f"cycles: {_number_text(cycles)} is more than a scenario "
+                     f"file may run ({MAX_CYCLES} cycles); split the run into scenarios of fewer cycles")
     _convert_mp(data, tree)
     _resolve_mp_file(data, folder, tree)
     refs = _check_names(data, names, tree.spans, tree.key_spans, Span(file, 1, 1), diags)

@@ -15,7 +15,8 @@ from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError,
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario, normalize_value
+from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario, compose_yaml, \
+    normalize_value
 from transpiler.language.semantics import PROFILES
 from transpiler.exec.compiled.shim import NcActionError, UnknownModule
 from transpiler.verify.stimulus import ExpectationFailure, Stimulus, build_stimulus, check_expectations, observed_operands
@@ -244,7 +245,7 @@ def _nc_event_span(scenario: Scenario, cycle: int) -> Span:
 def scenario_settings(path: Path) -> tuple[str | None, dict, Span | None]:
     """The scenario's `profile` and `semantics` (needed before compiling), and where `semantics` is written."""
     try:
-        node = yaml.compose(path.read_text(encoding="utf-8"), Loader=yaml.SafeLoader)
+        node = compose_yaml(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return None, {}, None          # load_scenario reports it with its line
     profile, semantics, where = None, {}, None
