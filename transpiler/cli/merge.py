@@ -12,6 +12,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Callable
 
 from transpiler import api
 from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, project_from_args, write_reports
@@ -101,12 +102,7 @@ def _merge_equiv(args: argparse.Namespace, section, shards: list[dict]) -> int:
     data["shard"] = {"merged": section["count"], "command": "equiv", "digest": section["digest"],
                      "argv": section["argv"], "failures": failures}
     print_coverage(data["coverage"], args.verbose)
-    files = {}
-    if args.report:
-        files[args.report] = data_json(data)
-    if args.junit:
-        files[args.junit] = junit_of(data)
-    if not write_reports(files):
+    if not _write_merged(args, data, data_json, junit_of):
         return EXIT_BAD_INPUT
     runs = data["runs"]
     print(f"hh2iec merge: equiv {data['verdict']} ({len(runs)} runs from {section['count']} shards, "
@@ -114,6 +110,17 @@ def _merge_equiv(args: argparse.Namespace, section, shards: list[dict]) -> int:
     if any(f["what"] in (FAILED_RUN, REFUSED) for f in failures):
         return EXIT_BAD_INPUT
     return EXIT_OK if data["equivalent"] else EXIT_FAILED
+
+
+def _write_merged(args: argparse.Namespace, data: dict, as_json: Callable[[dict], str],
+                  as_junit: Callable[[dict], str]) -> bool:
+    """The merged report and JUnit file where the command line asks for them (False: one could not be written)."""
+    files = {}
+    if args.report:
+        files[args.report] = as_json(data)
+    if args.junit:
+        files[args.junit] = as_junit(data)
+    return write_reports(files)
 
 
 def _what(run: dict) -> str:
@@ -154,12 +161,7 @@ def _merge_mutate(args: argparse.Namespace, section, shards: list[dict]) -> int:
     met = denominator > 0 and counts[KILLED] / denominator >= min_score
     data["shard"] = {"merged": section["count"], "command": "mutate", "digest": section["digest"],
                      "argv": section["argv"], "min_score": min_score, "failures": failures}
-    files = {}
-    if args.report:
-        files[args.report] = data_json(data)
-    if args.junit:
-        files[args.junit] = junit_of(data)
-    if not write_reports(files):
+    if not _write_merged(args, data, data_json, junit_of):
         return EXIT_BAD_INPUT
     print(f"hh2iec merge: mutate score {100 * data['score']:.1f}% ({counts[KILLED]} killed of {denominator} "
           f"non-equivalent mutants from {section['count']} shards; {counts[EQUIVALENT]} judged equivalent, "
