@@ -321,15 +321,21 @@ def test_byte_mask_fuzz_gives_only_diagnostics(fuzz_folder, data):
     _only_diagnostics(fuzz_folder, data)
 
 
-def test_equiv_fails_when_the_screens_differ_though_every_compared_operand_agrees(tmp_path, capsys):
-    # The mask shows WG_shown, which the program never writes: no compared operand tells the two sides apart. An io
-    # map without its row leaves the translated side no place to read it from, so its screen differs.
+def _transpiled_screen_project(tmp_path: Path) -> Path:
+    """A program whose mask shows two operands it uses and a word it never writes, transpiled to tmp_path/out."""
     (tmp_path / "Main.src").write_text("#define /g d.def\nL I_a\n= O_b\nEM\n")
     (tmp_path / "d.def").write_text("I_a I 1\nO_b O 2\nWG_shown W 100\n")
     (tmp_path / "screen.msk").write_text('"IN %d OUT %d\\n", $I_a$/c, $O_b$/c;\n"VALUE %5D\\n", $WG_shown$/c;\n')
     (tmp_path / "s.yaml").write_text("name: s\ncycles: 4\nevents:\n  - cycle: 1\n    set: {I_a: 1}\n")
     out = tmp_path / "out"
     assert hh2iec(["transpile", str(tmp_path / "Main.src"), "--out", str(out), "--format", "st"]) == 0
+    return out
+
+
+def test_equiv_fails_when_the_screens_differ_though_every_compared_operand_agrees(tmp_path, capsys):
+    # The mask shows WG_shown, which the program never writes: no compared operand tells the two sides apart. An io
+    # map without its row leaves the translated side no place to read it from, so its screen differs.
+    out = _transpiled_screen_project(tmp_path)
     assert "masks/ (1 files)" in capsys.readouterr().out
     args = ["equiv", str(tmp_path / "Main.src"), "--scenario", str(tmp_path / "s.yaml"), "--backend", "builtin",
             "--st", str(out / "project.st"), "--show-mask", "screen@2"]
@@ -347,12 +353,7 @@ def test_equiv_reports_carry_the_screens(tmp_path, capsys):
     """--report gets a `screens` key (which mask, cycle, scenario, both drawings, whether they differ); in --junit
     each screen is a test case: a failure where the screens differ, skipped where the run never reached the cycle."""
     import xml.etree.ElementTree as ET
-    (tmp_path / "Main.src").write_text("#define /g d.def\nL I_a\n= O_b\nEM\n")
-    (tmp_path / "d.def").write_text("I_a I 1\nO_b O 2\nWG_shown W 100\n")
-    (tmp_path / "screen.msk").write_text('"IN %d OUT %d\\n", $I_a$/c, $O_b$/c;\n"VALUE %5D\\n", $WG_shown$/c;\n')
-    (tmp_path / "s.yaml").write_text("name: s\ncycles: 4\nevents:\n  - cycle: 1\n    set: {I_a: 1}\n")
-    out = tmp_path / "out"
-    assert hh2iec(["transpile", str(tmp_path / "Main.src"), "--out", str(out), "--format", "st"]) == 0
+    out = _transpiled_screen_project(tmp_path)
     report, junit = tmp_path / "r.json", tmp_path / "j.xml"
     args = ["equiv", str(tmp_path / "Main.src"), "--scenario", str(tmp_path / "s.yaml"), "--backend", "builtin",
             "--st", str(out / "project.st"), "--show-mask", "screen@2", "--show-mask", "screen@9",

@@ -191,6 +191,17 @@ def print_plan(command: str, plan, count: int, seconds_per_cost: float, unit: st
           f"{100.0 * max(c for _, c in loads) / total if total else 0:.0f}% of the work")
 
 
+def report_plan(command: str, plan, args: argparse.Namespace, seconds_per_cost: float, unit: str,
+                setup_note: str) -> bool:
+    """`--plan N`: print the plan (with the cost of the coverage-guided search, where it made runs) and write it to
+    `--plan-file` where given; False when that file could not be written."""
+    if plan.generated:
+        setup_note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs "
+                       "once, here, else again in every shard")
+    print_plan(command, plan, args.plan, seconds_per_cost, unit, setup_note)
+    return write_reports({args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {})
+
+
 def print_screens(screens) -> None:
     """The screen masks asked for with --show-mask, each framed under a title line (stdout)."""
     from transpiler.verify.screens import render_text

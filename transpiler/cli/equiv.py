@@ -9,7 +9,7 @@ from typing import Callable
 
 from transpiler import api
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
-                                   check_shard_arguments, input_argv, print_diagnostics, print_plan, print_screens,
+                                   check_shard_arguments, input_argv, print_diagnostics, print_screens, report_plan,
                                    project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 from transpiler.diagnostics import NO_SPAN
@@ -126,12 +126,7 @@ def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
     """`--plan N`: the runs and the estimated time of each of N shards; `--plan-file` also writes the plan."""
     plan, per_cycle = api.plan_equivalence(project, **inputs)
     note = f"; {1000 * per_cycle:.2f} ms per co-simulated cycle (one calibration run)"
-    if plan.generated:
-        note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs once, "
-                 "here, else again in every shard")
-    print_plan("equiv", plan, args.plan, per_cycle, "runs", note)
-    files = {args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {}
-    return EXIT_OK if write_reports(files) else EXIT_BAD_INPUT
+    return EXIT_OK if report_plan("equiv", plan, args, per_cycle, "runs", note) else EXIT_BAD_INPUT
 
 
 def _cycle_progress(line: ProgressLine) -> Callable[[str, int, int], Callable[[int, int], None]]:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from transpiler import api
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, UsageError, add_shard_arguments,
-                                   check_shard_arguments, input_argv, print_diagnostics, print_plan,
+                                   check_shard_arguments, input_argv, print_diagnostics, report_plan,
                                    project_from_args, write_reports)
 from transpiler.cli.progress import ProgressLine
 
@@ -162,9 +162,4 @@ def _plan(project, args: argparse.Namespace, inputs: dict) -> int:
     per_cost = per_mutant / plan.costs[0] if plan.costs and plan.costs[0] else 0.0
     note = (f" (translation, scenarios, the unmutated run); {per_mutant:.2f} s per mutant with --jobs {args.jobs} "
             f"({len(judged)} mutants judged as a sample)")
-    if plan.generated:
-        note += (f"; the coverage-guided search took {plan.search_seconds:.1f} s: with --plan-file it runs once, "
-                 "here, else again in every shard")
-    print_plan("mutate", plan, args.plan, per_cost, "mutants", note)
-    files = {args.plan_file: api.plan_file_text(plan)} if args.plan_file is not None else {}
-    return EXIT_OK if write_reports(files) else EXIT_BAD_INPUT
+    return EXIT_OK if report_plan("mutate", plan, args, per_cost, "mutants", note) else EXIT_BAD_INPUT
