@@ -160,6 +160,44 @@ def test_a_shard_missing_given_twice_or_of_other_inputs_is_refused(equiv_whole, 
     assert "--shard needs --report" in capsys.readouterr().err
 
 
+def test_a_shard_with_a_plan_file_loads_only_the_runs_it_makes(equiv_whole, tmp_path, monkeypatch, capsys):
+    """The plan job loaded and checked every run; a shard parses its own share only (its set-up does not grow with
+    the other shards' scenarios), and its result is the same as when it loaded everything."""
+    from transpiler.verify import scenario as scenario_module
+    parsed: list[str] = []
+    real = scenario_module.scenario_from_text
+
+    def counting(text, source, *args, **kwargs):
+        parsed.append(str(source))
+        return real(text, source, *args, **kwargs)
+
+    monkeypatch.setattr(scenario_module, "scenario_from_text", counting)
+    plan = json.loads((equiv_whole / "plan.json").read_text())
+    report = tmp_path / "shard.json"
+    assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(equiv_whole / "plan.json"), "--shard", "2/7",
+                 "--report", str(report)]) == 0
+    ran = json.loads(report.read_text())["shard"]["ran"]
+    assert 0 < len(ran) < len(plan["units"]) and len(parsed) == len(ran)
+    reference = _shards("equiv", EQUIV_ARGS, 7, tmp_path, equiv_whole / "plan.json")[1]
+    assert comparable(report) == comparable(reference)
+
+
+def test_a_damaged_plan_file_is_refused(equiv_whole, tmp_path, capsys):
+    plan = json.loads((equiv_whole / "plan.json").read_text())
+    for damage in ({"cost": "many"}, {"unit": 99}, {"name": None}):
+        broken = tmp_path / "plan.json"
+        units = [dict(u) for u in plan["units"]]
+        units[1].update(damage)
+        broken.write_text(json.dumps({**plan, "units": units}))
+        assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(broken), "--shard", "1/2",
+                     "--report", str(tmp_path / "r.json")]) == 2
+        assert "error[E-SHARD]" in capsys.readouterr().err and not (tmp_path / "r.json").exists()
+    broken.write_text(json.dumps({**plan, "units": plan["units"][:-1]}))
+    assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(broken), "--shard", "1/2",
+                 "--report", str(tmp_path / "r.json")]) == 2
+    assert "make it again" in capsys.readouterr().err
+
+
 def test_merge_refuses_sources_that_changed_since_the_shards_ran(tmp_path, capsys):
     project = tmp_path / "timers"
     shutil.copytree(TIMERS, project)

@@ -421,10 +421,24 @@ def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
 def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path | None = None) -> list:
     """The generated runs of a plan file written by `--plan N --plan-file FILE` on the same inputs; raises
     HH2IECError (E-SHARD) when the file is not a plan of `command` or was made from other inputs."""
-    import json
+    data = _plan_file_data(Path(path), command, digest)
+    return [_planned_run(text, Path(path), i, folder, names) for i, text in enumerate(data["generated"])]
+
+
+def _planned_run(text: str, path: Path, index: int, folder: Path | None, names):
+    """Generated run `index` (0-based) of a plan file, as a scenario."""
     from transpiler.verify.scenario import ScenarioError, scenario_from_text
+    try:
+        return scenario_from_text(text, f"{path}#generated{index + 1}", folder or Path.cwd(), names)
+    except ScenarioError as exc:
+        raise CompileFailed(list(exc.diagnostics)) from None
+
+
+def _plan_file_data(path: Path, command: str, digest: str) -> dict:
+    """A plan file's content, checked: a plan of `command` made from the inputs of `digest`, whose units are
+    numbered 1..n with a name and a cost each, and whose generated runs are texts (E-SHARD otherwise)."""
+    import json
     from transpiler.verify.shard import FORMAT
-    path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
@@ -436,13 +450,14 @@ def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path
     if data.get("digest") != digest:
         raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
                              "version) than this run's: make it again with the same arguments", path)
-    out = []
-    for i, text in enumerate(data.get("generated", [])):
-        try:
-            out.append(scenario_from_text(text, f"{path}#generated{i + 1}", folder or Path.cwd(), names))
-        except ScenarioError as exc:
-            raise CompileFailed(list(exc.diagnostics)) from None
-    return out
+    units, generated = data.get("units", []), data.get("generated", [])
+    if not isinstance(units, list) or not isinstance(generated, list) or not all(isinstance(t, str) for t in generated):
+        raise _shard_problem("the plan file's units or generated runs are damaged: make it again", path)
+    for number, unit in enumerate(units, 1):
+        if (not isinstance(unit, dict) or unit.get("unit") != number or not isinstance(unit.get("name"), str)
+                or not isinstance(unit.get("cost"), (int, float)) or isinstance(unit.get("cost"), bool)):
+            raise _shard_problem(f"the plan file's unit {number} is damaged: make it again", path)
+    return data
 
 
 def plan_file_text(plan: Plan) -> str:
@@ -496,7 +511,10 @@ class _EquivSetup:
 
 def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: int, seed: int, backend: str,
                        st_file: Path | None, io_map_file: Path | None, mp_file: Path | None, shrink: bool,
-                       allow_untranslated: bool, plan_file: Path | None) -> _EquivSetup:
+                       allow_untranslated: bool, plan_file: Path | None,
+                       share: "Share | None" = None) -> _EquivSetup:
+    """The translation, its executor and the runs of the check. With a plan file and a `share`, `runs` holds only
+    the runs the share makes (None in the other places): their units and costs come from the plan file."""
     import time
     from transpiler.verify.equiv import choose_backend
     from transpiler.verify.simulate import project_names
@@ -529,15 +547,46 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
-    loaded = _load_scenarios(project, scenarios, names, diags)
-    setup_seconds = time.perf_counter() - start
-    generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp, random_cycles,
-                                                seed, plan_file, digest)
-    runs = loaded + generated
-    plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
-                tuple(generated), setup_seconds, search_seconds)
+    if plan_file is not None and share is not None:
+        runs, plan = _runs_of_plan_file(project, Path(plan_file), digest, names, scenarios, share, diags)
+        plan = dataclasses.replace(plan, setup_seconds=time.perf_counter() - start)
+    else:
+        loaded = _load_scenarios(project, scenarios, names, diags)
+        setup_seconds = time.perf_counter() - start
+        generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp,
+                                                    random_cycles, seed, plan_file, digest)
+        runs = loaded + generated
+        plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
+                    tuple(generated), setup_seconds, search_seconds)
     return _EquivSetup(st_text, st_name, iomap, chosen, names, base_mp, runs, plan, diags,
                        tuple(transpiled.result.untranslated))
+
+
+def _runs_of_plan_file(project: Project, path: Path, digest: str, names, scenarios: list[Path], share: "Share",
+                       diags: Diagnostics) -> tuple[list, Plan]:
+    """The plan of a plan file and the runs `share` makes, in plan order (None for the others). Only those
+    scenario files and generated runs are loaded: the job that wrote the plan loaded and checked every one of the
+    same inputs (the digest says so), and a shard need not parse the runs of the other shards again."""
+    data = _plan_file_data(path, "equiv", digest)
+    units, texts = data["units"], data["generated"]
+    if len(units) != len(scenarios) + len(texts):
+        raise _shard_problem("the plan file's units are not its scenarios and generated runs: make it again", path)
+    plan = Plan("equiv", digest, tuple(u["name"] for u in units), tuple(float(u["cost"]) for u in units))
+    wanted = plan.selected(share)
+    runs: list = [None] * len(units)
+    from_files = [number for number in wanted if number <= len(scenarios)]
+    for number, run in zip(from_files, _load_scenarios(project, [scenarios[n - 1] for n in from_files], names,
+                                                       diags)):
+        runs[number - 1] = run
+    for number in wanted:
+        if number > len(scenarios):
+            runs[number - 1] = _planned_run(texts[number - 1 - len(scenarios)], path, number - 1 - len(scenarios),
+                                            None, names)
+    for number in wanted:
+        if runs[number - 1].name != plan.names[number - 1] or float(runs[number - 1].cycles) != plan.costs[number - 1]:
+            raise _shard_problem(f"run {number} of the plan file is not the run these inputs give: make it again",
+                                 path)
+    return runs, plan
 
 
 def _equivalence_digest(project: Project, mp_path: Path | None, scenarios: list[Path], random_cycles: int, seed: int,
@@ -610,7 +659,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     if requests and not scenarios:
         raise _usage("--show-mask draws masks in the runs of --scenario files: give at least one")
     setup = _equivalence_setup(project, scenarios, random_cycles, seed, backend, st_file, io_map_file, mp_file,
-                               shrink, allow_untranslated, share.plan_file)
+                               shrink, allow_untranslated, share.plan_file, None if requests else share)
     chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
     selected = setup.plan.selected(share)
     loaded = [setup.runs[i - 1] for i in selected]
