@@ -275,6 +275,36 @@ def test_merged_mutate_shards_equal_the_unsharded_run(mutate_whole, n, capsys):
     assert json.loads(reports[0].read_text())["shard"]["min_score"] == 0.9
 
 
+def test_a_mutate_shard_takes_the_infection_map_from_the_plan_file(mutate_whole, tmp_path, monkeypatch, capsys):
+    """The plan job probed every run with every mutant; a shard given its plan file does not probe again and
+    records the reference only of the runs its own mutants go through, with the verdicts of the whole run."""
+    from transpiler.verify import mutate as mutate_module
+    plan = json.loads((mutate_whole / "plan.json").read_text())
+    infected = plan["infected"]
+    assert infected and all(set(e) == {"run", "mutants"} for e in infected)
+    assert {n for e in infected for n in e["mutants"]} <= set(range(1, len(plan["units"]) + 1))
+    recorded: list[str] = []
+    real = mutate_module.record_reference
+    monkeypatch.setattr(mutate_module, "record_reference",
+                        lambda program, iomap, scenario, *a, **k: recorded.append(scenario.name) or real(
+                            program, iomap, scenario, *a, **k))
+    probes: list = []
+    monkeypatch.setattr(mutate_module, "_prepare_scenario", lambda *a: probes.append(a))
+    report = tmp_path / "shard.json"
+    assert main(["mutate", *MUTATE_ARGS, "--plan-file", str(mutate_whole / "plan.json"), "--shard", "2/7",
+                 "--report", str(report)]) == 0
+    assert not probes and len(set(recorded)) == len(recorded) < len(infected)
+    whole = {m["unit"]: m for m in comparable(mutate_whole / "whole.json")["mutants"]}
+    shard = comparable(report)["mutants"]
+    assert shard and all(m == whole[m["unit"]] for m in shard)
+    broken = tmp_path / "plan.json"
+    broken.write_text(json.dumps({**plan, "infected": [{**infected[0], "mutants": [0]}, *infected[1:]]}))
+    capsys.readouterr()
+    assert main(["mutate", *MUTATE_ARGS, "--plan-file", str(broken), "--shard", "2/7",
+                 "--report", str(tmp_path / "r.json")]) == 2
+    assert "infection map does not fit" in capsys.readouterr().err
+
+
 # ---------------------------------------------------------------------------------------------
 # the sample, and the recipe's processes
 

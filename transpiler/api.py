@@ -350,6 +350,9 @@ class Plan:
     generated: tuple = ()
     setup_seconds: float = 0.0              # what translating and loading the scenarios took in this process
     search_seconds: float = 0.0             # what the coverage-guided search took (0 with a plan file)
+    # mutate: per run (named, in the order mutants go through them) the numbers of the mutants its run of the
+    # unmutated translation infects, from probing every run once; a plan file carries it so shards need not probe
+    infected: tuple[tuple[str, tuple[int, ...]], ...] = ()
 
     def assignment(self, count: int) -> list[int]:
         """The shard (1..count) of each unit (shard.partition over the costs)."""
@@ -469,7 +472,9 @@ def plan_file_text(plan: Plan) -> str:
     return json.dumps({"kind": "hh2iec-plan", "format": FORMAT, "command": plan.command, "digest": plan.digest,
                        "units": [{"unit": i + 1, "name": n, "cost": c} for i, (n, c) in
                                  enumerate(zip(plan.names, plan.costs))],
-                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated]}, indent=1) + "\n"
+                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated],
+                       **({"infected": [{"run": name, "mutants": list(numbers)} for name, numbers in plan.infected]}
+                          if plan.infected else {})}, indent=1) + "\n"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -735,6 +740,27 @@ def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list,
     return plan, {mutants[i - 1]: i for i in plan.selected(share)}
 
 
+def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share, jobs: int,
+                 progress: Callable[[int, int], None] | None) -> tuple[Plan, list]:
+    """The verdicts of the mutants `share` judges (`unit_ids`: each with its plan number). Making a plan (a sample
+    share) probes with every mutant of the plan and keeps the infection map in it; a shard given a plan file with a
+    map uses it instead of probing every run again."""
+    if share.sample > 0:
+        indexes = [unit_ids[m] - 1 for m in unit_ids]
+        verdicts, infected = _judged(judge, mutants, jobs, progress, indexes=indexes)
+        if infected is not None:
+            plan = dataclasses.replace(plan, infected=tuple(
+                (s.name, tuple(sorted(runs))) for s, runs in zip(judge.scenarios, infected)))
+        return plan, verdicts
+    chosen = list(unit_ids)
+    local = None
+    if share.plan_file is not None:
+        planned = _planned_infection(share.plan_file, plan.digest, judge.scenarios)
+        if planned is not None:
+            local = tuple(frozenset(k + 1 for k, m in enumerate(chosen) if unit_ids[m] in runs) for runs in planned)
+    return plan, _judged(judge, chosen, jobs, progress, local)[0]
+
+
 def _mutant_side_factories(backend: str, iec) -> tuple[Callable, Callable | None]:
     """How a mutant's ST text becomes an executor on the chosen backend, and (built-in only) how one build of the
     text with every mutation as a switch (mutant schemata) does."""
@@ -748,20 +774,40 @@ def _mutant_side_factories(backend: str, iec) -> tuple[Callable, Callable | None
             (lambda text, mutations: BuiltinSchema(text, mutations, "project.st")))
 
 
-def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None) -> list:
-    """The verdicts of `mutants` (see verify/mutate.py judge_all); raises CompileFailed when the unmutated
-    translation does not agree with the reference under the stimulus."""
+def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None,
+            infected: tuple | None = None, indexes: list[int] | None = None) -> tuple[list, tuple | None]:
+    """The verdicts of `mutants` (of those at `indexes` only, when given; see verify/mutate.py judge_all) and the
+    infection map the probing found (None without a schema); `infected` is a plan file's map, which skips the
+    probing. Raises CompileFailed when the unmutated translation does not agree with the reference."""
     from transpiler.verify.mutate import judge_all, prepare
-    judging = prepare(judge, mutants, jobs)
+    judging = prepare(judge, mutants, jobs, infected)
     if judging.problems:
         raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
                      "would mean nothing (run hh2iec equiv): " + "; ".join(judging.problems[:5]))
     verdicts = []
-    for verdict in judge_all(judge, mutants, jobs, judging):
+    total = len(mutants) if indexes is None else len(indexes)
+    for verdict in judge_all(judge, mutants, jobs, judging, indexes):
         verdicts.append(verdict)
         if progress is not None:
-            progress(len(verdicts), len(mutants))
-    return verdicts
+            progress(len(verdicts), total)
+    return verdicts, judging.infected
+
+
+def _planned_infection(path: Path, digest: str, scenarios: list) -> tuple[frozenset[int], ...] | None:
+    """The infection map of a mutate plan file, per run in judging order (plan numbers of the mutants), or None
+    when the plan has none (a backend without schemata); E-SHARD when it does not fit these runs."""
+    data = _plan_file_data(Path(path), "mutate", digest)
+    entries = data.get("infected")
+    if entries is None:
+        return None
+    units = len(data["units"])
+    if (not isinstance(entries, list) or len(entries) != len(scenarios)
+            or any(not isinstance(e, dict) or e.get("run") != s.name or not isinstance(e.get("mutants"), list)
+                   or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= units
+                              for n in e["mutants"]) for e, s in zip(entries, scenarios))):
+        raise _shard_problem("the plan file's infection map does not fit its runs and mutants: make it again",
+                             Path(path))
+    return tuple(frozenset(e["mutants"]) for e in entries)
 
 
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
@@ -813,9 +859,9 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
             sites = mutation_sites(st_text)
             mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
             plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
-            mutants = list(unit_ids)
             start = time.perf_counter()
-            verdicts = _judged(judge, mutants, jobs, progress)
+            plan, verdicts = _judge_share(judge, plan, mutants, unit_ids, share, jobs, progress)
+            mutants = list(unit_ids)
             seconds = time.perf_counter() - start
         finally:
             if saved_cache is None:

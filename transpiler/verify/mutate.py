@@ -28,7 +28,7 @@ import re
 import time
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol
+from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol, Sequence
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -320,8 +320,9 @@ class Judge:
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
     schema_factory: Callable[[str, list], MutantSides] | None = None
-    # per scenario, its reference run recorded once (see prepare): mutants then run only their own half
-    recordings: tuple[Recording, ...] | None = None
+    # per scenario, its reference run recorded once (see prepare; LazyRecordings records it on first use): mutants
+    # then run only their own half
+    recordings: "Sequence[Recording] | None" = None
     comparison: Comparison | None = None        # what every run compares (comparison_for, made once by prepare)
 
     def __call__(self, mutant: Mutant) -> Verdict:
@@ -405,15 +406,44 @@ class Judging:
         return self.judge.run(mutant, self.sides.factory(number), runs, start)
 
 
-def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1) -> Judging:
+class LazyRecordings:
+    """The scenarios' reference runs, each recorded the first time a mutant needs it: a shard that was given the
+    infection map by its plan file records only the runs its own mutants go through."""
+
+    def __init__(self, judge: Judge):
+        self._judge = judge
+        self._made: dict[int, Recording] = {}
+
+    def __len__(self) -> int:
+        return len(self._judge.scenarios)
+
+    def __getitem__(self, index: int) -> Recording:
+        if index not in self._made:
+            judge = self._judge
+            self._made[index] = record_reference(judge.program, judge.iomap, judge.scenarios[index], judge.names,
+                                                 compiled=judge.compiled, base_mp=judge.base_mp,
+                                                 comparison=judge.comparison)
+        return self._made[index]
+
+
+def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1,
+            infected: "tuple[frozenset[int], ...] | None" = None) -> Judging:
     """Record every scenario's reference run, build the mutant schema (where the backend has one) and probe each
-    scenario with it; the scenarios are shared out over `jobs` forked processes."""
+    scenario with it; the scenarios are shared out over `jobs` forked processes. `infected` (per scenario, the
+    mutants' numbers its run infects, as a plan file carries them from the job that probed every scenario) skips
+    the probing: the reference runs are then recorded as the mutants need them."""
     judge = dataclasses.replace(judge, comparison=judge.comparison or comparison_for(judge.program, judge.names,
                                                                                     judge.iomap))
     sides = None
     if judge.schema_factory is not None:
         from transpiler.exec.stexec import TextMutation
         sides = judge.schema_factory(judge.st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(mutants)])
+    if infected is not None and sides is not None:
+        if len(infected) != len(judge.scenarios):
+            raise ValueError("the infection map does not have one entry per scenario")
+        lazy = dataclasses.replace(judge)
+        lazy.recordings = LazyRecordings(lazy)
+        return Judging(lazy, mutants, sides, tuple(infected))
     original = judge.side_factory(judge.st_text) if sides is None else None
     task = functools.partial(_prepare_scenario, judge, sides, original)
     found = dict(_each(task, range(len(judge.scenarios)), jobs))
@@ -478,12 +508,14 @@ def _worker(task: Callable[[int], Any], tasks, results) -> None:
         results.put((item, task(item)))
 
 
-def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None) -> Iterator[Verdict]:
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None,
+              indexes: Iterable[int] | None = None) -> Iterator[Verdict]:
     """Verdicts of the given mutants as they come in (prepare, unless `judging` is that of these mutants, then judge
-    each; with jobs > 1 in forked workers, which share what was prepared and send back only verdicts). Any list of
-    mutants can be given: a subset judges exactly as it would among all."""
+    each, or those at `indexes`; with jobs > 1 in forked workers, which share what was prepared and send back only
+    verdicts). Any list of mutants can be given: a subset judges exactly as it would among all."""
     judging = judging or prepare(judge, mutants, jobs)
-    for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
+    chosen = range(len(mutants)) if indexes is None else list(indexes)
+    for index, verdict in _each(functools.partial(_verdict_fields, judging), chosen, jobs):
         yield Verdict(mutants[index], *verdict)
 
 
