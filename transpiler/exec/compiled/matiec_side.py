@@ -242,9 +242,9 @@ def _load(lib_path: Path) -> ctypes.CDLL:
 def _sides(lib: ctypes.CDLL, st_text: str, project: IecProject,
            start: Callable[[], None] | None = None, infected: Callable[[], set[int]] | None = None
            ) -> Callable[[], object]:
+    # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.
     """The side class over a loaded library: `start` runs after each re-initialisation (a schema sets its mutant
     number), `infected` reads the mutants a probing run infected (a schema's PROBE sides only)."""
-    # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.
     loops = loop_sites(st_text)
     variables = _variables(project)
     ids = {path: (n, typ, shape) for n, (path, typ, shape, _) in enumerate(variables)}

@@ -153,112 +153,133 @@ def build_schema(st_text: str, mutations: Iterable[TextMutation], filename: str 
     numbers = {m.number for m in mutations}
     tree = parse(st_text, filename)
     found = plan(tree, st_text, mutations, impure)
-    impure_names = found.impure
-    names = _names(st_text)
-    lines = st_text.split("\n")
-    by_number = {m.number: m for m in mutations}
+    writer = _Writer(st_text, mutations, found.impure)
     skipped = set(found.unswitched) | (set(leave_out) & numbers)
-    mutated: dict[int, list[str]] = {}
-
-    def variant_text(v: Variant, node: object) -> str:
-        if v.number not in mutated:
-            copy = list(lines)
-            for index, new in by_number[v.number].changes:
-                copy[index] = new
-            mutated[v.number] = copy
-        return _slice(mutated[v.number], node.span)
-
-    edits = _Edits()
-    pous_used: set[int] = set()
-    headers: dict[int, tuple[int, int]] = {}
+    headers: dict[int, int] = {}           # id(POU) -> the column after its name, where its externals go
     for el in tree.elements:
-        if isinstance(el, n.Pou) and el.kind != "function":
-            m = _HEADER.match(lines[el.span.line - 1])
+        if isinstance(el, n.Pou) and el.kind != "function":     # a FUNCTION cannot have a VAR_EXTERNAL
+            m = _HEADER.match(writer.lines[el.span.line - 1])
             if m is not None:
-                headers[id(el)] = (el.span.line, m.end() + 1)
-    switched: set[int] = set()
-    probes: dict[int, tuple[object, list[str]]] = {}        # id(owner statement) -> (owner, probe statements)
-    mutant, hit = names.mutant, names.hits
-
-    def probe(owner: object, statement: str) -> None:
-        probes.setdefault(id(owner), (owner, []))[1].append(statement)
-
+                headers[id(el)] = m.end() + 1
+    configuration = next((el for el in tree.elements if isinstance(el, n.Configuration)), None)
+    header = _HEADER.match(writer.lines[configuration.span.line - 1]) if configuration is not None else None
+    if header is None:
+        return StSchema(st_text, frozenset(), frozenset(numbers), 1, writer.names)
     for el in tree.elements:
         if not isinstance(el, n.Pou):
             continue
+        used = False
         for place in _places(el):
-            variants = [v for v in found.variants.get(id(place.node), []) if v.number not in skipped]
-            if place.kind == "case":
-                variants = [v for v in variants if v.swap is not None]
+            variants = [v for v in found.variants.get(id(place.node), []) if v.number not in skipped
+                        and (place.kind != "case" or v.swap is not None)]
             if not variants:
                 continue
-            # an expression is computed by every mutant's SEL: one calling a stateful POU is left out
-            expression = place.node.selector if place.kind == "case" else place.node
-            if id(el) not in headers or (place.kind != "stmt" and (calls_impure(expression, impure_names) or any(
-                    calls_impure(v.node, impure_names) for v in variants if v.swap is None))):
+            if id(el) not in headers or not writer.switch(place, variants):
                 skipped.update(v.number for v in variants)
                 continue
-            pous_used.add(id(el))
-            switched.update(v.number for v in variants)
-            if place.kind == "stmt":
-                _switch_statement(place.node, variants, variant_text, lines, edits, names, impure_names)
-            elif place.kind == "case":
-                selector = _slice(lines, place.node.selector.span)
-                chain = ""
-                for v in variants:
-                    a, b = v.swap
-                    chain += f"SEL({mutant} <> {v.number}, SEL(({selector}) = {a}, SEL(({selector}) = {b}, " \
-                             f"{selector}, {a}), {b}), "
-                    probe(place.owner, f"IF (({selector}) = {a}) OR (({selector}) = {b}) THEN {hit}[{v.number}] := TRUE; "
-                                       "END_IF;")
-                edits.before(place.node.selector.span, chain)
-                edits.after(place.node.selector.span, ")" * len(variants))
-            else:
-                original = _slice(lines, place.node.span)
-                chain = ""
-                for v in variants:
-                    text = variant_text(v, v.node)
-                    chain += f"SEL({mutant} <> {v.number}, {text}, "
-                    if place.kind == "cond":
-                        probe(place.owner, f"IF ({text}) <> ({original}) THEN {hit}[{v.number}] := TRUE; END_IF;")
-                    else:
-                        probe(place.owner, f"{hit}[{v.number}] := TRUE;")
-                edits.before(place.node.span, chain)
-                edits.after(place.node.span, ")" * len(variants))
-    for owner, statements in probes.values():
-        edits.before(owner.span, f"IF {mutant} < 0 THEN {' '.join(statements)} END_IF; ")
+            used = True
+        if used:
+            writer.edits.at(el.span.line, headers[id(el)], f" VAR_EXTERNAL {writer.declarations} END_VAR")
     size = max(numbers, default=0) or 1
-    for el in tree.elements:
-        if isinstance(el, n.Pou) and id(el) in pous_used:
-            line, col = headers[id(el)]
-            edits.at(line, col, f" VAR_EXTERNAL {mutant} : DINT; {hit} : {names.hits_type}; END_VAR")
-    configuration = next((el for el in tree.elements if isinstance(el, n.Configuration)), None)
-    header = _HEADER.match(lines[configuration.span.line - 1]) if configuration is not None else None
-    if header is None:
-        return StSchema(st_text, frozenset(), frozenset(numbers), size, names)
-    edits.at(configuration.span.line, header.end() + 1,
-             f" VAR_GLOBAL {mutant} : DINT; {hit} : {names.hits_type}; END_VAR")
-    edits.at(1, 1, f"TYPE {names.hits_type} : ARRAY [1..{size}] OF BOOL; END_TYPE ")
-    return StSchema(edits.apply(st_text), frozenset(switched), frozenset(numbers - switched), size, names)
+    writer.edits.at(configuration.span.line, header.end() + 1, f" VAR_GLOBAL {writer.declarations} END_VAR")
+    writer.edits.at(1, 1, f"TYPE {writer.names.hits_type} : ARRAY [1..{size}] OF BOOL; END_TYPE ")
+    return StSchema(writer.text(), frozenset(writer.switched), frozenset(numbers - writer.switched), size,
+                    writer.names)
 
 
-def _switch_statement(s: n.Stmt, variants: list[Variant], variant_text, lines: Sequence[str], edits: _Edits,
-                      names: SchemaNames, impure: frozenset[str]) -> None:
-    """`IF mutant = k THEN <variant k> ELSIF ... ELSE <probe> <original> END_IF;` around the statement."""
-    mutant, hit = names.mutant, names.hits
-    head = " ELSIF ".join(f"{mutant} = {v.number} THEN {variant_text(v, v.node)}" for v in variants)
-    probes = []
-    valued = isinstance(s, n.Assign) and not calls_impure(s, impure)
-    for v in variants:
-        if valued and isinstance(v.node, n.Assign) and v.node.target == s.target \
-                and not calls_impure(v.node, impure):
-            probes.append(f"IF ({variant_text(v, v.node.value)}) <> ({_slice(lines, s.value.span)}) THEN "
-                          f"{hit}[{v.number}] := TRUE; END_IF;")
+class _Writer:
+    """The switches and probes of one schema, as insertions into the original text."""
+
+    def __init__(self, st_text: str, mutations: Sequence[TextMutation], impure: frozenset[str]):
+        self.lines = st_text.split("\n")
+        self.names = _names(st_text)
+        self.declarations = f"{self.names.mutant} : DINT; {self.names.hits} : {self.names.hits_type};"
+        self.impure = impure
+        self.edits = _Edits()
+        self.switched: set[int] = set()
+        self.by_number = {m.number: m for m in mutations}
+        self.mutated: dict[int, list[str]] = {}
+        self.probes: dict[int, tuple[object, list[str]]] = {}    # id(statement) -> (statement, probes before it)
+
+    def text(self) -> str:
+        mutant = self.names.mutant
+        for owner, statements in self.probes.values():
+            self.edits.before(owner.span, f"IF {mutant} < 0 THEN {' '.join(statements)} END_IF; ")
+        return self.edits.apply("\n".join(self.lines))
+
+    def variant_text(self, v: Variant, node: object) -> str:
+        """The text of `node`, a part of the parse of mutation v's text."""
+        if v.number not in self.mutated:
+            copy = list(self.lines)
+            for index, new in self.by_number[v.number].changes:
+                copy[index] = new
+            self.mutated[v.number] = copy
+        return _slice(self.mutated[v.number], node.span)
+
+    def probe(self, owner: object, number: int, condition: str | None = None) -> None:
+        """Before `owner` in a probing run: mark mutant `number` (where `condition` holds)."""
+        mark = f"{self.names.hits}[{number}] := TRUE;"
+        self.probes.setdefault(id(owner), (owner, []))[1].append(
+            mark if condition is None else f"IF {condition} THEN {mark} END_IF;")
+
+    def switch(self, place: _Place, variants: list[Variant]) -> bool:
+        """Write the switch of a place; False (nothing written) where an expression calls a stateful POU, which
+        every mutant's SEL would call."""
+        if place.kind != "stmt":
+            expression = place.node.selector if place.kind == "case" else place.node
+            if calls_impure(expression, self.impure) or any(calls_impure(v.node, self.impure)
+                                                             for v in variants if v.swap is None):
+                return False
+        self.switched.update(v.number for v in variants)
+        if place.kind == "stmt":
+            self.statement(place.node, variants)
+        elif place.kind == "case":
+            self.swaps(place.node, variants)
         else:
-            probes.append(f"{hit}[{v.number}] := TRUE;")
-    # the original keeps its own place (and lines), after the ELSE
-    edits.before(s.span, f"IF {head} ELSE IF {mutant} < 0 THEN {' '.join(probes)} END_IF; ")
-    edits.after(s.span, " END_IF;")
+            self.expression(place, variants)
+        return True
+
+    def statement(self, s: n.Stmt, variants: list[Variant]) -> None:
+        """`IF mutant = k THEN <variant k> ELSIF ... ELSE <probes> <original> END_IF;` around the statement; a
+        variant that stores another value into the same target is probed by comparing the values."""
+        mutant = self.names.mutant
+        head = " ELSIF ".join(f"{mutant} = {v.number} THEN {self.variant_text(v, v.node)}" for v in variants)
+        valued = isinstance(s, n.Assign) and not calls_impure(s, self.impure)
+        probes = []
+        for v in variants:
+            mark = f"{self.names.hits}[{v.number}] := TRUE;"
+            if valued and isinstance(v.node, n.Assign) and v.node.target == s.target \
+                    and not calls_impure(v.node, self.impure):
+                probes.append(f"IF ({self.variant_text(v, v.node.value)}) <> ({_slice(self.lines, s.value.span)}) "
+                              f"THEN {mark} END_IF;")
+            else:
+                probes.append(mark)
+        # the original keeps its own place (and lines), after the ELSE
+        self.edits.before(s.span, f"IF {head} ELSE IF {mutant} < 0 THEN {' '.join(probes)} END_IF; ")
+        self.edits.after(s.span, " END_IF;")
+
+    def swaps(self, case: n.Case, variants: list[Variant]) -> None:
+        """The selector's two values exchanged for each swap of two labels."""
+        selector = _slice(self.lines, case.selector.span)
+        chain = ""
+        for v in variants:
+            a, b = v.swap
+            chain += f"SEL({self.names.mutant} <> {v.number}, SEL(({selector}) = {a}, SEL(({selector}) = {b}, " \
+                     f"{selector}, {a}), {b}), "
+            self.probe(case, v.number, f"(({selector}) = {a}) OR (({selector}) = {b})")
+        self.edits.before(case.selector.span, chain)
+        self.edits.after(case.selector.span, ")" * len(variants))
+
+    def expression(self, place: _Place, variants: list[Variant]) -> None:
+        """A condition or selector chosen by SEL; probed by value before its statement, a loop's by running."""
+        original = _slice(self.lines, place.node.span)
+        chain = ""
+        for v in variants:
+            text = self.variant_text(v, v.node)
+            chain += f"SEL({self.names.mutant} <> {v.number}, {text}, "
+            self.probe(place.owner, v.number, f"({text}) <> ({original})" if place.kind == "cond" else None)
+        self.edits.before(place.node.span, chain)
+        self.edits.after(place.node.span, ")" * len(variants))
 
 
 def checked_schema(st_text: str, mutations: Sequence[TextMutation], filename: str = "project.st",
