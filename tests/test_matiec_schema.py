@@ -140,3 +140,21 @@ def test_matiec_schema_gives_every_mutant_the_verdict_of_its_own_build(tmp_path,
     for v in verdicts:
         if v.outcome == "killed":
             assert v.by.startswith(judge.scenarios[v.scenarios_run[-1]].name + ": ")
+
+
+def test_a_mutant_that_is_no_valid_st_is_left_to_its_own_build():
+    # word_arith_flags has a constant mutated past DINT's range: the checker rejects its line in the schema, and
+    # only that mutant (not the whole schema) is left out, to be built alone (and found invalid) as before.
+    _project, transpiled, *_ = _parts("word_arith_flags", random_cycles=0)
+    sites = mutation_sites(transpiled.st_text)
+    schema = checked_schema(transpiled.st_text, _mutations(transpiled.st_text))
+    out_of_range = {i + 1 for i, m in enumerate(sites) if "2147483649" in m.description}
+    assert out_of_range and out_of_range <= schema.unswitched
+    assert len(schema.unswitched) <= 3 and len(schema.switched) == len(sites) - len(schema.unswitched)
+
+
+def test_the_lines_matiec_rejects_are_read_from_its_message():
+    from transpiler.exec.compiled.matiec_schema import rejected_lines
+    message = ("iec2c failed: /tmp/x/project.st:105-5..105-22: error: Incompatible data types for ':=' operation.\n"
+               "/tmp/x/project.st:110-9..111-4: error: Data type mismatch\n2 error(s) found. Bailing out!")
+    assert rejected_lines(message) == {105, 110, 111}

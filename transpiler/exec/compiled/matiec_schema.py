@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from transpiler.backends.iec_model import IecProject
-from transpiler.exec.compiled.matiec_side import MatiecBuildError, _load, _sides, build_library
+from transpiler.exec.compiled.matiec_side import MatiecBuildError, build_library, load_library, sides_of
 from transpiler.exec.compiled.schema_st import SchemaNames, StSchema, build_schema, checked_schema, leave_out_at
 from transpiler.exec.compiled.sysfb import modules_in
 from transpiler.exec.stexec.schema import TextMutation
@@ -54,14 +54,14 @@ class MatiecSchema:
         for attempt in range(MENDS + 1):
             schema = checked_schema(st_text, mutations, filename, left_out, impure)
             try:
-                self.lib = _load(build_library(schema.text, project, iec2c, accessors_c(schema.names)))
+                self.lib = load_library(build_library(schema.text, project, iec2c, accessors_c(schema.names)))
                 break
             except MatiecBuildError as exc:
                 lines = rejected_lines(str(exc))
                 more = leave_out_at(schema, st_text, mutations, lines, filename) if lines else None
                 if not more or attempt == MENDS:
                     schema = build_schema(st_text, [], filename)
-                    self.lib = _load(build_library(schema.text, project, iec2c, accessors_c(schema.names)))
+                    self.lib = load_library(build_library(schema.text, project, iec2c, accessors_c(schema.names)))
                     break
                 left_out |= more
         self.schema: StSchema = schema
@@ -71,7 +71,7 @@ class MatiecSchema:
 
     def factory(self, number: int) -> Callable[[], object]:
         lib = self.lib
-        return _sides(lib, self.st_text, self.project, lambda: lib.hh_schema_set(number),
+        return sides_of(lib, self.st_text, self.project, lambda: lib.hh_schema_set(number),
                       self._infected if number < 0 else None)
 
     def _infected(self) -> set[int]:

@@ -223,10 +223,11 @@ def bind_sys(lib: ctypes.CDLL, sys: SysBinding, machine: object) -> None:
 
 def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Callable[[], object]:
     """Build the library once; each call gives the program re-initialised (config_init__, cleared I/O)."""
-    return _sides(_load(build_library(st_text, project, iec2c)), st_text, project)
+    return sides_of(load_library(build_library(st_text, project, iec2c)), st_text, project)
 
 
-def _load(lib_path: Path) -> ctypes.CDLL:
+def load_library(lib_path: Path) -> ctypes.CDLL:
+    """The built library loaded, its harness functions typed for ctypes."""
     lib = ctypes.CDLL(str(lib_path))
     lib.hh_get.restype = ctypes.c_longlong
     lib.hh_get.argtypes = [ctypes.c_int, ctypes.c_int]
@@ -239,7 +240,7 @@ def _load(lib_path: Path) -> ctypes.CDLL:
     return lib
 
 
-def _sides(lib: ctypes.CDLL, st_text: str, project: IecProject,
+def sides_of(lib: ctypes.CDLL, st_text: str, project: IecProject,
            start: Callable[[], None] | None = None, infected: Callable[[], set[int]] | None = None
            ) -> Callable[[], object]:
     # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.

@@ -299,7 +299,8 @@ def checked_schema(st_text: str, mutations: Sequence[TextMutation], filename: st
             if not more:
                 break
             left_out |= more
-    return build_schema(st_text, [], filename)
+    return dataclasses.replace(build_schema(st_text, [], filename),
+                               unswitched=frozenset(m.number for m in mutations))
 
 
 def leave_out_at(schema: StSchema, st_text: str, mutations: Sequence[TextMutation], bad_lines: Iterable[int],
