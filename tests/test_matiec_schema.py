@@ -158,3 +158,43 @@ def test_the_lines_matiec_rejects_are_read_from_its_message():
     message = ("iec2c failed: /tmp/x/project.st:105-5..105-22: error: Incompatible data types for ':=' operation.\n"
                "/tmp/x/project.st:110-9..111-4: error: Data type mismatch\n2 error(s) found. Bailing out!")
     assert rejected_lines(message) == {105, 110, 111}
+
+
+GUARDED = """PROGRAM Main
+VAR
+    i : INT;
+    a : ARRAY [0..3] OF INT;
+    y : BOOL;
+END_VAR
+    i := i + 1;
+    IF i > 3 THEN
+        y := FALSE;
+    ELSIF a[i] = 0 THEN
+        y := TRUE;
+    END_IF;
+END_PROGRAM
+CONFIGURATION C
+    RESOURCE R ON PLC
+        TASK T(INTERVAL := T#20ms, PRIORITY := 0);
+        PROGRAM P WITH T : Main;
+    END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def test_an_elsif_condition_is_probed_only_where_its_if_computes_it():
+    # `a[i]` is read only while i <= 3: a probe that compared the ELSIF's mutants on entering the IF without the
+    # first condition would index out of range (the built-in executor raises; compiled C reads stray memory).
+    sites = mutation_sites(GUARDED)
+    schema = checked_schema(GUARDED, _mutations(GUARDED))
+    elsif = {i + 1 for i, m in enumerate(sites) if m.line == 10}
+    assert elsif and elsif <= schema.switched
+    from transpiler.exec.stexec import load_st
+    rt = load_st(schema.text).instantiate()
+    rt.set(schema.names.mutant, -1)
+    for _ in range(6):
+        rt.run_cycle()                     # i runs past 3: raises if a[i] is computed there
+    assert rt.get("P.i") == 6
+    flagged = {k for k in elsif if rt.get(f"{schema.names.hits}[{k}]")}
+    constant = {i + 1 for i, m in enumerate(sites) if m.line == 10 and m.description.startswith("0 -> 1")}
+    assert constant and constant <= flagged     # a[1] = 0 and a[1] = 1 differ on the first cycle

@@ -12,8 +12,9 @@ becomes plain IEC 61131-3 that matiec compiles:
     branch the exchanged labels pick (plan only accepts labels no other label of the CASE matches).
 The global number is 0 for the original. A negative number runs the original and records, in the global array
 HH_HIT, each mutant the run infects: for a statement that stores a value, or a condition or selector, whether the
-mutated expression gives another value at the place (a condition of a later ELSIF is compared on entering its
-IF: more runs marked, never fewer); for any other change (a call, a loop condition), whether its statement ran.
+mutated expression gives another value at the place (the condition of an ELSIF is compared on entering its IF,
+where the conditions before it are false: what the IF then computes); for any other change (a call, a loop
+condition), whether its statement ran.
 
 Every insertion is made on the line of the text it belongs to, so the schema has the original's line numbers
 (a tool's message about line N is about the original's line N; the first line gets the array type).
@@ -216,11 +217,15 @@ class _Writer:
             self.mutated[v.number] = copy
         return _slice(self.mutated[v.number], node.span)
 
-    def probe(self, owner: object, number: int, condition: str | None = None) -> None:
-        """Before `owner` in a probing run: mark mutant `number` (where `condition` holds)."""
-        mark = f"{self.names.hits}[{number}] := TRUE;"
-        self.probes.setdefault(id(owner), (owner, []))[1].append(
-            mark if condition is None else f"IF {condition} THEN {mark} END_IF;")
+    def probe(self, owner: object, number: int, condition: str | None = None, unless: Sequence[str] = ()) -> None:
+        """Before `owner` in a probing run: mark mutant `number` (where `condition` holds, and only where none of
+        the conditions `unless` holds: an ELSIF's condition is computed only where its IF would compute it)."""
+        statement = f"{self.names.hits}[{number}] := TRUE;"
+        if condition is not None:
+            statement = f"IF {condition} THEN {statement} END_IF;"
+        for earlier in reversed(unless):
+            statement = f"IF NOT ({earlier}) THEN {statement} END_IF;"
+        self.probes.setdefault(id(owner), (owner, []))[1].append(statement)
 
     def switch(self, place: _Place, variants: list[Variant]) -> bool:
         """Write the switch of a place; False (nothing written) where an expression calls a stateful POU, which
@@ -273,11 +278,17 @@ class _Writer:
     def expression(self, place: _Place, variants: list[Variant]) -> None:
         """A condition or selector chosen by SEL; probed by value before its statement, a loop's by running."""
         original = _slice(self.lines, place.node.span)
+        unless: list[str] = []
+        if isinstance(place.owner, n.If):
+            for cond, _stmts in place.owner.branches:
+                if cond is place.node:
+                    break
+                unless.append(_slice(self.lines, cond.span))
         chain = ""
         for v in variants:
             text = self.variant_text(v, v.node)
             chain += f"SEL({self.names.mutant} <> {v.number}, {text}, "
-            self.probe(place.owner, v.number, f"({text}) <> ({original})" if place.kind == "cond" else None)
+            self.probe(place.owner, v.number, f"({text}) <> ({original})" if place.kind == "cond" else None, unless)
         self.edits.before(place.node.span, chain)
         self.edits.after(place.node.span, ")" * len(variants))
 
