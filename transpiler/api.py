@@ -762,13 +762,15 @@ def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share,
 
 
 def _mutant_side_factories(backend: str, iec) -> tuple[Callable, Callable | None]:
-    """How a mutant's ST text becomes an executor on the chosen backend, and (built-in only) how one build of the
-    text with every mutation as a switch (mutant schemata) does."""
+    """How a mutant's ST text becomes an executor on the chosen backend, and how one build of the text with every
+    mutation as a switch (mutant schemata) does."""
     if backend == "matiec":
         from transpiler.backends.st.check import find_iec2c
+        from transpiler.exec.compiled.matiec_schema import MatiecSchema
         from transpiler.exec.compiled.matiec_side import matiec_side_factory
         iec2c = find_iec2c()
-        return (lambda text: matiec_side_factory(text, iec, iec2c)), None
+        return ((lambda text: matiec_side_factory(text, iec, iec2c)),
+                (lambda text, mutations: MatiecSchema(text, mutations, iec, iec2c)))
     from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory
     return ((lambda text: builtin_side_factory(text, "project.st")),
             (lambda text, mutations: BuiltinSchema(text, mutations, "project.st")))

@@ -295,7 +295,7 @@ class Verdict:
 class MutantSides(Protocol):
     """Many mutants of the ST text built once (a mutant schema): `factory(number)` makes ST sides of the mutant
     numbered `number` in the judged list (1, 2, ...; 0 the original, PROBE the original recording in each side's
-    `rt.infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
+    `infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
 
     unswitched: frozenset
 
@@ -473,7 +473,7 @@ def _prepare_scenario(judge: Judge, sides: MutantSides | None, original: Callabl
                    base_mp=judge.base_mp, recording=recording, comparison=judge.comparison)
     if not r.equivalent:
         return recording, None, f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}"
-    return recording, frozenset(made[0].rt.infected) if sides is not None else None, None
+    return recording, frozenset(made[0].infected) if sides is not None else None, None
 
 
 def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int) -> Iterator[tuple[int, Any]]:
