@@ -852,7 +852,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     loaded += generated
     from transpiler.backends.report.report import io_map_of
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), base_mp, schema_factory)
+                  st_text, side_factory, compile_program(project.program), base_mp, schema_factory,
+                  isolate=chosen.name == "matiec")
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.
