@@ -29,6 +29,7 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.corners import NC_MODEL_OWNED
+from transpiler.verify.implication import Tied, tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -365,6 +366,68 @@ def _infeasible_reason(decision: Decision, number: int, masking: bool, state: _V
             f"no two evaluations can show it: it is coupled with the other reads of {cond.text} in the chain")
 
 
+def _showable(decision: Decision, number: int, masking: bool, vectors: frozenset[int]) -> bool:
+    """Whether two of `vectors` (the vectors the chain can see) would show condition `number`."""
+    function = decision.function()
+    n = len(decision.conditions)
+    with_outcome = [v | function(v) << n for v in vectors]
+    if masking:
+        return shown_masking(with_outcome, n, number, function)
+    return shown_unique(with_outcome, n, number)
+
+
+def _tied_reason(program: Program, decision: Decision, number: int, masking: bool, state: _Values) -> str:
+    """Why the code before the chain in the same cycle keeps condition `number` from being shown (implication.py),
+    naming the writes the claim rests on; "" where it does not."""
+    def entry(kind: str, addr: int) -> int | None:
+        held = state.of(kind, addr)
+        return next(iter(held)) if len(held) == 1 else None
+
+    tied = tied_vectors(program, decision, entry)
+    if tied is None or not tied.vectors or _showable(decision, number, masking, tied.vectors):
+        return ""
+    # the writes the claim rests on: drop each one the claim holds without
+    absent: set[int] = set()
+    for w in tied.writes:
+        trial = tied_vectors(program, decision, entry, frozenset(absent | {w}), tied.start)
+        if trial is not None and trial.vectors and not _showable(decision, number, masking, trial.vectors):
+            absent.add(w)
+    ops = program.files[decision.file].ops
+    needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
+    facts = _ties(decision, number, tied)
+    cond = decision.conditions[number].text
+    where = (f"set by {', '.join(needed[:4])} before this chain on every path to it" if needed else
+             "the chain's own conditions")
+    return f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'} ({where})"
+
+
+def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
+    """What the chain can see, in words: conditions that are constant there, and pairs of values that never occur
+    together (those with condition `number` first)."""
+    conds = decision.conditions
+    n = len(conds)
+    facts: list[str] = []
+    seen = {(i, b): any(v >> i & 1 == b for v in tied.vectors) for i in range(n) for b in (0, 1)}
+    for i in range(n):
+        for b in (0, 1):
+            if not seen[(i, 1 - b)] and seen[(i, b)] and f"{conds[i].text} is always {b}" not in facts:
+                facts.append(f"{conds[i].text} is always {b}")
+    pairs: list[tuple[int, str]] = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            if conds[i].text == conds[j].text:
+                continue
+            for a in (0, 1):
+                for b in (0, 1):
+                    if seen[(i, a)] and seen[(j, b)] and not any(v >> i & 1 == a and v >> j & 1 == b
+                                                                 for v in tied.vectors):
+                        text = f"{conds[i].text} = {a} only with {conds[j].text} = {1 - b}"
+                        if all(text != t for _, t in pairs):
+                            pairs.append((0 if number in (i, j) else 1, text))
+    facts += [t for _, t in sorted(pairs, key=lambda p: p[0])][:3]
+    return facts
+
+
 # ----------------------------------------------------------------------------------------------------- figures
 
 def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, int]] = frozenset(),
@@ -392,7 +455,8 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
-            reason = _infeasible_reason(decision, number, coupled, state)
+            reason = (_infeasible_reason(decision, number, coupled, state)
+                      or _tied_reason(program, decision, number, coupled, state))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
