@@ -325,7 +325,7 @@ def test_every_recorded_vector_is_one_the_code_before_the_chain_allows(project: 
         machine.run_cycle(cycle, [("I", rng.randrange(16), rng.randrange(2)) for _ in range(4)])
     checked = 0
     for decision in table.decisions:
-        tied = tied_vectors(program, decision, lambda kind, addr: None)
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None)
         if tied is None:
             continue
         checked += 1
@@ -333,3 +333,22 @@ def test_every_recorded_vector_is_one_the_code_before_the_chain_allows(project: 
         recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
         assert recorded <= tied.vectors, decision.text()
     assert checked
+
+
+def test_a_timer_start_read_before_its_only_write_in_the_cycle_is_always_0(tmp_path: Path) -> None:
+    # The service clears a timer start after every cycle (A-34a): read before the program's own `= T0`, T0 is 0,
+    # so it never decides O1. Read after the write in the same cycle it can; so can a start a scenario sets.
+    # Catches: a start taken as constant although a write runs before the read, or although a scenario sets it.
+    before = _program(tmp_path, "L I1\nAN T0\n= O1\nL I2\n= T0\nEM\n")
+    items, _ = _status(before, [_run(before, [{"I1": 1, "I2": 1}, {"I1": 1}])])
+    t0 = items[("T0", "O1", 1)]
+    assert t0.status == "infeasible" and "the service clears after every cycle" in t0.reason, t0
+    items, _ = _status(before, [_run(before, [{"I1": 1, "I2": 1}, {"I1": 1}])], driven={("T", 0)})
+    assert items[("T0", "O1", 1)].status == "missing"
+    after = _program(tmp_path, "L I2\n= T0\nL I1\nAN T0\n= O1\nEM\n")
+    items, _ = _status(after, [_run(after, [{"I1": 1, "I2": 1}, {"I1": 1, "I2": 0}])])
+    assert items[("T0", "O1", 1)].status == "shown"
+    # the write in a subroutine called before the read runs first in the cycle too
+    called = _program(tmp_path, "CM Start\nL I1\nAN T0\n= O1\nEM\nLBL Start\nL I2\n= T0\nEM\n")
+    items, _ = _status(called, [_run(called, [{"I1": 1}])])
+    assert items[("T0", "O1", 1)].status == "missing"

@@ -81,7 +81,7 @@ class _Run:
     followed (`_relevant`): the others read no variables."""
 
     def __init__(self, program: Program, f: int, start: int, consumer: int, reads: set[int],
-                 entry: Callable[[str, int], int | None], skip: frozenset[int] = frozenset()):
+                 entry: Callable[[str, int, int, int], int | None], skip: frozenset[int] = frozenset()):
         self.program = program
         self.f = f
         self.start = start
@@ -112,7 +112,7 @@ class _Run:
     def at_start(self, key: Key) -> int:
         found = self.entries.get(key)
         if found is None:
-            fixed = self.entry(*key)
+            fixed = self.entry(key[0], key[1], self.f, self.start)
             found = self.fresh() if fixed is None else (_ALL if fixed else 0)
             self.entries[key] = found
         return found
@@ -323,11 +323,11 @@ def region_starts(program: Program, f: int, first: int, consumer: int) -> list[i
     return starts
 
 
-def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int], int | None],
+def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
                  skip: frozenset[int] = frozenset(), start: int | None = None) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
-    fit MAX_VARS; `entry(kind, addr)`: the operand's value at any region start where the program fixes it, else
-    None. None where no region covers all its conditions (or the decision is not reached in it)."""
+    fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
+    the program fixes it there, else None. None where no region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -361,7 +361,7 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
 
 
 def _attempt(program: Program, f: int, starts: list[int], k: int, consumer: int, reads: set[int],
-             entry: Callable[[str, int], int | None], skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
+             entry: Callable[[str, int, int, int], int | None], skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
     if k < 0:
         return None
     run = _Run(program, f, starts[k], consumer, reads, entry, skip)
@@ -379,3 +379,113 @@ def _split(tables: Sequence[int], n: int, mask: int, vector: int, out: set[int])
         return
     _split(tables, n + 1, mask & tables[n], vector | 1 << n, out)
     _split(tables, n + 1, mask & ~tables[n], vector, out)
+
+
+# ------------------------------------------------------------------------------- consumed starts and cycle order
+
+class _Unordered(Exception):
+    """The program's call structure gives no order of its ops within a cycle (recursion, a very long trace)."""
+
+
+_TRACE_LIMIT = 200_000
+_STARTS_WRITTEN = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "POP", "INC", "DEC"})
+
+
+@dataclasses.dataclass(frozen=True)
+class CycleOrder:
+    """The order in which the main program runs its ops in a cycle, calls inlined (`positions`: (file, op) -> its
+    positions), the backward jumps as (target position, jump position), and the ops a submitted job runs (after
+    the main program)."""
+
+    positions: dict[tuple[int, int], list[int]]
+    loops: tuple[tuple[int, int], ...]
+    in_jobs: frozenset[tuple[int, int]]
+
+    def may_precede(self, writer: tuple[int, int], reader: tuple[int, int]) -> bool:
+        """Whether `writer` can run before `reader` in the same cycle (reader run by the main program)."""
+        for pr in self.positions.get(reader, ()):
+            for pw in self.positions.get(writer, ()):
+                if pw < pr or any(pt <= pr and pj >= pw for pt, pj in self.loops):
+                    return True
+        return False
+
+
+def cycle_order(program: Program) -> CycleOrder | None:
+    positions: dict[tuple[int, int], list[int]] = {}
+    loops: list[tuple[int, int]] = []
+    trace: list[tuple[int, int]] = []
+
+    def walk(f: int, start: int, stack: tuple[tuple[int, int], ...]) -> None:
+        if (f, start) in stack:
+            raise _Unordered
+        ops = program.files[f].ops
+        here: dict[int, int] = {}
+        furthest = start
+        for i in range(start, len(ops)):
+            op = ops[i]
+            if len(trace) > _TRACE_LIMIT:
+                raise _Unordered
+            here[i] = len(trace)
+            positions.setdefault((f, i), []).append(len(trace))
+            trace.append((f, i))
+            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+                if op.target > i:
+                    furthest = max(furthest, op.target)
+                else:
+                    loops.append((here.get(op.target, -1), len(trace) - 1))
+            for target in (op.call, *op.case_targets):
+                if target is not None and not target.is_module and target.file >= 0:
+                    walk(target.file, target.index, stack + ((f, start),))
+            if op.code == "EM" and i >= furthest:
+                return
+
+    try:
+        walk(0, 0, ())
+        main_end = len(trace)
+        jobs: set[tuple[int, int]] = set()
+        for f, code in enumerate(program.files):
+            for op in code.ops:
+                if op.code == "SUBM" and op.call is not None and op.call.file >= 0:
+                    walk(op.call.file, op.call.index, ())
+        jobs = set(trace[main_end:])
+    except _Unordered:
+        return None
+    for f_i in jobs:
+        positions[f_i] = [p for p in positions[f_i] if p < main_end]
+    return CycleOrder(positions, tuple(loops), frozenset(jobs))
+
+
+def consumed_start_zero(program: Program, driven: set[tuple[str, int]]) -> Callable[[str, int, int, int], bool]:
+    """Whether a timer or counter start operand still holds 0 at op (file, index): the service consumes every
+    start after the cycle (A-34a, A-36a), power-on memory is 0, no scenario sets it, and no write of it can run
+    before that op in the same cycle (cycle_order); the op is run by the main program, not by a submitted job."""
+    sem = program.semantics
+    profile = sem.profile
+    ranges = []
+    if sem["timer_start_consumed"]:
+        ranges.append(("T", *profile.timer_start))
+    if sem["counter_start_consumed"]:
+        ranges.append(("C", *profile.counter_start))
+    writers: dict[tuple[str, int], list[tuple[int, int]]] = {}
+    free: set[str] = set()
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            o = op.operand
+            if o is None or not o.is_bit or op.code not in _STARTS_WRITTEN:
+                continue
+            if o.indexed:
+                free.add(o.kind)
+                continue
+            for n in range(op.nbits if op.code == "STBITS" else 1):
+                writers.setdefault((o.kind, o.addr + n), []).append((f, i))
+    order = cycle_order(program) if ranges else None
+
+    def zero(kind: str, addr: int, f: int, index: int) -> bool:
+        if order is None or kind in free or (kind, addr) in driven:
+            return False
+        if not any(kind == k and first <= addr <= last for k, first, last in ranges):
+            return False
+        if (f, index) in order.in_jobs or (f, index) not in order.positions:
+            return False
+        return not any(order.may_precede(w, (f, index)) for w in writers.get((kind, addr), ()))
+    return zero
