@@ -16,8 +16,11 @@ Infeasible, and so neither counted as missing nor dropped: a condition whose ope
 the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface
 operand or operand a scenario sets; power-on memory is 0; a write through the index register counts for every operand
 the values the register can hold there reach), a condition the outcome cannot depend on given those
-constants and the coupling of its chain (masked by a constant, or redundant), and a boundary value the word cannot
-hold. Only these reasons are claimed; a condition that is merely hard to reach stays missing."""
+constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
+chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
+a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
+cycle), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+to reach stays missing."""
 
 from __future__ import annotations
 
