@@ -7,7 +7,7 @@ The analysis runs the code of one region symbolically: from a start op to the de
 file, reached only from its start (every jump into it comes from inside it and goes forward; no call, CASE or
 indexed bit write inside it). Every bit operand's value at the start is a free variable (or a constant where the
 program's own logic fixes it, see mcdc.constant_bits, or a consumed timer/counter start no earlier write can have
-set in this cycle, see cycle_start_zero), and so is every value the analysis does not follow (a word compare, LA
+set in this cycle, see consumed_start_zero), and so is every value the analysis does not follow (a word compare, LA
 after a join). Values are truth tables over those variables (a Python int with one bit per assignment), so a
 join of two paths is exact and the values a chain sees are over-approximated only by the free variables: a
 vector not among them can never occur, which is what an infeasible claim needs."""
@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable, Sequence
 
-from transpiler.exec.interp.decisions import Decision
+from transpiler.exec.interp.decisions import KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Op, Program
 
@@ -41,22 +41,13 @@ _GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "X
 _BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
 _READS = frozenset({"LD", "LDN", *_GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
-# Ops that leave LA as it is (as decisions._KEEP); any other op not handled leaves it unknown here.
-_KEEP = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN",
-                   "ADD", "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC", "NOTW", "INC",
-                   "DEC", "INCX", "DECX", "PUSH", "POP", "PSW", "PLW", "PSL", "PSX", "PLX", "SLD", "SCAT", "SST",
-                   "RPLY", "CAN", "NOP"})
-_WORD_WRITERS = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD",
-                           "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC", "NOTW", "PLW",
-                           "RPLY"})
-
 Key = tuple[str, int]
 
 
 @dataclasses.dataclass(frozen=True)
 class Tied:
-    """What the code before a decision allows: the condition `vectors` it can see (bit i = condition i), the ops
-    of its region, and the region's writes of bit operands (file op indices)."""
+    """What the code before a decision allows: the condition `vectors` it can see (bit i = condition i), the op
+    its region starts at, and the region's writes of bit operands it followed (op indices in the file)."""
 
     vectors: frozenset[int]
     start: int
@@ -217,7 +208,7 @@ class _Run:
                 path.frames.append(None)
         elif c == "BCLOSE":
             self.close(i, op, path)
-        elif c not in _KEEP or (self.shared and c in _WORD_WRITERS):
+        elif c not in KEEPS_LA or (self.shared and c in WORD_WRITERS):
             path.la = None
         if c == "LBL":
             path.frames = []
@@ -327,7 +318,8 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
                  skip: frozenset[int] = frozenset(), start: int | None = None) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
-    the program fixes it there, else None. None where no region covers all its conditions (or the decision is not reached in it)."""
+    the program fixes it there, else None. None where no region covers all its conditions (or the decision is not
+    reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -361,7 +353,9 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
 
 
 def _attempt(program: Program, f: int, starts: list[int], k: int, consumer: int, reads: set[int],
-             entry: Callable[[str, int, int, int], int | None], skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
+             entry: Callable[[str, int, int, int], int | None],
+             skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
+    """The run of the region from starts[k], or None where it needs more than MAX_VARS free values."""
     if k < 0:
         return None
     run = _Run(program, f, starts[k], consumer, reads, entry, skip)
