@@ -673,7 +673,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
         result = run_equivalence(project.program, chosen.factory, iomap, loaded, names, chosen.name,
                                  shrink_divergences=shrink, vcd_dir=vcd_dir, progress=progress, base_mp=mp,
                                  untranslated=setup.untranslated,
-                                 pipelined=pipeline.worthwhile())
+                                 pipelined=pipeline.worthwhile(), explain_missing=share.shard is None)
         result.run_ids = tuple(selected)
         page = None
         if html:

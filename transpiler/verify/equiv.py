@@ -289,11 +289,14 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
                     names: NameTable, backend: str, *, shrink_divergences: bool = True, vcd_dir: Path | None = None,
                     progress: Callable[[str, int, int], Callable[[int, int], None]] | None = None,
                     base_mp: Mapping | None = None,
-                    untranslated: tuple[tuple[Span, str], ...] = (), pipelined: bool = False) -> EquivalenceResult:
+                    untranslated: tuple[tuple[Span, str], ...] = (), pipelined: bool = False,
+                    explain_missing: bool = True) -> EquivalenceResult:
     """Co-simulate every scenario; shrink each divergent stimulus. Raises CompileFailed on bad scenario input.
     `base_mp` are the machine parameters the translation was made with, `pipelined` runs the reference in a process
     of its own where it can (see cosim.cosimulate). `progress(run name, cycles of the runs before, cycles of all
-    runs)` gives the cycle counter of one run."""
+    runs)` gives the cycle counter of one run. Without `explain_missing` (a shard's share of the runs, whose
+    coverage the merge computes again over all of them), a condition no run showed is not analysed for a reason
+    it cannot be shown: it is only missing here."""
     outcomes: list[Outcome] = []
     coverage_sets: list = []
     reference = compile_program(program, coverage=True, exact=False)      # fast code, exact coverage
@@ -316,18 +319,18 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
     driven = driven_operands(scenarios, names)
-    summary, source, decisions = coverage_of(program, coverage_sets, driven)
+    summary, source, decisions = coverage_of(program, coverage_sets, driven, explain_missing)
     return EquivalenceResult(outcomes, backend, summary, tuple(untranslated), source, decisions,
                              driven=frozenset(driven))
 
 
-def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]]
+def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]], explain_missing: bool = True
                 ) -> tuple[dict[str, Any], SourceCoverage, DecisionCoverage]:
     """The coverage summary, the per-file coverage and MC/DC with boundary values over the runs' coverage sets
     (`driven`: the operands the runs' scenarios set, never constant): one process's runs, or the runs of every
     shard (merge_reports), computed alike."""
     ops = op_coverage(program, sets)
-    decisions = decision_coverage(program, sets, driven)
+    decisions = decision_coverage(program, sets, driven, explain_missing=explain_missing)
     return ({**summarize_coverage(ops), **decisions.summary()}, source_coverage(program, ops, len(sets)),
             decisions)
 

@@ -466,8 +466,9 @@ def _never_together(decision: Decision, number: int, tied: Tied) -> list[str]:
 # ----------------------------------------------------------------------------------------------------- figures
 
 def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, int]] = frozenset(),
-                      table: DecisionTable | None = None) -> DecisionCoverage:
-    """MC/DC and boundaries over the runs' coverage sets (machine.Coverage); `driven`: operands the scenarios set."""
+                      table: DecisionTable | None = None, explain_missing: bool = True) -> DecisionCoverage:
+    """MC/DC and boundaries over the runs' coverage sets (machine.Coverage); `driven`: operands the scenarios set.
+    Without `explain_missing`, a condition no run showed is missing without the search for why it cannot be."""
     table = table or decision_table(program)
     vectors: dict[tuple[int, int], set[int]] = {}
     bounds: dict[tuple[int, int], set[int]] = {}
@@ -488,6 +489,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                      shown_unique(recorded, n, number))
             if shown:
                 conditions.append(ConditionItem(decision, number, coupled, "shown"))
+                continue
+            if not explain_missing:
+                conditions.append(ConditionItem(decision, number, coupled, "missing"))
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
