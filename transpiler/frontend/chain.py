@@ -44,6 +44,17 @@ class _Step(NamedTuple):
     is_str: bool
 
 
+class _Shape(NamedTuple):
+    """What a pure instruction group made of one (mnemonic, operand kind, chain state): the op's code and
+    fields besides the instruction's own, and the chain state after it."""
+
+    code: str
+    rel: str
+    nbits: int
+    chain_open: bool
+    last_acc: str
+
+
 class ChainLowering:
     """Lowers the instructions of one file; jumps and calls are queued in `pending_jumps`/`pending_calls` for linking."""
 
@@ -57,9 +68,18 @@ class ChainLowering:
         self.brackets: list[BracketFrame] = []
         self._groups = (self._load_store, self._logic_word, self._bracket_stack, self._control, self._extended)
         self._group_of: dict[str, Callable[[_Step], Lowered | None]] = {}    # mnemonic -> the group that took it
+        # The groups whose answer depends only on the mnemonic, the operand's kind and the chain state (no
+        # diagnostics, no queued jumps or brackets): their op shape is kept per such key and reused (_Shape).
+        self._pure_groups = (self._load_store, self._logic_word, self._extended)
+        self._shapes: dict[tuple[str, str | None, bool, str], _Shape] = {}
 
     def lower(self, instr: ast.Instr, operand: Operand | None, index: int, chain_open: bool, last_acc: str) -> Lowered:
         m = instr.mnemonic
+        shape_key = (m, operand.kind if operand is not None else None, chain_open, last_acc)
+        shape = self._shapes.get(shape_key)
+        if shape is not None:
+            return (Op(shape.code, m, instr.span, operand, instr.comments, rel=shape.rel, nbits=shape.nbits,
+                       chain_open=chain_open), shape.chain_open, shape.last_acc)
         base = dict(mnemonic=m, span=instr.span, operand=operand, comments=instr.comments, chain_open=chain_open)
         is_bit = operand is not None and operand.is_bit
         is_str = operand is not None and operand.kind in ("S", "STR")
@@ -70,14 +90,20 @@ class ChainLowering:
         if known is not None:
             lowered = known(step)
             if lowered is not None:
-                return lowered
+                return self._keep_shape(known, shape_key, lowered)
         for group in self._groups:
             lowered = group(step)
             if lowered is not None:
                 self._group_of[m] = group
-                return lowered
+                return self._keep_shape(group, shape_key, lowered)
         self.diags.report("E-UNSUPPORTED", instr.span, f"{m} is not supported")
         return None, chain_open, last_acc
+
+    def _keep_shape(self, group: Callable[[_Step], Lowered | None], key: tuple, lowered: Lowered) -> Lowered:
+        op, chain_open, last_acc = lowered
+        if op is not None and group in self._pure_groups:
+            self._shapes[key] = _Shape(op.code, op.rel, op.nbits, chain_open, last_acc)
+        return lowered
 
     def report_unclosed(self) -> None:
         for frame in self.brackets:
