@@ -134,7 +134,7 @@ class OperandMixin(ExecutorPart):
                 lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
             else:
                 # (the places written of an operand without index are fixed: neither the value nor X moves them)
-                lv = lambda k=k: E.var(first[k][0], "BYTE")
+                lv = lambda place=E.var(first[k][0], "BYTE"): place
             rv = lambda k=k: layout.write_value(o, self._xi(o), value())[k][1]
             self.store(lv, rv, frozenset(["WA", "X", "LA", "SA"]))
 

@@ -118,7 +118,9 @@ class StackMixin(ExecutorPart):
         if self.static is None:
             return
         expected = self.static.interface.stack_at.get(index)
-        if expected is not None and tuple(k for k, _ in self.s.stack) != expected:
+        stack = self.s.stack
+        if expected is not None and (len(stack) != len(expected)
+                                     or any(kind != want for (kind, _), want in zip(stack, expected))):
             self.s.stack = [(k, E.var(self.static.slot(d, k), SLOT_TYPES[k])) for d, k in enumerate(expected)]
 
     def flush_stack(self) -> None:
