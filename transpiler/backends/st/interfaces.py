@@ -132,7 +132,13 @@ class StackAnalysis:
         for key, effect in self.effects.items():
             walk = self._walks[key]
             u = len(effect.params)
-            stack_at = {i: tuple(self._kind(walk, x) for x in _lift(s, u)) for i, s in walk.states.items()}
+            kinds: dict[tuple[int, tuple], tuple[str, ...]] = {}     # (most ops of a routine share one state)
+            stack_at = {}
+            for i, s in walk.states.items():
+                known = kinds.get(s)
+                if known is None:
+                    known = kinds[s] = tuple(self._kind(walk, x) for x in _lift(s, u))
+                stack_at[i] = known
             self.interfaces[key] = StackInterface(
                 tuple(zip(self._param_names(key, u), reversed(effect.params))),
                 tuple(zip(self._result_names(key, effect), effect.results)), MappingProxyType(stack_at))

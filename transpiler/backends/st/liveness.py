@@ -16,6 +16,9 @@ _WA_DEF = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "W
 _SA_USE = frozenset({"SCAT", "SST", "SCMP"})
 _SA_DEF = frozenset({"SLD", "SCAT"})
 SA_CODES = _SA_USE | _SA_DEF        # the only ops that read or write the string accumulator
+_ENDS = frozenset({"EM", "EMT", "EMF"})
+# The ops whose successors are not just the next op, or that enter routines (flow.successors, routines_entered).
+_BRANCHES = frozenset({"EM", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE"})
 
 
 def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
@@ -95,8 +98,11 @@ class Liveness:
             if known is None:
                 known = self._use_def[facts] = use_def(op)
             use, d = known
-            out.append((i, use, d, successors(ops, i), tuple(c.key for c in routines_entered(op)),
-                        op.code in ("EM", "EMT", "EMF")))
+            code = op.code
+            # (successors and routines_entered, for the ops that neither jump nor call: most of them)
+            plain = code not in _BRANCHES
+            out.append((i, use, d, [i + 1] if plain else successors(ops, i),
+                        () if plain else tuple(c.key for c in routines_entered(op)), code in _ENDS))
         return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:

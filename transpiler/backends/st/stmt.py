@@ -12,7 +12,7 @@ import dataclasses
 from typing import Iterator, Union
 
 from transpiler.backends.st.exprs import Expr
-from transpiler.records import quick_init
+from transpiler.records import quick_init, replaced
 
 
 @quick_init
@@ -127,12 +127,12 @@ def blocks(stmt: Stmt) -> tuple[tuple[Stmt, ...], ...]:
 def with_blocks(stmt: Stmt, new: list[tuple[Stmt, ...]]) -> Stmt:
     """`stmt` with its nested blocks replaced by `new`, given in the order of `blocks(stmt)`."""
     if isinstance(stmt, If):
-        return dataclasses.replace(stmt, then=new[0], orelse=new[1])
+        return replaced(stmt, then=new[0], orelse=new[1])
     if isinstance(stmt, Case):
-        branches = tuple(dataclasses.replace(b, body=body) for b, body in zip(stmt.branches, new))
-        return dataclasses.replace(stmt, branches=branches, orelse=new[-1])
+        branches = tuple(replaced(b, body=body) for b, body in zip(stmt.branches, new))
+        return replaced(stmt, branches=branches, orelse=new[-1])
     if isinstance(stmt, (While, Repeat)):
-        return dataclasses.replace(stmt, body=new[0])
+        return replaced(stmt, body=new[0])
     return stmt
 
 
