@@ -152,13 +152,20 @@ class Liveness:
         for _ in range(len(body) + 2):
             changed = False
             for i, use, d, succ, callees, ends in steps:
+                # (the same sets as `use | callees' entry sets | (successors' sets - d)`, without making a new set
+                # for each empty operand: most are empty)
                 out = exit_live if ends else empty
                 for s in succ:
-                    out = out | live.get(s, empty)
-                extra = empty
+                    after = live.get(s, empty)
+                    if after:
+                        out = out | after if out else after
+                value = out - d if out and d else out
                 for callee in callees:
-                    extra = extra | entry_use.get(callee, empty)
-                value = use | extra | (out - d)
+                    entry = entry_use.get(callee, empty)
+                    if entry:
+                        value = value | entry
+                if use:
+                    value = use | value if value else use
                 if value != live[i]:
                     live[i] = value
                     changed = True

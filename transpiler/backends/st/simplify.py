@@ -115,9 +115,10 @@ def _leaves_or_calls(stmt: S.Stmt) -> bool:
 
 
 def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
-    if isinstance(stmt, S.Assign) and E.unqualified(stmt.target).upper() in registers and stmt.note is None:
-        return E.unqualified(stmt.target).upper()
-    return None
+    if type(stmt) is not S.Assign or stmt.note is not None:
+        return None
+    name = E.unqualified(stmt.target).upper()
+    return name if name in registers else None
 
 
 def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
