@@ -697,10 +697,9 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
     used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
-    for u in sorted(used - local):
-        if u in globals_by_upper:
-            var, area = globals_by_upper[u]
-            by_area.setdefault(area, []).append(IecVar(var.name, var.type))
+    for u in sorted(u for u in used - local if u in globals_by_upper):    # (the same order; fewer names to sort)
+        var, area = globals_by_upper[u]
+        by_area.setdefault(area, []).append(IecVar(var.name, var.type))
     if not by_area:
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)

@@ -74,7 +74,7 @@ def names_of(e: Expr) -> frozenset[str]:
         found = text_names(e.text)
     else:
         found = frozenset(names_in(e.text))
-    object.__setattr__(e, "names", found)     # (a memo of a fact of the text, which never changes)
+    e.__dict__["names"] = found     # (a memo of a fact of the text, which never changes; frozen: set past __setattr__)
     return found
 
 

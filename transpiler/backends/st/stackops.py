@@ -115,12 +115,14 @@ class StackMixin(ExecutorPart):
     def sync_stack(self, index: int) -> None:
         """Before op `index`: after a path that ended (RETURN, EXIT) the entries are those of the other paths, which
         left every entry in the variable of its depth."""
-        if self.static is None:
+        static = self.static
+        if static is None:
             return
-        expected = self.static.interface.stack_at.get(index)
+        expected = static.interface.stack_at.get(index)
+        if expected is None:
+            return
         stack = self.s.stack
-        if expected is not None and (len(stack) != len(expected)
-                                     or any(kind != want for (kind, _), want in zip(stack, expected))):
+        if len(stack) != len(expected) or any(kind != want for (kind, _), want in zip(stack, expected)):
             self.s.stack = [(k, E.var(self.static.slot(d, k), SLOT_TYPES[k])) for d, k in enumerate(expected)]
 
     def flush_stack(self) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from typing import Iterable
 
 import jinja2
 
@@ -46,6 +47,19 @@ def declaration(var: IecVar) -> str:
     return f"{var.name}{located} : {var.type}{initial};{trailing_comment(var.comment)}"
 
 
+def var_sections(sections: Iterable[VarSection], indent: str) -> str:
+    """The variable sections, each as located_blocks splits it: its header line with the section's comment, one
+    declaration line per variable, END_VAR; every line ends with a line break. (A filter, not template loops:
+    tens of thousands of declarations print several times faster so.)"""
+    lines = []
+    for section in sections:
+        for block in located_blocks(section):
+            lines.append(f"{indent}{section_header(block)}{trailing_comment(block.comment)}\n")
+            lines.extend(f"{indent}    {declaration(var)}\n" for var in block.vars)
+            lines.append(f"{indent}END_VAR\n")
+    return "".join(lines)
+
+
 def section_header(section: VarSection) -> str:
     if section.constant and section.retain:
         raise ValueError(f"a {section.kind} section cannot be both CONSTANT and RETAIN")
@@ -80,6 +94,7 @@ def _environment() -> jinja2.Environment:
         section_header=section_header,
         located_blocks=located_blocks,
         declaration=declaration,
+        var_sections=var_sections,
     ))
 
 
