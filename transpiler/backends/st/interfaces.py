@@ -30,6 +30,8 @@ _PULL = MappingProxyType({"PLW": VAL, "PLL": BIT, "PLX": VAL})
 _CALLS = ("CALL", "CALLT", "CALLF")
 _JOBS = ("SUBM", "RPLY", "CAN")
 MAIN = (0, 0)
+# The op codes _step looks at; every other op leaves the stack state as it is.
+_STACK_CODES = frozenset({"PUSH", "POP", "CASE", *_PUSH, *_PULL, *_CALLS})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -225,7 +227,8 @@ class StackAnalysis:
                 state = self._call(walk, state, self._by_file[entry.file][i], op, conditional=False)
                 exits.append((i, state))
                 continue
-            state = self._step(walk, state, op)
+            if op.code in _STACK_CODES:
+                state = self._step(walk, state, op)
             if op.code in ("EM", "EMT", "EMF"):
                 exits.append((i, state))
                 if op.code == "EM":

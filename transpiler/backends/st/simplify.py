@@ -35,7 +35,9 @@ def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]
 def _block(block: Block, registers: frozenset[str]) -> Block:
     out: list[S.Stmt] = []
     for stmt in _without_dead_stores(block, registers):
-        stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in S.blocks(stmt)])
+        inner_blocks = S.blocks(stmt)
+        if inner_blocks:
+            stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in inner_blocks])
         if isinstance(stmt, S.If):
             if not S.has_code(stmt.then) and not S.has_code(stmt.orelse):
                 out.extend(stmt.then + stmt.orelse)
