@@ -359,7 +359,8 @@ class StBackend:
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
                              self._kfield, self._stack_names, self._module_call, self.semantics, accessors.pick,
                              self.job_plan.routine(key, lambda: self._queue_access(temps)), instance)
-        other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
+        in_body = set(body)
+        other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in in_body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
         self.current_key = key

@@ -17,6 +17,7 @@ _SA_USE = frozenset({"SCAT", "SST", "SCMP"})
 _SA_DEF = frozenset({"SLD", "SCAT"})
 SA_CODES = _SA_USE | _SA_DEF        # the only ops that read or write the string accumulator
 _ENDS = frozenset({"EM", "EMT", "EMF"})
+_ALL_REGS = frozenset(REGS)
 # The ops whose successors are not just the next op, or that enter routines (flow.successors, routines_entered).
 _BRANCHES = frozenset({"EM", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE"})
 
@@ -174,7 +175,8 @@ class Liveness:
         return live
 
     def at(self, routine: tuple[int, int], index: int) -> frozenset[str]:
-        return self.live_in.get(routine, {}).get(index, frozenset(REGS))
+        live = self.live_in.get(routine)
+        return _ALL_REGS if live is None else live.get(index, _ALL_REGS)
 
     def exit(self, routine: tuple[int, int]) -> frozenset[str]:
         return self.exit_live.get(routine, frozenset(REGS))

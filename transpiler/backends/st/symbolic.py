@@ -28,6 +28,8 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
         self.index = 0
         # A routine with a static stack depth starts with its parameters on the symbolic stack (see stackops).
         self.static = static
+        # (the depth recorded at each op, looked up before every op: sync_stack)
+        self.stack_at = static.interface.stack_at if static is not None else None
         if static is not None:
             self.s.stack = static.initial()
 
