@@ -476,3 +476,43 @@ def test_atomic_write_rolls_back_when_a_replace_fails(tmp_path: Path, monkeypatc
     assert str(tmp_path / "a.st") in calls and str(tmp_path / "b.xml") in calls
     assert _snapshot(tmp_path) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.st", "b.xml"]
+
+
+AWKWARD = [NASTY, "", "tab\tcr\rlf\nquote\" apostrophe' amp& lt< gt>", "plain", "\u00e9\u20ac\U0001F600 ]]>"]
+
+
+def _both_trees(texts: list[str]):
+    """The same document built as an xmltree and as an lxml tree: elements with attributes, text (empty
+    included), no text, children, and a child of a foreign namespace that declares its own prefix."""
+    from transpiler.backends.plcopen import xmltree
+    from transpiler.backends.plcopen.writer import xml_safe
+    ours = xmltree.Element("project", xmltree.attribute_text([("xmlns", NS["p"]), ("xmlns:xhtml", NS["x"])]))
+    theirs = etree.Element(f"{{{NS['p']}}}project", nsmap={None: NS["p"], "xhtml": NS["x"]})
+    for k, raw in enumerate(texts):
+        text = xml_safe(raw)
+        attributes = [("name", text), ("n", str(k))]
+        mine = ours.sub("item", xmltree.attribute_text(attributes))
+        lx = etree.SubElement(theirs, f"{{{NS['p']}}}item", dict(attributes))
+        mine.sub("xhtml:p").text = text
+        etree.SubElement(lx, f"{{{NS['x']}}}p").text = text
+        mine.sub("empty")
+        etree.SubElement(lx, f"{{{NS['p']}}}empty")
+        mapped = mine.sub("hh:sourceMap", xmltree.attribute_text([("xmlns:hh", NS["hh"])]))
+        mapped.sub("hh:range").set("file", text)
+        lmapped = etree.SubElement(lx, f"{{{NS['hh']}}}sourceMap", nsmap={"hh": NS["hh"]})
+        etree.SubElement(lmapped, f"{{{NS['hh']}}}range").set("file", text)
+    return xmltree.to_bytes(ours), etree.tostring(theirs, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+
+
+def test_xmltree_prints_what_lxml_prints_for_the_same_tree():
+    ours, theirs = _both_trees(AWKWARD)
+    assert ours == theirs
+    assert b"&amp;" in ours and b"&#13;" in ours and b"<empty/>" in ours     # the awkward cases were written
+
+
+def test_render_xml_reads_back_and_prints_the_same(epoch):
+    """The writer's text of a rich project is what lxml prints for the tree it reads back from that text."""
+    xml = render_xml(rich_project())
+    root = etree.fromstring(xml)
+    etree.indent(root, space="  ")
+    assert etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8") == xml

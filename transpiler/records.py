@@ -6,7 +6,8 @@ records per line (span, instruction, operand, op) and spent a quarter of its tim
 `quick_init` gives such a class an `__init__` that stores the fields the way `object.__setattr__` ends up doing
 (through the slot descriptors, or into the instance dict), with the same signature and defaults. The class stays
 frozen: assigning a field afterwards still raises FrozenInstanceError; equality, hashing, ordering, repr and
-`dataclasses.replace` are the dataclass's own.
+`dataclasses.replace` are the dataclass's own. A `__post_init__` is called after the fields are stored, as the
+dataclass's own `__init__` calls it.
 """
 
 from __future__ import annotations
@@ -18,11 +19,9 @@ T = TypeVar("T")
 
 
 def quick_init(cls: type[T]) -> type[T]:
-    """Replace the generated `__init__` of the frozen dataclass `cls` (plain defaults only, no __post_init__)."""
+    """Replace the generated `__init__` of the frozen dataclass `cls` (plain defaults only, no init-only fields)."""
     if not dataclasses.is_dataclass(cls) or not cls.__dataclass_params__.frozen:
         raise TypeError(f"{cls.__name__} is not a frozen dataclass")
-    if hasattr(cls, "__post_init__"):
-        raise TypeError(f"{cls.__name__} has a __post_init__")
     fields = dataclasses.fields(cls)
     params, stores = [], []
     namespace: dict[str, object] = {}
@@ -39,11 +38,27 @@ def quick_init(cls: type[T]) -> type[T]:
             namespace[f"_store_{f.name}"] = cls.__dict__[f.name].__set__
             stores.append(f"    _store_{f.name}(self, {f.name})")
     if not slotted:
-        stores = ["    self.__dict__.update(" + ", ".join(f"{f.name}={f.name}" for f in fields) + ")"]
+        # (one store per field into the instance dict: faster than building keyword arguments for dict.update)
+        stores = ["    _stored = self.__dict__"] + [f"    _stored[{f.name!r}] = {f.name}" for f in fields]
+    if hasattr(cls, "__post_init__"):
+        stores.append("    self.__post_init__()")
     source = f"def __init__(self, {', '.join(params)}):\n" + "\n".join(stores or ["    pass"]) + "\n"
     exec(source, namespace)     # noqa: S102 - the text is built above from the field names only
     init = namespace["__init__"]
+    cls._quick_fields = tuple(f.name for f in fields)
     init.__qualname__ = f"{cls.__qualname__}.__init__"
     init.__doc__ = cls.__init__.__doc__
     cls.__init__ = init
     return cls
+
+
+def replaced(record: T, **changes: object) -> T:
+    """`dataclasses.replace` for a record of a `quick_init` class: the same new record, built without looking the
+    fields up again (replace costs several times the constructor; the front end and the back ends use it for
+    every patched jump, call and nested block)."""
+    cls = type(record)
+    names = cls._quick_fields
+    for name in changes:
+        if name not in names:
+            raise TypeError(f"{cls.__name__} has no field {name}")
+    return cls(*[changes[name] if name in changes else getattr(record, name) for name in names])

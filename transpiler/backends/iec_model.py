@@ -119,7 +119,8 @@ def st_comment(text: str) -> str:
     """An ST comment that is safe whatever `text` contains (no nested or closing comment markers)."""
     safe = text.replace("(*", "( *").replace("*)", "* )")
     # Control characters other than tab would upset some importers; show them as '?'.
-    safe = safe.translate(_CONTROL_AS_QUESTION_MARK)
+    if not (safe.isascii() and safe.isprintable()):     # (printable ASCII, nearly every comment, holds none)
+        safe = safe.translate(_CONTROL_AS_QUESTION_MARK)
     return f"(* {safe} *)"
 
 

@@ -22,6 +22,8 @@ def template_environment(folder: str, filters: Mapping[str, Callable]) -> jinja2
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
+        # (a template included once per POU would otherwise be checked on disk for changes at every include)
+        auto_reload=False,
     )
     env.filters.update(filters)
     return env

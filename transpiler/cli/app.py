@@ -6,7 +6,6 @@ import argparse
 import json
 import os
 import sys
-from importlib import metadata
 from typing import Sequence
 
 from transpiler import __version__, api
@@ -25,7 +24,7 @@ SUBCOMMAND_MODULES = (transpile, simulate, equiv, mutate, merge)
 
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(prog="hh2iec", description="HEIDENHAIN TNC PLC to IEC 61131-3 transpiler")
-    parser.add_argument("--version", action="version", version=f"hh2iec {version()}")
+    parser.add_argument("--version", action=_VersionAction, nargs=0, help="show program's version number and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check", help="preprocess, parse and resolve a project; print a summary")
     add_project_arguments(check)
@@ -78,8 +77,17 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_BAD_INPUT if result.diagnostics.has_errors() else EXIT_OK
 
 
+class _VersionAction(argparse.Action):
+    """`--version`: looks the version up only when asked (importlib.metadata costs ~25 ms of every start-up)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"hh2iec {version()}")     # (stdout, as argparse's own version action prints it)
+        parser.exit()
+
+
 def version() -> str:
     """The installed distribution's version; a checkout that was never installed has only the package's own."""
+    from importlib import metadata
     try:
         return metadata.version("hh2iec")
     except metadata.PackageNotFoundError:

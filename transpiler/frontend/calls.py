@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend.flow import routine_body
 from transpiler.frontend.lowering import FileLowering
 from transpiler.frontend.symbols import folded_key
 from transpiler.ir import CallTarget, FileCode
 from transpiler.language.semantics import Semantics
+from transpiler.records import replaced
 
 _Key = tuple[int, int]                                  # (file index, op index) of a routine entry
 _Edges = dict[_Key, list[tuple[CallTarget, Span]]]      # callee and the span of the call
@@ -81,13 +80,13 @@ def link(low: FileLowering, lowerings: list[FileLowering], exports: dict[str, Ca
     for index, name, span in low.pending_calls:
         t = target(name, span)
         if t is not None:
-            low.ops[index] = dataclasses.replace(low.ops[index], call=t)
+            low.ops[index] = replaced(low.ops[index], call=t)
     case_targets: dict[int, list[CallTarget]] = {}
     for index, entry, name, span in low.pending_case:          # entries arrive in table order
         t = target(name, span)
         case_targets.setdefault(index, []).append(t if t is not None else CallTarget(label=name))
     for index, targets in case_targets.items():
-        low.ops[index] = dataclasses.replace(low.ops[index], case_targets=tuple(targets))
+        low.ops[index] = replaced(low.ops[index], case_targets=tuple(targets))
     for name, extern in low.externs.items():
         # an EXTERN that nothing calls still names a label no module exports (spec: E-SYM-UNRESOLVED)
         if name not in reported and name not in low.labels and spelled(name, exports) not in exports:
@@ -95,7 +94,7 @@ def link(low: FileLowering, lowerings: list[FileLowering], exports: dict[str, Ca
     for index, name, span in low.pending_jumps:
         name = spelled(name, low.labels)
         if name in low.labels:
-            low.ops[index] = dataclasses.replace(low.ops[index], target=low.labels[name])
+            low.ops[index] = replaced(low.ops[index], target=low.labels[name])
         elif name not in low.src.broken_labels:
             elsewhere = [o.src.path for o in lowerings if name in o.labels]
             where = f"; it is in {elsewhere[0]} (jumps stay inside a file, A-31)" if elsewhere else ""

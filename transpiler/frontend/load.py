@@ -203,7 +203,9 @@ class _Loader:
                 return
             parsed = self.parsers.src.parse_file(text.display, self._preprocess(text), len(text.lines), self.diags)
             out.append(parsed)
-            stack.append((path, parsed.path, iter(parsed.statements)))
+            # (only these two statements matter here: the walk below skips the rest of the file at once)
+            wanted = [s for s in parsed.statements if type(s) is ast.DefineFile or type(s) is ast.Uses]
+            stack.append((path, parsed.path, iter(wanted)))
 
         enter(main, NO_SPAN)
         while stack:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
 from transpiler.frontend.chain import ChainLowering
@@ -14,6 +12,7 @@ from transpiler.frontend.symbols import SymTables
 from transpiler.ir import Op, Operand
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.semantics import Semantics
+from transpiler.records import replaced
 
 
 class FileLowering:
@@ -110,7 +109,10 @@ class FileLowering:
         index = len(self.ops)
         m = instr.mnemonic
         info = MNEMONICS[m]
-        if not self._admitted(instr):
+        # (_admitted has nothing to say about a plain instruction outside CASE tables and brackets: most of them)
+        plain = (not info.extended and m != "=N" and self.case_open is None
+                 and (not self.chain.brackets or m not in CONTROL))
+        if not plain and not self._admitted(instr):
             return
         if self.case_open is not None and m == "CM":
             self._case_entry(instr)
@@ -183,7 +185,7 @@ class FileLowering:
     def _finish(self) -> None:
         """Attach the CASE entry notes; report what is still open at the end of the file."""
         for case_index, notes in self.case_entries.items():
-            self.ops[case_index] = dataclasses.replace(self.ops[case_index], case_notes=tuple(notes))
+            self.ops[case_index] = replaced(self.ops[case_index], case_notes=tuple(notes))
         self.chain.report_unclosed()
         self.structure.report_unclosed()
         if self.case_open is not None:

@@ -17,6 +17,7 @@ DefineValue = Union[int, str]
 
 _PP_LINE = re.compile(r"^\s*(#if|#ifdef|#ifndef|#else|#endif|DEFINE)(?![A-Za-z0-9_])", re.IGNORECASE)
 _MAY_HOLD_DASH = re.compile("[\u2013\x96\xe2]")     # what _normalise_dashes looks for (its first characters)
+_DIRECTIVE_STARTS = frozenset("#dD")       # the first characters _PP_LINE can match after blanks
 _INCLUDE_LINE = re.compile(r'^\s*(?:INCLUDE|#include)\s+"?([^";\s]+)"?\s*$', re.IGNORECASE)
 
 
@@ -212,8 +213,10 @@ class Preprocessor:
         pp_line, append = _PP_LINE.match, out.append
         for index, raw in enumerate(lines):
             lineno = index + 1
-            text = _normalise_dashes(raw) if _MAY_HOLD_DASH.search(raw) else raw
-            directive = pp_line(text)
+            # (the dashes looked for are not ASCII, and a directive starts with '#' or 'D': most lines skip both scans)
+            text = _normalise_dashes(raw) if not raw.isascii() and _MAY_HOLD_DASH.search(raw) else raw
+            stripped = text.lstrip()
+            directive = pp_line(text) if stripped[:1] in _DIRECTIVE_STARTS else None
             if directive:
                 handled, active = self._directive(display, lineno, text, directive.group(1).lower(), stack, active)
                 if handled:
@@ -222,7 +225,6 @@ class Preprocessor:
                 continue
             # The common line: code and an optional comment, no '*' comment, no INCLUDE, no string before a ';'
             # (_code_line handles every other line, and this one in the same way).
-            stripped = text.lstrip()
             if not stripped:
                 continue
             first = stripped[0]

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.opcodes import CONTROL, MAX_NESTING, STRUCT_OPEN
 from transpiler.ir import Op
 from transpiler.language.semantics import Semantics
+from transpiler.records import replaced
 
 
 class StructureMatcher:
@@ -86,4 +85,4 @@ class StructureMatcher:
         return start
 
     def _patch(self, index: int, target: int) -> None:
-        self.ops[index] = dataclasses.replace(self.ops[index], target=target)
+        self.ops[index] = replaced(self.ops[index], target=target)

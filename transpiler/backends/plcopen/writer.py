@@ -1,4 +1,6 @@
-"""Format an IecProject as PLCopen TC6 XML v2.01 (lxml): same POUs, types and ST bodies as the ST container.
+"""Format an IecProject as PLCopen TC6 XML v2.01: same POUs, types and ST bodies as the ST container.
+
+The tree is built with xmltree (printed as lxml would print it, faster to build); lxml reads the files back.
 
 Text is carried as escaped character data, never CDATA (Beremiz rewrites CDATA, targets.md §4.2).
 XML 1.0 cannot carry most control characters (U+0000-U+001F except tab, LF and CR), lone
@@ -14,10 +16,9 @@ import os
 import re
 from datetime import datetime, timezone
 
-from lxml import etree
-
 from transpiler.backends.iec_model import DataType, IecProject, IecVar, Pou, VarSection
 from transpiler.backends.st.dialect import TargetProject
+from transpiler.backends.plcopen.xmltree import Element, attribute_text, to_bytes
 from transpiler.backends.st.writer import check_formattable
 
 NS = "http://www.plcopen.org/xml/tc6_0201"
@@ -57,21 +58,22 @@ def _q(tag: str) -> str:
     return f"{{{NS}}}{tag}"
 
 
-def _sub(parent: etree._Element, tag: str, **attributes: str) -> etree._Element:
-    # (the attributes go in with the element: one call into lxml per element, not one per attribute)
-    return etree.SubElement(parent, _q(tag), {key: xml_safe(value) for key, value in attributes.items()}
-                            if attributes else None)
+def _sub(parent: Element, tag: str, **attributes: str) -> Element:
+    """A new element of the TC6 namespace (the root's default namespace: no prefix)."""
+    child = Element(tag, attribute_text([(key, xml_safe(value)) for key, value in attributes.items()])
+                    if attributes else "")
+    parent.children.append(child)
+    return child
 
 
-def _formatted_text(parent: etree._Element, tag: str, text: str) -> etree._Element:
+def _formatted_text(parent: Element, tag: str, text: str) -> Element:
     """A formattedText element: exactly one xhtml:p holding the escaped text."""
     element = _sub(parent, tag)
-    paragraph = etree.SubElement(element, f"{{{XHTML}}}p")
-    paragraph.text = xml_safe(text)
+    element.sub("xhtml:p").text = xml_safe(text)
     return element
 
 
-def _documentation(parent: etree._Element, text: str | None) -> None:
+def _documentation(parent: Element, text: str | None) -> None:
     if text:
         _formatted_text(parent, "documentation", text)
 
@@ -119,7 +121,7 @@ def _assignment(text: str) -> tuple[str, str] | None:
     return None
 
 
-def _value(parent: etree._Element, tag: str, literal: str, **attributes: str) -> None:
+def _value(parent: Element, tag: str, literal: str, **attributes: str) -> None:
     """An element of type ppx:value for an ST initial value: arrayValue, structValue or simpleValue."""
     element = _sub(parent, tag, **attributes)
     text = literal.strip()
@@ -149,7 +151,7 @@ def _value(parent: etree._Element, tag: str, literal: str, **attributes: str) ->
 # --- types, variables, POUs -----------------------------------------------------------------
 
 
-def _type_ref(parent: etree._Element, tag: str, type_name: str) -> None:
+def _type_ref(parent: Element, tag: str, type_name: str) -> None:
     holder = _sub(parent, tag)
     elementary = _ELEMENTARY.get(type_name.upper())
     if elementary is not None:
@@ -158,7 +160,7 @@ def _type_ref(parent: etree._Element, tag: str, type_name: str) -> None:
         _sub(holder, "derived", name=type_name)
 
 
-def _variable(parent: etree._Element, var: IecVar) -> None:
+def _variable(parent: Element, var: IecVar) -> None:
     attributes = {"name": var.name}
     if var.address:
         attributes["address"] = var.address
@@ -169,7 +171,7 @@ def _variable(parent: etree._Element, var: IecVar) -> None:
     _documentation(element, var.comment)
 
 
-def _var_list(parent: etree._Element, section: VarSection, tag: str | None = None) -> None:
+def _var_list(parent: Element, section: VarSection, tag: str | None = None) -> None:
     attributes = {}
     if section.constant:
         attributes["constant"] = "true"
@@ -181,7 +183,7 @@ def _var_list(parent: etree._Element, section: VarSection, tag: str | None = Non
     _documentation(element, section.comment)
 
 
-def _data_type(parent: etree._Element, data_type: DataType) -> None:
+def _data_type(parent: Element, data_type: DataType) -> None:
     element = _sub(parent, "dataType", name=data_type.name)
     base = _sub(element, "baseType")
     if data_type.kind == "array":
@@ -196,19 +198,18 @@ def _data_type(parent: etree._Element, data_type: DataType) -> None:
     _documentation(element, data_type.comment)
 
 
-def _source_map(parent: etree._Element, pou: Pou) -> None:
+def _source_map(parent: Element, pou: Pou) -> None:
     if not pou.source_map:
         return
     data = _sub(_sub(parent, "addData"), "data", name=SOURCEMAP_DATA_NAME, handleUnknown="discard")
-    source_map = etree.SubElement(data, f"{{{SOURCEMAP_NS}}}sourceMap", nsmap={"hh": SOURCEMAP_NS})
+    source_map = data.sub("hh:sourceMap", attribute_text((("xmlns:hh", SOURCEMAP_NS),)))
     for source_range in pou.source_map:
-        entry = etree.SubElement(source_map, f"{{{SOURCEMAP_NS}}}range")
-        entry.set("file", xml_safe(source_range.file))
-        entry.set("first", str(source_range.first_line))
-        entry.set("last", str(source_range.last_line))
+        source_map.sub("hh:range", attribute_text((("file", xml_safe(source_range.file)),
+                                                   ("first", str(source_range.first_line)),
+                                                   ("last", str(source_range.last_line)))))
 
 
-def _pou(parent: etree._Element, pou: Pou) -> None:
+def _pou(parent: Element, pou: Pou) -> None:
     element = _sub(parent, "pou", name=pou.name, pouType=_POU_TYPE[pou.kind])
     interface = _sub(element, "interface")
     if pou.return_type:
@@ -220,7 +221,7 @@ def _pou(parent: etree._Element, pou: Pou) -> None:
     _documentation(element, pou.comment)
 
 
-def _instances(parent: etree._Element, project: IecProject, configuration: bool) -> None:
+def _instances(parent: Element, project: IecProject, configuration: bool) -> None:
     conf = project.configuration
     task_names = {task.name for task in conf.tasks}
     for instance in conf.instances:
@@ -280,7 +281,7 @@ def build_time(creation: datetime | None = None) -> datetime:
     return creation
 
 
-def _headers(root: etree._Element, project: IecProject, stamp: str) -> None:
+def _headers(root: Element, project: IecProject, stamp: str) -> None:
     _sub(root, "fileHeader", companyName=COMPANY_NAME, productName=PRODUCT_NAME,
          productVersion=_product_version(), creationDateTime=stamp)
     content = _sub(root, "contentHeader", name=project.name, modificationDateTime=stamp)
@@ -298,8 +299,12 @@ def render_xml(project: IecProject, creation: datetime | None = None, *, configu
     `configuration` the file has an empty `configurations` element (no task, no program instance).
     Raises ValueError for model shapes that cannot be written (st_writer.check_formattable).
     """
+    return to_bytes(_project_tree(project, creation, configuration))
+
+
+def _project_tree(project: IecProject, creation: datetime | None, configuration: bool) -> Element:
     check_formattable(project)
-    root = etree.Element(_q("project"), nsmap={None: NS, "xhtml": XHTML})
+    root = Element("project", attribute_text((("xmlns", NS), ("xmlns:xhtml", XHTML))))
     _headers(root, project, creation_stamp(creation))
     types = _sub(root, "types")
     data_types = _sub(types, "dataTypes")
@@ -309,7 +314,7 @@ def render_xml(project: IecProject, creation: datetime | None = None, *, configu
     for pou in project.pous:
         _pou(pous, pou)
     _instances(root, project, configuration)
-    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+    return root
 
 
 def render_target_xml(target: TargetProject, creation: datetime | None = None) -> bytes:
@@ -322,7 +327,7 @@ def render_target_xml(target: TargetProject, creation: datetime | None = None) -
     addData. The task is described to the user instead (task_setup.py)."""
     if target.dialect.xml_globals == "configuration":
         return render_xml(target.project, creation)
-    root = etree.fromstring(render_xml(target.project, creation, configuration=False))
+    root = _project_tree(target.project, creation, configuration=False)
     add_data = _sub(root, "addData")
     for gvl in target.gvls:
         # One data element per list: a TC6 data element holds exactly one child.
@@ -340,12 +345,12 @@ def render_target_xml(target: TargetProject, creation: datetime | None = None) -
             attributes = _sub(_sub(_sub(element, "addData"), "data", name=ATTRIBUTES_DATA_NAME,
                                    handleUnknown="implementation"), "Attributes")
             _sub(attributes, "Attribute", Name="qualified_only", Value="")
-    etree.indent(root, space="  ")
-    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+    return to_bytes(root)
 
 
 def extract_st_bodies(xml: bytes) -> dict[str, str]:
     """Map each POU name to the text of its `<ST><xhtml:p>` body (for the one-translation equality check)."""
+    from lxml import etree
     root = etree.fromstring(xml, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True))
     bodies: dict[str, str] = {}
     for pou in root.iterfind(f"{_q('types')}/{_q('pous')}/{_q('pou')}"):

@@ -359,7 +359,8 @@ class StBackend:
         ctx = RoutineContext(self.layout, emitter, live_after, self._register, self.helpers_used.add, temp,
                              self._kfield, self._stack_names, self._module_call, self.semantics, accessors.pick,
                              self.job_plan.routine(key, lambda: self._queue_access(temps)), instance)
-        other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in body}
+        in_body = set(body)
+        other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in in_body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
                            self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
         self.current_key = key
@@ -697,10 +698,9 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
     used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
-    for u in sorted(used - local):
-        if u in globals_by_upper:
-            var, area = globals_by_upper[u]
-            by_area.setdefault(area, []).append(IecVar(var.name, var.type))
+    for u in sorted(u for u in used - local if u in globals_by_upper):    # (the same order; fewer names to sort)
+        var, area = globals_by_upper[u]
+        by_area.setdefault(area, []).append(IecVar(var.name, var.type))
     if not by_area:
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)

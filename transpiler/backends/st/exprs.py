@@ -7,6 +7,7 @@ import re
 from types import MappingProxyType
 
 from transpiler.backends.st.dialect import GVL_NAMES
+from transpiler.records import quick_init
 
 INT32 = (-(2 ** 31), 2 ** 31 - 1)
 RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)})
@@ -15,6 +16,7 @@ RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": 
 PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_EQ, PREC_AND, PREC_XOR, PREC_OR = 10, 9, 8, 7, 6, 5, 4, 3, 2
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Expr:
     """ST text of a value, its IEC type, the variables it reads, and (for integers) its value range.
@@ -72,7 +74,7 @@ def names_of(e: Expr) -> frozenset[str]:
         found = text_names(e.text)
     else:
         found = frozenset(names_in(e.text))
-    object.__setattr__(e, "names", found)     # (a memo of a fact of the text, which never changes)
+    e.__dict__["names"] = found     # (a memo of a fact of the text, which never changes; frozen: set past __setattr__)
     return found
 
 

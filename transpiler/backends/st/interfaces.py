@@ -30,6 +30,8 @@ _PULL = MappingProxyType({"PLW": VAL, "PLL": BIT, "PLX": VAL})
 _CALLS = ("CALL", "CALLT", "CALLF")
 _JOBS = ("SUBM", "RPLY", "CAN")
 MAIN = (0, 0)
+# The op codes _step looks at; every other op leaves the stack state as it is.
+_STACK_CODES = frozenset({"PUSH", "POP", "CASE", *_PUSH, *_PULL, *_CALLS})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,7 +134,13 @@ class StackAnalysis:
         for key, effect in self.effects.items():
             walk = self._walks[key]
             u = len(effect.params)
-            stack_at = {i: tuple(self._kind(walk, x) for x in _lift(s, u)) for i, s in walk.states.items()}
+            kinds: dict[tuple[int, tuple], tuple[str, ...]] = {}     # (most ops of a routine share one state)
+            stack_at = {}
+            for i, s in walk.states.items():
+                known = kinds.get(s)
+                if known is None:
+                    known = kinds[s] = tuple(self._kind(walk, x) for x in _lift(s, u))
+                stack_at[i] = known
             self.interfaces[key] = StackInterface(
                 tuple(zip(self._param_names(key, u), reversed(effect.params))),
                 tuple(zip(self._result_names(key, effect), effect.results)), MappingProxyType(stack_at))
@@ -219,7 +227,8 @@ class StackAnalysis:
                 state = self._call(walk, state, self._by_file[entry.file][i], op, conditional=False)
                 exits.append((i, state))
                 continue
-            state = self._step(walk, state, op)
+            if op.code in _STACK_CODES:
+                state = self._step(walk, state, op)
             if op.code in ("EM", "EMT", "EMF"):
                 exits.append((i, state))
                 if op.code == "EM":

@@ -16,6 +16,10 @@ _WA_DEF = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "W
 _SA_USE = frozenset({"SCAT", "SST", "SCMP"})
 _SA_DEF = frozenset({"SLD", "SCAT"})
 SA_CODES = _SA_USE | _SA_DEF        # the only ops that read or write the string accumulator
+_ENDS = frozenset({"EM", "EMT", "EMF"})
+_ALL_REGS = frozenset(REGS)
+# The ops whose successors are not just the next op, or that enter routines (flow.successors, routines_entered).
+_BRANCHES = frozenset({"EM", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE"})
 
 
 def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
@@ -95,8 +99,11 @@ class Liveness:
             if known is None:
                 known = self._use_def[facts] = use_def(op)
             use, d = known
-            out.append((i, use, d, successors(ops, i), tuple(c.key for c in routines_entered(op)),
-                        op.code in ("EM", "EMT", "EMF")))
+            code = op.code
+            # (successors and routines_entered, for the ops that neither jump nor call: most of them)
+            plain = code not in _BRANCHES
+            out.append((i, use, d, [i + 1] if plain else successors(ops, i),
+                        () if plain else tuple(c.key for c in routines_entered(op)), code in _ENDS))
         return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
@@ -146,13 +153,20 @@ class Liveness:
         for _ in range(len(body) + 2):
             changed = False
             for i, use, d, succ, callees, ends in steps:
+                # (the same sets as `use | callees' entry sets | (successors' sets - d)`, without making a new set
+                # for each empty operand: most are empty)
                 out = exit_live if ends else empty
                 for s in succ:
-                    out = out | live.get(s, empty)
-                extra = empty
+                    after = live.get(s, empty)
+                    if after:
+                        out = out | after if out else after
+                value = out - d if out and d else out
                 for callee in callees:
-                    extra = extra | entry_use.get(callee, empty)
-                value = use | extra | (out - d)
+                    entry = entry_use.get(callee, empty)
+                    if entry:
+                        value = value | entry
+                if use:
+                    value = use | value if value else use
                 if value != live[i]:
                     live[i] = value
                     changed = True
@@ -161,7 +175,8 @@ class Liveness:
         return live
 
     def at(self, routine: tuple[int, int], index: int) -> frozenset[str]:
-        return self.live_in.get(routine, {}).get(index, frozenset(REGS))
+        live = self.live_in.get(routine)
+        return _ALL_REGS if live is None else live.get(index, _ALL_REGS)
 
     def exit(self, routine: tuple[int, int]) -> frozenset[str]:
         return self.exit_live.get(routine, frozenset(REGS))

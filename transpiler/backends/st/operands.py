@@ -121,7 +121,8 @@ class OperandMixin(ExecutorPart):
     def _store_value(self, o: Operand, value: Callable[[], Expr]) -> None:
         """Store a DINT value into a B/W/D operand (one assignment, or one per byte in the byte array)."""
         layout = self.ctx.layout
-        count = len(layout.write_value(o, self._xi(o), value()))
+        first = layout.write_value(o, self._xi(o), value())
+        count = len(first)
         if count > 1:
             self.pin_index(o)
         if count > 1 and not value().simple:
@@ -129,7 +130,11 @@ class OperandMixin(ExecutorPart):
             v = self._stable(value())
             value = lambda v=v: v
         for k in range(count):
-            lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
+            if o.indexed:
+                lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
+            else:
+                # (the places written of an operand without index are fixed: neither the value nor X moves them)
+                lv = lambda place=E.var(first[k][0], "BYTE"): place
             rv = lambda k=k: layout.write_value(o, self._xi(o), value())[k][1]
             self.store(lv, rv, frozenset(["WA", "X", "LA", "SA"]))
 

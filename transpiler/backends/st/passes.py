@@ -153,27 +153,30 @@ def _reads_first(stmt: S.Stmt, word: re.Pattern[str], value: E.Expr) -> bool:
 def _propagate_one(root: list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
     """The tree with the first temporary (in printed order) that qualifies propagated, and its name; None when
     no temporary does."""
-    def visit(block: tuple[S.Stmt, ...] | list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
-        for i, stmt in enumerate(block):
-            if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
-                word = _word(stmt.target)
-                j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
-                if j is not None and _uses(root, word, stmt.target) == 2 \
-                        and not _uses(root, _bit_read(stmt.target), stmt.target) \
-                        and _reads_first(block[j], word, stmt.value):
-                    new = list(block)
-                    new[j] = _Substitution(word, stmt.value).in_statement(block[j])
-                    del new[i]
-                    return new, stmt.target
-            inner = list(S.blocks(stmt))
-            for k, nested in enumerate(inner):
-                found = visit(nested)
-                if found is not None:
-                    inner[k] = tuple(found[0])
-                    return [*block[:i], S.with_blocks(stmt, inner), *block[i + 1:]], found[1]
-        return None
+    return _propagate_in(root, root)
 
-    return visit(root)
+
+def _propagate_in(root: list[S.Stmt], block: tuple[S.Stmt, ...] | list[S.Stmt]) -> tuple[list[S.Stmt], str] | None:
+    """_propagate_one within `block`, a block of `root`. (A function of its own, not a closure: a closure that calls
+    itself is a reference cycle, which kept each POU's statements alive until the process exited.)"""
+    for i, stmt in enumerate(block):
+        if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
+            word = _word(stmt.target)
+            j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
+            if j is not None and _uses(root, word, stmt.target) == 2 \
+                    and not _uses(root, _bit_read(stmt.target), stmt.target) \
+                    and _reads_first(block[j], word, stmt.value):
+                new = list(block)
+                new[j] = _Substitution(word, stmt.value).in_statement(block[j])
+                del new[i]
+                return new, stmt.target
+        inner = list(S.blocks(stmt))
+        for k, nested in enumerate(inner):
+            found = _propagate_in(root, nested)
+            if found is not None:
+                inner[k] = tuple(found[0])
+                return [*block[:i], S.with_blocks(stmt, inner), *block[i + 1:]], found[1]
+    return None
 
 
 def propagate_temporaries(pou: Pou) -> Pou:

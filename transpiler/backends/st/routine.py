@@ -58,8 +58,9 @@ class Emitter:
         self.pending_comments.append(text)
 
     def flush_comments(self) -> None:
-        self.block.extend(S.Comment(text) for text in self.pending_comments)
-        self.pending_comments = []
+        if self.pending_comments:
+            self.block.extend(S.Comment(text) for text in self.pending_comments)
+            self.pending_comments = []
 
     def add(self, stmt: S.Stmt) -> None:
         self._forget_changed(stmt)

@@ -35,7 +35,9 @@ def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]
 def _block(block: Block, registers: frozenset[str]) -> Block:
     out: list[S.Stmt] = []
     for stmt in _without_dead_stores(block, registers):
-        stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in S.blocks(stmt)])
+        inner_blocks = S.blocks(stmt)
+        if inner_blocks:
+            stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in inner_blocks])
         if isinstance(stmt, S.If):
             if not S.has_code(stmt.then) and not S.has_code(stmt.orelse):
                 out.extend(stmt.then + stmt.orelse)
@@ -115,9 +117,10 @@ def _leaves_or_calls(stmt: S.Stmt) -> bool:
 
 
 def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
-    if isinstance(stmt, S.Assign) and E.unqualified(stmt.target).upper() in registers and stmt.note is None:
-        return E.unqualified(stmt.target).upper()
-    return None
+    if type(stmt) is not S.Assign or stmt.note is not None:
+        return None
+    name = E.unqualified(stmt.target).upper()
+    return name if name in registers else None
 
 
 def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:

@@ -9,7 +9,7 @@ passes the entries it pulls as inputs and pushes its outputs.
 from __future__ import annotations
 
 import dataclasses
-from typing import Callable
+from typing import Callable, Mapping
 
 from transpiler.ir import Op
 from transpiler.backends.st import exprs as E
@@ -63,6 +63,7 @@ class StackMixin(ExecutorPart):
         out.add(S.Assign(sp, E.binop("+", pointer, E.int_const(2, "INT"), "INT", E.PREC_ADD)))
 
     static: StaticStack | None = None
+    stack_at: Mapping[int, tuple[str, ...]] | None = None     # static.interface.stack_at
 
     def _pop(self, kind: str) -> Expr:
         if self.s.stack and self.s.stack[-1][0] == kind:
@@ -115,10 +116,14 @@ class StackMixin(ExecutorPart):
     def sync_stack(self, index: int) -> None:
         """Before op `index`: after a path that ended (RETURN, EXIT) the entries are those of the other paths, which
         left every entry in the variable of its depth."""
-        if self.static is None:
+        stack_at = self.stack_at
+        if stack_at is None:
             return
-        expected = self.static.interface.stack_at.get(index)
-        if expected is not None and tuple(k for k, _ in self.s.stack) != expected:
+        expected = stack_at.get(index)
+        if expected is None:
+            return
+        stack = self.s.stack
+        if len(stack) != len(expected) or any(kind != want for (kind, _), want in zip(stack, expected)):
             self.s.stack = [(k, E.var(self.static.slot(d, k), SLOT_TYPES[k])) for d, k in enumerate(expected)]
 
     def flush_stack(self) -> None:

@@ -12,8 +12,10 @@ import dataclasses
 from typing import Iterator, Union
 
 from transpiler.backends.st.exprs import Expr
+from transpiler.records import quick_init, replaced
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Comment:
     """A comment on a line of its own: a source comment, a label, an explanation."""
@@ -22,6 +24,7 @@ class Comment:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Assign:
     target: str                         # lvalue text: a variable, an array element or a member
@@ -29,6 +32,7 @@ class Assign:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Call:
     """A call statement of an FB instance (or a function whose result is not used) with named inputs."""
@@ -38,16 +42,19 @@ class Call:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Return:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Exit:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class If:
     """IF/ELSE; `inline` asks for one line (a single short statement in `then`, no ELSE)."""
@@ -59,6 +66,7 @@ class If:
     inline: bool = False
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class CaseBranch:
     labels: tuple[int, ...]
@@ -66,6 +74,7 @@ class CaseBranch:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Case:
     selector: Expr
@@ -74,6 +83,7 @@ class Case:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class While:
     cond: Expr
@@ -81,6 +91,7 @@ class While:
     note: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Repeat:
     body: tuple[Stmt, ...]
@@ -101,28 +112,27 @@ def has_code(block: tuple[Stmt, ...] | list[Stmt]) -> bool:
     return any(is_code(s) for s in block)
 
 
-def blocks(stmt: Stmt) -> Iterator[tuple[Stmt, ...]]:
+def blocks(stmt: Stmt) -> tuple[tuple[Stmt, ...], ...]:
     """The statement lists nested directly in `stmt`."""
-    if isinstance(stmt, If):
-        yield stmt.then
-        yield stmt.orelse
-    elif isinstance(stmt, Case):
-        for branch in stmt.branches:
-            yield branch.body
-        yield stmt.orelse
-    elif isinstance(stmt, (While, Repeat)):
-        yield stmt.body
+    kind = type(stmt)
+    if kind is If:
+        return (stmt.then, stmt.orelse)
+    if kind is Case:
+        return (*(branch.body for branch in stmt.branches), stmt.orelse)
+    if kind is While or kind is Repeat:
+        return (stmt.body,)
+    return ()
 
 
 def with_blocks(stmt: Stmt, new: list[tuple[Stmt, ...]]) -> Stmt:
     """`stmt` with its nested blocks replaced by `new`, given in the order of `blocks(stmt)`."""
     if isinstance(stmt, If):
-        return dataclasses.replace(stmt, then=new[0], orelse=new[1])
+        return replaced(stmt, then=new[0], orelse=new[1])
     if isinstance(stmt, Case):
-        branches = tuple(dataclasses.replace(b, body=body) for b, body in zip(stmt.branches, new))
-        return dataclasses.replace(stmt, branches=branches, orelse=new[-1])
+        branches = tuple(replaced(b, body=body) for b, body in zip(stmt.branches, new))
+        return replaced(stmt, branches=branches, orelse=new[-1])
     if isinstance(stmt, (While, Repeat)):
-        return dataclasses.replace(stmt, body=new[0])
+        return replaced(stmt, body=new[0])
     return stmt
 
 
@@ -130,5 +140,9 @@ def walk(block: tuple[Stmt, ...] | list[Stmt]) -> Iterator[Stmt]:
     """Every statement of `block`, nested ones included, in textual order."""
     for stmt in block:
         yield stmt
-        for inner in blocks(stmt):
-            yield from walk(inner)
+        if type(stmt) in _NESTING:
+            for inner in blocks(stmt):
+                yield from walk(inner)
+
+
+_NESTING = frozenset({If, Case, While, Repeat})

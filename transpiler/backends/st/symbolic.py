@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+from typing import Callable, Mapping
+
 from transpiler.ir import Op
 from transpiler.backends.st.arith import ArithmeticMixin
 from transpiler.backends.st.inflight import InFlightMixin
@@ -25,6 +28,8 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
         self.index = 0
         # A routine with a static stack depth starts with its parameters on the symbolic stack (see stackops).
         self.static = static
+        # (the depth recorded at each op, looked up before every op: sync_stack)
+        self.stack_at = static.interface.stack_at if static is not None else None
         if static is not None:
             self.s.stack = static.initial()
 
@@ -33,11 +38,11 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
         self.sync_stack(index)
         for text in op.comments:
             self.ctx.out.comment(text)
-        handler = getattr(self, "op_" + op.code, None)
+        handler = HANDLERS.get(op.code)
         if handler is None:
             raise Unsupported(f"{op.mnemonic} ({op.code})", op.span)
         try:
-            handler(op)
+            handler(self, op)
         except Unsupported as exc:
             exc.span = exc.span or op.span
             raise
@@ -47,3 +52,8 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
 
     op_NOP = op_LBL
     op_KFIELD = op_LBL
+
+
+# The handler of each op code (`op_<code>`), looked up once instead of through the mixins on every op.
+HANDLERS: Mapping[str, Callable[[Executor, Op], None]] = MappingProxyType(
+    {name[3:]: getattr(Executor, name) for name in dir(Executor) if name.startswith("op_")})

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from typing import Iterable
 
 import jinja2
 
@@ -35,6 +36,28 @@ def trailing_comment(text: str | None) -> str:
 def indent_body(body: str) -> str:
     """Indent every non-empty line by BODY_INDENT; extract_pou_bodies undoes exactly this."""
     return "\n".join(BODY_INDENT + line if line else "" for line in body.split("\n"))
+
+
+def declaration(var: IecVar) -> str:
+    """One declaration line without its indent: `name [AT address] : type [:= initial];` and its comment.
+    (A filter, not a template macro: a project declares tens of thousands of variables, and a macro call costs
+    several times the line's text.)"""
+    located = f" AT {var.address}" if var.address else ""
+    initial = f" := {var.initial}" if var.initial is not None else ""
+    return f"{var.name}{located} : {var.type}{initial};{trailing_comment(var.comment)}"
+
+
+def var_sections(sections: Iterable[VarSection], indent: str) -> str:
+    """The variable sections, each as located_blocks splits it: its header line with the section's comment, one
+    declaration line per variable, END_VAR; every line ends with a line break. (A filter, not template loops:
+    tens of thousands of declarations print several times faster so.)"""
+    lines = []
+    for section in sections:
+        for block in located_blocks(section):
+            lines.append(f"{indent}{section_header(block)}{trailing_comment(block.comment)}\n")
+            lines.extend(f"{indent}    {declaration(var)}\n" for var in block.vars)
+            lines.append(f"{indent}END_VAR\n")
+    return "".join(lines)
 
 
 def section_header(section: VarSection) -> str:
@@ -70,6 +93,8 @@ def _environment() -> jinja2.Environment:
         indent_body=indent_body,
         section_header=section_header,
         located_blocks=located_blocks,
+        declaration=declaration,
+        var_sections=var_sections,
     ))
 
 

@@ -8,7 +8,6 @@ sections, which every XML reader joins back into the same text.
 from __future__ import annotations
 
 from pathlib import PurePosixPath
-from xml.sax.saxutils import escape
 
 from transpiler.backends.plcopen.writer import xml_safe
 from transpiler.backends.templating import template_environment
@@ -30,7 +29,8 @@ def cdata(text: str | None) -> str:
 
 def attr(text: str) -> str:
     """`text` escaped for a double-quoted attribute or element text."""
-    return escape(xml_safe(str(text)), {'"': "&quot;"})
+    # (xml.sax.saxutils.escape with '"' added does the same; importing it loads urllib and http, ~15 ms a run)
+    return xml_safe(str(text)).replace("&", "&amp;").replace(">", "&gt;").replace("<", "&lt;").replace('"', "&quot;")
 
 
 def winpath(path: PurePosixPath) -> str:
