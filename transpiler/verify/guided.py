@@ -43,7 +43,8 @@ SEARCH_MAX = 120_000
 STALE_LIMIT = 400           # candidates in a row without anything new: the search stops
 FILLER_ATTEMPTS = 8
 FILLER_KINDS = 4            # healthy or not, clean or dirty memory at power-on
-FILLER_MIN = 200            # shortest filler run when the rest of the budget is split
+POWER_ON_TRIES = 64         # power-on memories drawn where the original faults at once from clean memory
+FILLER_MIN = 150            # shortest filler run when the rest of the budget is split
 CHILD_CYCLES = 1000         # longest candidate run
 VALUE_SHARE = 0.25          # share of the budget for runs kept for value-profile features alone
 # Features a run may bring that rank below branches, CASE entries and marker states: the value profile, compare
@@ -232,7 +233,10 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
             draw = rng.random()
             if corners.inputs and draw < 0.3:
                 initial[rng.choice(corners.inputs)] = rng.randrange(2)
-            elif corners.remanent_words and draw < 0.8:
+            elif draw >= 0.9:
+                # all of it at once, as an earlier run may have left it (words at byte patterns or corners)
+                initial.update(corners.power_on(rng))
+            elif corners.remanent_words and draw < 0.7:
                 name, kind = rng.choice(corners.remanent_words)
                 initial[name] = corners.word_value(rng, kind)
             elif corners.remanent_markers:
@@ -258,7 +262,8 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
     normally-closed contacts made, or all 0), NC jobs with corner values every 20-200 cycles, and a foreign word or
     marker set to a corner value with each job. `dirty`: the memory the program writes starts as remanent memory
     left by an earlier run would (the markers at these values, some words at corners), so that a store that only
-    ever writes the power-on value still shows whether it happens."""
+    ever writes the power-on value still shows whether it happens: the markers at these values, every word at a
+    byte pattern or a corner value (Corners.power_on)."""
     events: list[Event] = []
     cycle = rng.randrange(2, 20)
     while cycle < cycles:
@@ -271,15 +276,36 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
         cycle += rng.randrange(20, 200)
     initial: dict[str, Any] = {n: 1 for n in corners.inputs} if healthy else {}
     if dirty is not None:
+        initial.update(corners.power_on(rng))
         initial.update(dirty)
-        initial.update((word, corners.word_value(rng, kind)) for word, kind in corners.remanent_words
-                       if rng.random() < 0.3)
     inputs = list(corners.inputs)
     scenario = Scenario(name=name, cycles=cycles, profile=program.semantics.profile.name,
                         machine_parameters=machine_parameters, initial=initial, events=events,
                         random=RandomStimulus(seed=rng.randrange(1 << 30), inputs=inputs,
                                               toggle_probability=0.01 if healthy else 0.05) if inputs else None)
     return bind(scenario, names)
+
+
+def _starting(search: Search, scenario: Scenario, make, runs: list[Scenario], corners: Corners,
+              rng: random.Random) -> Scenario:
+    """`scenario`, or where the original faults in its first cycle with it (a table index or a divisor read from
+    memory at power-on), `make(memory)` with the power-on memory of one of `runs` that got further, else with memory
+    drawn afresh (Corners.power_on), the first that gets through its first cycle (`scenario` when none does)."""
+    if _gets_going(search, scenario):
+        return scenario
+    memories = [{name: value for name, value in run.initial.items() if name not in corners.inputs} for run in runs]
+    memories += [corners.power_on(rng) for _ in range(POWER_ON_TRIES)]
+    for memory in memories:
+        candidate = make(memory)
+        if _gets_going(search, candidate):
+            return candidate
+    return scenario
+
+
+def _gets_going(search: Search, scenario: Scenario) -> bool:
+    # one cycle is enough to tell (and costs one interpreter cycle)
+    probe = search.probe(_cut(scenario, 1, search.names))
+    return probe is not None and probe.cycles_ok > 0
 
 
 def _cut(scenario: Scenario, cycles: int, names: NameTable) -> Scenario:
@@ -314,8 +340,11 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     # Without scenarios of the user, the corpus starts from corner-random runs (kept only where they add).
     if not corpus:
         for n, healthy in enumerate((True, False)):
-            corpus.append(corner_random(program, corners, names, min(budget, 400), rng, f"corner_seed{seed}_{n}",
-                                        machine_parameters, healthy))
+            def make(memory, n=n, healthy=healthy):
+                return corner_random(program, corners, names, min(budget, 400), rng, f"corner_seed{seed}_{n}",
+                                     machine_parameters, healthy, memory)
+            corpus.append(_starting(search, make(None), make, [], corners, rng))
+    search.interpreter_cycles = 0
     serial = 0
     stale = 0
     spent_on_values = 0
@@ -347,13 +376,17 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
     while spent < budget and attempt < FILLER_ATTEMPTS:
         # healthy and not, from clean and from dirty memory: the four kinds share what is left of the budget (a
-        # share too short to matter goes to the one running now)
+        # share too short to matter goes to the one running now); clean and dirty alternate, so that a short rest
+        # still has runs from both
         share = (budget - spent) // max(1, FILLER_KINDS - attempt)
         cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
-        filler = corner_random(program, corners, names, cycles, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
-                               machine_parameters, healthy=attempt % 2 == 0,
-                               dirty=None if attempt % 4 < 2 else dirty if attempt % 4 == 2 else
-                               {marker: 1 - value for marker, value in dirty.items()})
+        def make(memory, cycles=cycles, attempt=attempt):
+            return corner_random(program, corners, names, cycles, rng,
+                                 f"random_seed{seed}" + (f"_{attempt}" if attempt else ""), machine_parameters,
+                                 healthy=attempt % 4 < 2, dirty=memory)
+        filler = _starting(search, make(None if attempt % 2 == 0 else dirty if attempt % 4 == 1 else
+                                        {marker: 1 - value for marker, value in dirty.items()}),
+                           make, [*kept, *corpus], corners, rng)
         attempt += 1
         probe = search.probe(filler)
         if probe is None or probe.cycles_ok == 0:
