@@ -289,13 +289,14 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
 def _starting(search: Search, scenario: Scenario, make, runs: list[Scenario], corners: Corners,
               rng: random.Random) -> Scenario:
     """`scenario`, or where the original faults in its first cycle with it (a table index or a divisor read from
-    memory at power-on), `make(memory)` with the power-on memory of one of `runs` that got further, else with memory
-    drawn afresh (Corners.power_on), the first that gets through its first cycle (`scenario` when none does)."""
+    memory at power-on), `make(memory)` with memory drawn afresh (Corners.power_on), else with the power-on memory
+    of one of `runs`, the first that gets through its first cycle (`scenario` when none does)."""
     if _gets_going(search, scenario):
         return scenario
-    memories = [{name: value for name, value in run.initial.items() if name not in corners.inputs} for run in runs]
-    memories += [corners.power_on(rng) for _ in range(POWER_ON_TRIES)]
-    for memory in memories:
+    # fresh draws first (each run then starts from other memory), the memories of runs that got going after them
+    for attempt in range(POWER_ON_TRIES + len(runs)):
+        memory = corners.power_on(rng) if attempt < POWER_ON_TRIES else \
+            {name: value for name, value in runs[attempt - POWER_ON_TRIES].initial.items() if name not in corners.inputs}
         candidate = make(memory)
         if _gets_going(search, candidate):
             return candidate
