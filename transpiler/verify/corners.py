@@ -33,7 +33,8 @@ class Corners:
     """What the stimulus draws from: the program's constants and the operands it may drive."""
 
     constants: tuple[int, ...]                    # every K value and KFIELD entry of the program
-    tables: tuple[int, ...]                       # the KFIELD entries (decoded numbers such as M codes)
+    tables: tuple[int, ...]                       # KFIELD entries and numbers compared with an NC word (decoded
+                                                  # numbers such as M codes)
     values: tuple[int, ...]                       # c-1, c, c+1 of every constant, plus the range edges
     inputs: tuple[str, ...]                       # display names of the inputs the program reads
     foreign_words: tuple[tuple[str, str], ...]    # (name, kind) of B/W/D read, never written, not the NC model's
@@ -150,7 +151,11 @@ def harvest(program: Program, names: NameTable) -> Corners:
     used = used | indexed_read | indexed_written
     written = written | indexed_written
     # a constant compared with a byte or word counts at that width too (K$FF against a byte is -1)
-    constants |= {const for _, const in _compares(program)[0]}
+    compared = _compares(program)[0]
+    constants |= {const for _, const in compared}
+    # a number compared with a word of the NC interface (the M code, a tool number) is one the program decodes, as
+    # the entries of a table are: NC jobs draw from these
+    tables |= {const for word, const in compared if (word.kind, word.addr) in NC_MODEL_OWNED and const >= 0}
     values = {c + d for c in constants for d in (-1, 0, 1)} | set(_EDGES)
     profile = program.semantics.profile
 

@@ -106,8 +106,9 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     logic is then not folded into one expression per run, each condition is read into a local of its own.
 
     `value_profile` (with coverage) also marks each pair of values a bit gate combines, each zero or non-zero
-    divisor and each entry of a constant table read (see value_slots): a stimulus search counts those as features of their own, since a mutated gate
-    differs from the original only there. The exact re-run of a cycle does not mark them."""
+    divisor and each entry of a constant table read (see value_slots): a stimulus search counts those as features
+    of their own, since a mutated gate, divisor or index differs from the original only there. The exact re-run of
+    a cycle does not mark them."""
     if exact is None:
         exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
