@@ -301,6 +301,35 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
     return bind(scenario, names)
 
 
+def _fill(search: Search, runner, budget: int, kept: list[Scenario], corpus: list[Scenario], seed: int,
+          rng: random.Random) -> list[Scenario]:
+    """Corner-random runs (`runner`) for what is left of the budget: healthy and not, from clean and from dirty
+    memory. The four kinds share `budget` (a share too short to matter goes to the one running now); clean and dirty
+    alternate, so that a short rest still has runs from both. `kept` and `corpus`: the search's runs, whose power-on
+    memory a filler that faults at once may start from."""
+    corners = search.corners
+    filled: list[Scenario] = []
+    spent = 0
+    attempt = 0
+    # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
+    dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
+    while spent < budget and attempt < FILLER_ATTEMPTS:
+        share = (budget - spent) // max(1, FILLER_KINDS - attempt)
+        cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
+        make = runner(cycles, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""), attempt % 4 < 2)
+        memory = None if attempt % 2 == 0 else dirty if attempt % 4 == 1 else \
+            {marker: 1 - value for marker, value in dirty.items()}
+        filler = _starting(search, make(memory), make, [*kept, *filled, *corpus], corners, rng)
+        attempt += 1
+        probe = search.probe(filler)
+        if probe is None or probe.cycles_ok == 0:
+            continue
+        search.keep(probe, probe.cycles_ok)
+        filled.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, search.names))
+        spent += probe.cycles_ok
+    return filled
+
+
 def _starting(search: Search, scenario: Scenario, make, runs: list[Scenario], corners: Corners,
               rng: random.Random) -> Scenario:
     """`scenario`, or where the original faults in its first cycle with it (a table index or a divisor read from
@@ -355,15 +384,17 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
             corpus.append(bind(scenario.model_copy(update={"expect": []}), names))
     kept: list[Scenario] = []
     spent = 0
-    search.interpreter_cycles = 0       # the seeds' own runs are not part of the search budget
+
+    def runner(cycles: int, name: str, healthy: bool):
+        """A corner-random run of `cycles` cycles from the power-on memory given to it."""
+        return lambda memory: corner_random(program, corners, names, cycles, rng, name, machine_parameters, healthy,
+                                            memory)
     # Without scenarios of the user, the corpus starts from corner-random runs (kept only where they add).
     if not corpus:
         for n, healthy in enumerate((True, False)):
-            def make(memory, n=n, healthy=healthy):
-                return corner_random(program, corners, names, min(budget, 400), rng, f"corner_seed{seed}_{n}",
-                                     machine_parameters, healthy, memory)
+            make = runner(min(budget, 400), f"corner_seed{seed}_{n}", healthy)
             corpus.append(_starting(search, make(None), make, [], corners, rng))
-    search.interpreter_cycles = 0
+    search.interpreter_cycles = 0       # the seeds' own runs are not part of the search budget
     serial = 0
     stale = 0
     spent_on_values = 0
@@ -390,27 +421,5 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         corpus.append(child)
         spent += length
         spent_on_values += length if value_only else 0
-    attempt = 0
-    # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
-    dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
-    while spent < budget and attempt < FILLER_ATTEMPTS:
-        # healthy and not, from clean and from dirty memory: the four kinds share what is left of the budget (a
-        # share too short to matter goes to the one running now); clean and dirty alternate, so that a short rest
-        # still has runs from both
-        share = (budget - spent) // max(1, FILLER_KINDS - attempt)
-        cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
-        def make(memory, cycles=cycles, attempt=attempt):
-            return corner_random(program, corners, names, cycles, rng,
-                                 f"random_seed{seed}" + (f"_{attempt}" if attempt else ""), machine_parameters,
-                                 healthy=attempt % 4 < 2, dirty=memory)
-        filler = _starting(search, make(None if attempt % 2 == 0 else dirty if attempt % 4 == 1 else
-                                        {marker: 1 - value for marker, value in dirty.items()}),
-                           make, [*kept, *corpus], corners, rng)
-        attempt += 1
-        probe = search.probe(filler)
-        if probe is None or probe.cycles_ok == 0:
-            continue
-        search.keep(probe, probe.cycles_ok)
-        kept.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, names))
-        spent += probe.cycles_ok
+    kept += _fill(search, runner, budget - spent, kept, corpus, seed, rng)
     return kept
