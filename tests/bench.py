@@ -246,30 +246,45 @@ def bench_difftest_generator(programs: int = 40) -> dict:
 SHARD_OVERHEAD_TARGET = 0.15      # the shards' summed time may exceed the unsharded run's by this share (issue 32)
 
 
+MUTATE_SHARD_COUNT = 300               # mutants of the sample in the mutate part of bench_shards
+
+
 def bench_shards(shards: int = 4) -> dict:
-    """`equiv` of the sample (its scenarios and 2000 generated cycles, as `make demo`) unsharded, then as the CI recipe
-    does it with the shards one after the other: the plan once, `shards` shards, the merge. Wall and CPU time of
-    each (CPU time is less disturbed by other work on a shared machine) and each shard's set-up (its time less its
-    runs' own seconds)."""
+    """The CI recipe's cost against one process, for `equiv` of the sample (its scenarios and 2000 generated cycles,
+    as `make demo`) and for `mutate` of the sample (a seeded sample of MUTATE_SHARD_COUNT mutants under the same
+    runs): each unsharded, then as the recipe does it with the shards one after the other: the plan once, `shards`
+    shards, the merge. Wall and CPU time of each (CPU time is less disturbed by other work on a shared machine)
+    and each shard's set-up (its time less its units' own seconds)."""
+    from tests.shards import sample_equiv_args
+    sample = sample_equiv_args()
+    mutate_args = [*sample, "--backend", "builtin", "--count", str(MUTATE_SHARD_COUNT), "--jobs", "1",
+                   "--min-score", "0", "--equivalent", str(SAMPLE.parent / "equivalent_mutants.yaml")]
+    return {command: _shard_overhead(command, args, shards)
+            for command, args in (("equiv", sample), ("mutate", mutate_args))}
+
+
+def _shard_overhead(command: str, args: list[str], shards: int) -> dict:
     import json
-    from tests.shards import comparable, run_sharded, sample_equiv_args, timed
-    args = sample_equiv_args()
+    from tests.shards import comparable, run_sharded, timed
+    units = "runs" if command == "equiv" else "mutants"
     with tempfile.TemporaryDirectory(prefix="hh2iec-bench-shards-") as folder:
         whole = Path(folder) / "whole.json"
-        wall, cpu, _ = timed(["equiv", *args, "--report", str(whole)])
-        run = run_sharded("equiv", args, shards, Path(folder) / "shards", parallel=False)
+        wall, cpu, _ = timed([command, *args, "--report", str(whole)])
+        run = run_sharded(command, args, shards, Path(folder) / "shards", parallel=False)
         same = run.merge_code in (0, 1) and comparable(run.merged) == comparable(whole)
-        setups = [seconds - sum(r["seconds"] for r in json.loads(report.read_text())["runs"])
+        setups = [seconds - sum(r["seconds"] for r in json.loads(report.read_text())[units])
                   for seconds, report in zip(run.shard_seconds,
                                              sorted((Path(folder) / "shards").glob("shard-*.json")))]
     shard_cpu, shard_wall = sum(run.shard_cpu), sum(run.shard_seconds)
     over = shard_cpu / cpu - 1 if cpu else 0.0
-    print(f"shards, sample equiv: unsharded {wall:.1f} s ({cpu:.1f} s CPU); plan {run.plan_seconds:.1f} s "
-          f"({run.plan_cpu:.1f} s CPU, the coverage-guided search once); {shards} shards "
-          f"{shard_wall:.1f} s ({shard_cpu:.1f} s CPU) in all, largest {max(run.shard_seconds):.1f} s; per-shard "
-          f"set-up {min(setups):.1f}-{max(setups):.1f} s; shards' CPU sum {100 * over:+.0f}% of the unsharded run "
-          f"(target <= {100 * SHARD_OVERHEAD_TARGET:.0f}%: {'met' if over <= SHARD_OVERHEAD_TARGET else 'MISSED'}), "
-          f"plan included {100 * ((shard_cpu + run.plan_cpu) / cpu - 1) if cpu else 0:+.0f}%; merged report "
+    with_plan = (shard_cpu + run.plan_cpu) / cpu - 1 if cpu else 0.0
+    print(f"shards, sample {command}: unsharded {wall:.1f} s ({cpu:.1f} s CPU); plan {run.plan_seconds:.1f} s "
+          f"({run.plan_cpu:.1f} s CPU: the coverage-guided search once"
+          f"{', probing every run' if command == 'mutate' else ''}); {shards} shards {shard_wall:.1f} s "
+          f"({shard_cpu:.1f} s CPU) in all, largest {max(run.shard_seconds):.1f} s; per-shard set-up "
+          f"{min(setups):.1f}-{max(setups):.1f} s; shards' CPU sum {100 * over:+.0f}% of the unsharded run, plan "
+          f"included {100 * with_plan:+.0f}% (target <= {100 * SHARD_OVERHEAD_TARGET:.0f}%: "
+          f"{'met' if with_plan <= SHARD_OVERHEAD_TARGET else 'MISSED'}); merged report "
           f"{'equals' if same else 'DIFFERS FROM'} the unsharded one")
     return {"unsharded_cpu": round(cpu, 1), "plan_cpu": round(run.plan_cpu, 1), "shards_cpu": round(shard_cpu, 1),
             "setup_seconds": round(max(setups), 1), "same": same}

@@ -16,6 +16,7 @@ import argparse
 import dataclasses
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -99,13 +100,15 @@ def timed(command: list[str], cwd: Path | None = None) -> tuple[float, float, in
 
 
 def comparable(report: Path) -> dict:
-    """A report without what differs between one process and merged shards by nature: times and the shard
-    section."""
+    """A report without what differs between one process and merged shards by nature: times, the shard section,
+    and the plan file a shard's reproducing command names (so that the search is not made again)."""
     data = json.loads(report.read_text(encoding="utf-8"))
     data.pop("shard", None)
     data.pop("seconds", None)
     for item in data.get("runs", []) + data.get("mutants", []):
         item.pop("seconds", None)
+        if isinstance(item.get("reproduce"), str):
+            item["reproduce"] = re.sub(r" --plan-file (\S+|'[^']*')", "", item["reproduce"])
     return data
 
 

@@ -15,6 +15,7 @@ from transpiler.exec.interp.decisions import decision_table
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
+from transpiler.verify.implication import tied_vectors
 from transpiler.verify.mcdc import decision_coverage, shown_masking, shown_unique
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -264,3 +265,90 @@ def test_an_indexed_write_reaches_only_the_markers_its_index_can_hold(tmp_path: 
                          + "LBL Sub\nEM\n")
     items, _ = _status(unbounded, [_run(unbounded, [{"I1": 0, "I2": 1}])])
     assert {items[(m, o, 0)].status for m, o in (("M5", "O1"), ("M103", "O2"), ("M104", "O3"))} == {"missing"}
+
+
+def test_a_reset_on_every_path_before_the_chain_ties_its_conditions(tmp_path: Path) -> None:
+    # `LN I1` `R M10` before `L M10` `A I1`: whenever I1 is 0 there, M10 has just been reset, so I1 can never
+    # change the outcome on its own (the pair needs M10 = 1 with I1 = 0). M10 itself can (I1 = 1, M10 from I2).
+    # Catches: an implication claimed without the reset, the reason not naming the line that fixes it.
+    program = _program(tmp_path, "L I2\nS M10\nLN I1\nR M10\nL M10\nA I1\n= O1\nEM\n")
+    machine = _run(program, [{"I1": 1, "I2": 1}, {"I1": 1, "I2": 0}, {"I1": 0}])
+    items, cov = _status(program, [machine])
+    i1 = items[("I1", "O1", 1)]
+    assert i1.status == "infeasible", i1
+    assert "main.src:4:1 R M10" in i1.reason and "before this chain on every path" in i1.reason
+    assert items[("M10", "O1", 0)].status == "missing"
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 1
+
+
+def test_a_path_that_skips_the_reset_leaves_the_condition_reachable(tmp_path: Path) -> None:
+    # The same reset, but I3 jumps over it: with I3 = 1, M10 keeps what I2 set and I1 decides O1 alone. The rule
+    # must not fire, and the pair is really there: two cycles show it.
+    program = _program(tmp_path, "L I2\nS M10\nL I3\nJPT Skip\nLN I1\nR M10\nLBL Skip\nL M10\nA I1\n= O1\nEM\n")
+    items, _ = _status(program, [_run(program, [{"I1": 0, "I2": 0, "I3": 0}])])
+    assert items[("I1", "O1", 1)].status == "missing"
+    machine = _run(program, [{"I1": 1, "I2": 1, "I3": 1}, {"I1": 0, "I2": 0, "I3": 1}])
+    items, _ = _status(program, [machine])
+    assert items[("I1", "O1", 1)].status == "shown"
+
+
+def test_a_marker_assigned_from_the_chain_ties_it_and_a_call_between_does_not(tmp_path: Path) -> None:
+    # M10 = I1 AND I2 before the chain. In (M10 OR I3) AND I1 every condition can still decide alone (M10 via I2
+    # with I1 = 1, I1 with M10 = 0 and I3 = 1): nothing claimed. In M10 AND NOT I1, M10 = 1 only with I1 = 1, so
+    # the outcome is always 0: M10 is infeasible, naming the assignment. A call between the assignment and the
+    # chain may write M10: nothing is claimed then.
+    chain = "L M10\nO I3\nA I1\n= O1\n"
+    program = _program(tmp_path, "L I1\nA I2\n= M10\n" + chain + "EM\n")
+    items, _ = _status(program, [_run(program, [{"I1": 0}])])
+    assert items[("M10", "O1", 0)].status == "missing" and items[("I1", "O1", 2)].status == "missing"
+    assert items[("I3", "O1", 1)].status == "missing"
+    tied = _program(tmp_path, "L I1\nA I2\n= M10\nL M10\nAN I1\n= O1\nEM\n")
+    items, _ = _status(tied, [_run(tied, [{"I1": 0}])])
+    assert items[("M10", "O1", 0)].status == "infeasible" and "main.src:3:1 = M10" in items[("M10", "O1", 0)].reason
+    called = _program(tmp_path, "L I1\nA I2\n= M10\nCM Sub\nL M10\nAN I1\n= O1\nEM\nLBL Sub\nL I4\n= M10\nEM\n")
+    items, _ = _status(called, [_run(called, [{"I1": 0}])])
+    assert items[("M10", "O1", 0)].status == "missing"
+
+
+@pytest.mark.parametrize("project", ["logic_chain", "brackets_logic", "chain_start", "compare", "edges", "stack",
+                                     "ift_while_repeat", "jumps_loop", "calls_cmt_cmf"])
+def test_every_recorded_vector_is_one_the_code_before_the_chain_allows(project: str) -> None:
+    # The implication analysis over-approximates: each vector a run records must be among the ones it allows
+    # (else an infeasible claim could be false). Catches: a write, jump, bracket or call followed wrongly.
+    result = compile_project(ProjectOptions(main=ROOT / "samples" / "constructs" / project / "main.src"),
+                             make_semantics("itnc530", {}))
+    program = result.program
+    table = decision_table(program)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(3)
+    for cycle in range(300):
+        machine.run_cycle(cycle, [("I", rng.randrange(16), rng.randrange(2)) for _ in range(4)])
+    checked = 0
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None)
+        if tied is None:
+            continue
+        checked += 1
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded <= tied.vectors, decision.text()
+    assert checked
+
+
+def test_a_timer_start_read_before_its_only_write_in_the_cycle_is_always_0(tmp_path: Path) -> None:
+    # The service clears a timer start after every cycle (A-34a): read before the program's own `= T0`, T0 is 0,
+    # so it never decides O1. Read after the write in the same cycle it can; so can a start a scenario sets.
+    # Catches: a start taken as constant although a write runs before the read, or although a scenario sets it.
+    before = _program(tmp_path, "L I1\nAN T0\n= O1\nL I2\n= T0\nEM\n")
+    items, _ = _status(before, [_run(before, [{"I1": 1, "I2": 1}, {"I1": 1}])])
+    t0 = items[("T0", "O1", 1)]
+    assert t0.status == "infeasible" and "the service clears after every cycle" in t0.reason, t0
+    items, _ = _status(before, [_run(before, [{"I1": 1, "I2": 1}, {"I1": 1}])], driven={("T", 0)})
+    assert items[("T0", "O1", 1)].status == "missing"
+    after = _program(tmp_path, "L I2\n= T0\nL I1\nAN T0\n= O1\nEM\n")
+    items, _ = _status(after, [_run(after, [{"I1": 1, "I2": 1}, {"I1": 1, "I2": 0}])])
+    assert items[("T0", "O1", 1)].status == "shown"
+    # the write in a subroutine called before the read runs first in the cycle too
+    called = _program(tmp_path, "CM Start\nL I1\nAN T0\n= O1\nEM\nLBL Start\nL I2\n= T0\nEM\n")
+    items, _ = _status(called, [_run(called, [{"I1": 1}])])
+    assert items[("T0", "O1", 1)].status == "missing"

@@ -160,6 +160,44 @@ def test_a_shard_missing_given_twice_or_of_other_inputs_is_refused(equiv_whole, 
     assert "--shard needs --report" in capsys.readouterr().err
 
 
+def test_a_shard_with_a_plan_file_loads_only_the_runs_it_makes(equiv_whole, tmp_path, monkeypatch, capsys):
+    """The plan job loaded and checked every run; a shard parses its own share only (its set-up does not grow with
+    the other shards' scenarios), and its result is the same as when it loaded everything."""
+    from transpiler.verify import scenario as scenario_module
+    parsed: list[str] = []
+    real = scenario_module.scenario_from_text
+
+    def counting(text, source, *args, **kwargs):
+        parsed.append(str(source))
+        return real(text, source, *args, **kwargs)
+
+    monkeypatch.setattr(scenario_module, "scenario_from_text", counting)
+    plan = json.loads((equiv_whole / "plan.json").read_text())
+    report = tmp_path / "shard.json"
+    assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(equiv_whole / "plan.json"), "--shard", "2/7",
+                 "--report", str(report)]) == 0
+    ran = json.loads(report.read_text())["shard"]["ran"]
+    assert 0 < len(ran) < len(plan["units"]) and len(parsed) == len(ran)
+    reference = _shards("equiv", EQUIV_ARGS, 7, tmp_path, equiv_whole / "plan.json")[1]
+    assert comparable(report) == comparable(reference)
+
+
+def test_a_damaged_plan_file_is_refused(equiv_whole, tmp_path, capsys):
+    plan = json.loads((equiv_whole / "plan.json").read_text())
+    for damage in ({"cost": "many"}, {"unit": 99}, {"name": None}):
+        broken = tmp_path / "plan.json"
+        units = [dict(u) for u in plan["units"]]
+        units[1].update(damage)
+        broken.write_text(json.dumps({**plan, "units": units}))
+        assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(broken), "--shard", "1/2",
+                     "--report", str(tmp_path / "r.json")]) == 2
+        assert "error[E-SHARD]" in capsys.readouterr().err and not (tmp_path / "r.json").exists()
+    broken.write_text(json.dumps({**plan, "units": plan["units"][:-1]}))
+    assert main(["equiv", *EQUIV_ARGS, "--plan-file", str(broken), "--shard", "1/2",
+                 "--report", str(tmp_path / "r.json")]) == 2
+    assert "make it again" in capsys.readouterr().err
+
+
 def test_merge_refuses_sources_that_changed_since_the_shards_ran(tmp_path, capsys):
     project = tmp_path / "timers"
     shutil.copytree(TIMERS, project)
@@ -235,6 +273,36 @@ def test_merged_mutate_shards_equal_the_unsharded_run(mutate_whole, n, capsys):
     assert "hh2iec merge: mutate score 100.0%" in capsys.readouterr().out
     assert main(["merge", *map(str, reports), "--min-score", "1.0"]) == 0
     assert json.loads(reports[0].read_text())["shard"]["min_score"] == 0.9
+
+
+def test_a_mutate_shard_takes_the_infection_map_from_the_plan_file(mutate_whole, tmp_path, monkeypatch, capsys):
+    """The plan job probed every run with every mutant; a shard given its plan file does not probe again and
+    records the reference only of the runs its own mutants go through, with the verdicts of the whole run."""
+    from transpiler.verify import mutate as mutate_module
+    plan = json.loads((mutate_whole / "plan.json").read_text())
+    infected = plan["infected"]
+    assert infected and all(set(e) == {"run", "mutants"} for e in infected)
+    assert {n for e in infected for n in e["mutants"]} <= set(range(1, len(plan["units"]) + 1))
+    recorded: list[str] = []
+    real = mutate_module.record_reference
+    monkeypatch.setattr(mutate_module, "record_reference",
+                        lambda program, iomap, scenario, *a, **k: recorded.append(scenario.name) or real(
+                            program, iomap, scenario, *a, **k))
+    probes: list = []
+    monkeypatch.setattr(mutate_module, "_prepare_scenario", lambda *a: probes.append(a))
+    report = tmp_path / "shard.json"
+    assert main(["mutate", *MUTATE_ARGS, "--plan-file", str(mutate_whole / "plan.json"), "--shard", "2/7",
+                 "--report", str(report)]) == 0
+    assert not probes and len(set(recorded)) == len(recorded) < len(infected)
+    whole = {m["unit"]: m for m in comparable(mutate_whole / "whole.json")["mutants"]}
+    shard = comparable(report)["mutants"]
+    assert shard and all(m == whole[m["unit"]] for m in shard)
+    broken = tmp_path / "plan.json"
+    broken.write_text(json.dumps({**plan, "infected": [{**infected[0], "mutants": [0]}, *infected[1:]]}))
+    capsys.readouterr()
+    assert main(["mutate", *MUTATE_ARGS, "--plan-file", str(broken), "--shard", "2/7",
+                 "--report", str(tmp_path / "r.json")]) == 2
+    assert "infection map does not fit" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------------------------

@@ -350,6 +350,9 @@ class Plan:
     generated: tuple = ()
     setup_seconds: float = 0.0              # what translating and loading the scenarios took in this process
     search_seconds: float = 0.0             # what the coverage-guided search took (0 with a plan file)
+    # mutate: per run (named, in the order mutants go through them) the numbers of the mutants its run of the
+    # unmutated translation infects, from probing every run once; a plan file carries it so shards need not probe
+    infected: tuple[tuple[str, tuple[int, ...]], ...] = ()
 
     def assignment(self, count: int) -> list[int]:
         """The shard (1..count) of each unit (shard.partition over the costs)."""
@@ -421,10 +424,24 @@ def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
 def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path | None = None) -> list:
     """The generated runs of a plan file written by `--plan N --plan-file FILE` on the same inputs; raises
     HH2IECError (E-SHARD) when the file is not a plan of `command` or was made from other inputs."""
-    import json
+    data = _plan_file_data(Path(path), command, digest)
+    return [_planned_run(text, Path(path), i, folder, names) for i, text in enumerate(data["generated"])]
+
+
+def _planned_run(text: str, path: Path, index: int, folder: Path | None, names):
+    """Generated run `index` (0-based) of a plan file, as a scenario."""
     from transpiler.verify.scenario import ScenarioError, scenario_from_text
+    try:
+        return scenario_from_text(text, f"{path}#generated{index + 1}", folder or Path.cwd(), names)
+    except ScenarioError as exc:
+        raise CompileFailed(list(exc.diagnostics)) from None
+
+
+def _plan_file_data(path: Path, command: str, digest: str) -> dict:
+    """A plan file's content, checked: a plan of `command` made from the inputs of `digest`, whose units are
+    numbered 1..n with a name and a cost each, and whose generated runs are texts (E-SHARD otherwise)."""
+    import json
     from transpiler.verify.shard import FORMAT
-    path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
@@ -436,13 +453,14 @@ def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path
     if data.get("digest") != digest:
         raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
                              "version) than this run's: make it again with the same arguments", path)
-    out = []
-    for i, text in enumerate(data.get("generated", [])):
-        try:
-            out.append(scenario_from_text(text, f"{path}#generated{i + 1}", folder or Path.cwd(), names))
-        except ScenarioError as exc:
-            raise CompileFailed(list(exc.diagnostics)) from None
-    return out
+    units, generated = data.get("units", []), data.get("generated", [])
+    if not isinstance(units, list) or not isinstance(generated, list) or not all(isinstance(t, str) for t in generated):
+        raise _shard_problem("the plan file's units or generated runs are damaged: make it again", path)
+    for number, unit in enumerate(units, 1):
+        if (not isinstance(unit, dict) or unit.get("unit") != number or not isinstance(unit.get("name"), str)
+                or not isinstance(unit.get("cost"), (int, float)) or isinstance(unit.get("cost"), bool)):
+            raise _shard_problem(f"the plan file's unit {number} is damaged: make it again", path)
+    return data
 
 
 def plan_file_text(plan: Plan) -> str:
@@ -454,7 +472,9 @@ def plan_file_text(plan: Plan) -> str:
     return json.dumps({"kind": "hh2iec-plan", "format": FORMAT, "command": plan.command, "digest": plan.digest,
                        "units": [{"unit": i + 1, "name": n, "cost": c} for i, (n, c) in
                                  enumerate(zip(plan.names, plan.costs))],
-                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated]}, indent=1) + "\n"
+                       "generated": [scenario_to_yaml(s, Path.cwd()) for s in plan.generated],
+                       **({"infected": [{"run": name, "mutants": list(numbers)} for name, numbers in plan.infected]}
+                          if plan.infected else {})}, indent=1) + "\n"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -496,7 +516,10 @@ class _EquivSetup:
 
 def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: int, seed: int, backend: str,
                        st_file: Path | None, io_map_file: Path | None, mp_file: Path | None, shrink: bool,
-                       allow_untranslated: bool, plan_file: Path | None) -> _EquivSetup:
+                       allow_untranslated: bool, plan_file: Path | None,
+                       share: "Share | None" = None) -> _EquivSetup:
+    """The translation, its executor and the runs of the check. With a plan file and a `share`, `runs` holds only
+    the runs the share makes (None in the other places): their units and costs come from the plan file."""
     import time
     from transpiler.verify.equiv import choose_backend
     from transpiler.verify.simulate import project_names
@@ -529,15 +552,46 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
-    loaded = _load_scenarios(project, scenarios, names, diags)
-    setup_seconds = time.perf_counter() - start
-    generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp, random_cycles,
-                                                seed, plan_file, digest)
-    runs = loaded + generated
-    plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
-                tuple(generated), setup_seconds, search_seconds)
+    if plan_file is not None and share is not None:
+        runs, plan = _runs_of_plan_file(project, Path(plan_file), digest, names, scenarios, share, diags)
+        plan = dataclasses.replace(plan, setup_seconds=time.perf_counter() - start)
+    else:
+        loaded = _load_scenarios(project, scenarios, names, diags)
+        setup_seconds = time.perf_counter() - start
+        generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp,
+                                                    random_cycles, seed, plan_file, digest)
+        runs = loaded + generated
+        plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
+                    tuple(generated), setup_seconds, search_seconds)
     return _EquivSetup(st_text, st_name, iomap, chosen, names, base_mp, runs, plan, diags,
                        tuple(transpiled.result.untranslated))
+
+
+def _runs_of_plan_file(project: Project, path: Path, digest: str, names, scenarios: list[Path], share: "Share",
+                       diags: Diagnostics) -> tuple[list, Plan]:
+    """The plan of a plan file and the runs `share` makes, in plan order (None for the others). Only those
+    scenario files and generated runs are loaded: the job that wrote the plan loaded and checked every one of the
+    same inputs (the digest says so), and a shard need not parse the runs of the other shards again."""
+    data = _plan_file_data(path, "equiv", digest)
+    units, texts = data["units"], data["generated"]
+    if len(units) != len(scenarios) + len(texts):
+        raise _shard_problem("the plan file's units are not its scenarios and generated runs: make it again", path)
+    plan = Plan("equiv", digest, tuple(u["name"] for u in units), tuple(float(u["cost"]) for u in units))
+    wanted = plan.selected(share)
+    runs: list = [None] * len(units)
+    from_files = [number for number in wanted if number <= len(scenarios)]
+    for number, run in zip(from_files, _load_scenarios(project, [scenarios[n - 1] for n in from_files], names,
+                                                       diags)):
+        runs[number - 1] = run
+    for number in wanted:
+        if number > len(scenarios):
+            runs[number - 1] = _planned_run(texts[number - 1 - len(scenarios)], path, number - 1 - len(scenarios),
+                                            None, names)
+    for number in wanted:
+        if runs[number - 1].name != plan.names[number - 1] or float(runs[number - 1].cycles) != plan.costs[number - 1]:
+            raise _shard_problem(f"run {number} of the plan file is not the run these inputs give: make it again",
+                                 path)
+    return runs, plan
 
 
 def _equivalence_digest(project: Project, mp_path: Path | None, scenarios: list[Path], random_cycles: int, seed: int,
@@ -610,7 +664,7 @@ def check_equivalence(project: Project, *, scenarios: Iterable[Path] = (), rando
     if requests and not scenarios:
         raise _usage("--show-mask draws masks in the runs of --scenario files: give at least one")
     setup = _equivalence_setup(project, scenarios, random_cycles, seed, backend, st_file, io_map_file, mp_file,
-                               shrink, allow_untranslated, share.plan_file)
+                               shrink, allow_untranslated, share.plan_file, None if requests else share)
     chosen, names, iomap, mp = setup.chosen, setup.names, setup.iomap, setup.mp
     selected = setup.plan.selected(share)
     loaded = [setup.runs[i - 1] for i in selected]
@@ -686,33 +740,76 @@ def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list,
     return plan, {mutants[i - 1]: i for i in plan.selected(share)}
 
 
+def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share, jobs: int,
+                 progress: Callable[[int, int], None] | None) -> tuple[Plan, list]:
+    """The verdicts of the mutants `share` judges (`unit_ids`: each with its plan number). Making a plan (a sample
+    share) probes with every mutant of the plan and keeps the infection map in it; a shard given a plan file with a
+    map uses it instead of probing every run again."""
+    if share.sample > 0:
+        indexes = [unit_ids[m] - 1 for m in unit_ids]
+        verdicts, infected = _judged(judge, mutants, jobs, progress, indexes=indexes)
+        if infected is not None:
+            plan = dataclasses.replace(plan, infected=tuple(
+                (s.name, tuple(sorted(runs))) for s, runs in zip(judge.scenarios, infected)))
+        return plan, verdicts
+    chosen = list(unit_ids)
+    local = None
+    if share.plan_file is not None:
+        planned = _planned_infection(share.plan_file, plan.digest, judge.scenarios)
+        if planned is not None:
+            local = tuple(frozenset(k + 1 for k, m in enumerate(chosen) if unit_ids[m] in runs) for runs in planned)
+    return plan, _judged(judge, chosen, jobs, progress, local)[0]
+
+
 def _mutant_side_factories(backend: str, iec) -> tuple[Callable, Callable | None]:
-    """How a mutant's ST text becomes an executor on the chosen backend, and (built-in only) how one build of the
-    text with every mutation as a switch (mutant schemata) does."""
+    """How a mutant's ST text becomes an executor on the chosen backend, and how one build of the text with every
+    mutation as a switch (mutant schemata) does."""
     if backend == "matiec":
         from transpiler.backends.st.check import find_iec2c
+        from transpiler.exec.compiled.matiec_schema import MatiecSchema
         from transpiler.exec.compiled.matiec_side import matiec_side_factory
         iec2c = find_iec2c()
-        return (lambda text: matiec_side_factory(text, iec, iec2c)), None
+        return ((lambda text: matiec_side_factory(text, iec, iec2c)),
+                (lambda text, mutations: MatiecSchema(text, mutations, iec, iec2c)))
     from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory
     return ((lambda text: builtin_side_factory(text, "project.st")),
             (lambda text, mutations: BuiltinSchema(text, mutations, "project.st")))
 
 
-def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None) -> list:
-    """The verdicts of `mutants` (see verify/mutate.py judge_all); raises CompileFailed when the unmutated
-    translation does not agree with the reference under the stimulus."""
+def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None] | None,
+            infected: tuple | None = None, indexes: list[int] | None = None) -> tuple[list, tuple | None]:
+    """The verdicts of `mutants` (of those at `indexes` only, when given; see verify/mutate.py judge_all) and the
+    infection map the probing found (None without a schema); `infected` is a plan file's map, which skips the
+    probing. Raises CompileFailed when the unmutated translation does not agree with the reference."""
     from transpiler.verify.mutate import judge_all, prepare
-    judging = prepare(judge, mutants, jobs)
+    judging = prepare(judge, mutants, jobs, infected)
     if judging.problems:
         raise _usage("the unmutated translation is not equivalent under the stimulus, mutation results "
                      "would mean nothing (run hh2iec equiv): " + "; ".join(judging.problems[:5]))
     verdicts = []
-    for verdict in judge_all(judge, mutants, jobs, judging):
+    total = len(mutants) if indexes is None else len(indexes)
+    for verdict in judge_all(judge, mutants, jobs, judging, indexes):
         verdicts.append(verdict)
         if progress is not None:
-            progress(len(verdicts), len(mutants))
-    return verdicts
+            progress(len(verdicts), total)
+    return verdicts, judging.infected
+
+
+def _planned_infection(path: Path, digest: str, scenarios: list) -> tuple[frozenset[int], ...] | None:
+    """The infection map of a mutate plan file, per run in judging order (plan numbers of the mutants), or None
+    when the plan has none (a backend without schemata); E-SHARD when it does not fit these runs."""
+    data = _plan_file_data(Path(path), "mutate", digest)
+    entries = data.get("infected")
+    if entries is None:
+        return None
+    units = len(data["units"])
+    if (not isinstance(entries, list) or len(entries) != len(scenarios)
+            or any(not isinstance(e, dict) or e.get("run") != s.name or not isinstance(e.get("mutants"), list)
+                   or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= units
+                              for n in e["mutants"]) for e, s in zip(entries, scenarios))):
+        raise _shard_problem("the plan file's infection map does not fit its runs and mutants: make it again",
+                             Path(path))
+    return tuple(frozenset(e["mutants"]) for e in entries)
 
 
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
@@ -755,7 +852,8 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     loaded += generated
     from transpiler.backends.report.report import io_map_of
     judge = Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                  st_text, side_factory, compile_program(project.program), base_mp, schema_factory)
+                  st_text, side_factory, compile_program(project.program), base_mp, schema_factory,
+                  isolate=chosen.name == "matiec")
     saved_cache = os.environ.get("HH2IEC_CACHE")
     with tempfile.TemporaryDirectory(prefix="hh2iec-mutants-") as cache:
         # Mutant libraries are throw-away: they stay out of the user's build cache.
@@ -764,9 +862,9 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
             sites = mutation_sites(st_text)
             mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
             plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
-            mutants = list(unit_ids)
             start = time.perf_counter()
-            verdicts = _judged(judge, mutants, jobs, progress)
+            plan, verdicts = _judge_share(judge, plan, mutants, unit_ids, share, jobs, progress)
+            mutants = list(unit_ids)
             seconds = time.perf_counter() - start
         finally:
             if saved_cache is None:

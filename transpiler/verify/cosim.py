@@ -674,6 +674,11 @@ def _builtin_sides(project, st_text: str, mutant: int) -> Callable[[], StSide]:
         def attach_machine(self, machine) -> None:
             self.sys.attach(machine)
 
+        @property
+        def infected(self) -> set[int]:
+            """The mutants this (probing) run has infected so far."""
+            return self.rt.infected
+
         def get(self, path: str):
             return self.rt.get(path)
 

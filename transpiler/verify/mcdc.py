@@ -16,8 +16,11 @@ Infeasible, and so neither counted as missing nor dropped: a condition whose ope
 the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface
 operand or operand a scenario sets; power-on memory is 0; a write through the index register counts for every operand
 the values the register can hold there reach), a condition the outcome cannot depend on given those
-constants and the coupling of its chain (masked by a constant, or redundant), and a boundary value the word cannot
-hold. Only these reasons are claimed; a condition that is merely hard to reach stays missing."""
+constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
+chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
+a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
+cycle), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+to reach stays missing."""
 
 from __future__ import annotations
 
@@ -29,6 +32,7 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.corners import NC_MODEL_OWNED
+from transpiler.verify.implication import Tied, consumed_start_zero, tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -365,6 +369,100 @@ def _infeasible_reason(decision: Decision, number: int, masking: bool, state: _V
             f"no two evaluations can show it: it is coupled with the other reads of {cond.text} in the chain")
 
 
+def _showable(decision: Decision, number: int, masking: bool, vectors: frozenset[int]) -> bool:
+    """Whether two of `vectors` (the vectors the chain can see) would show condition `number`."""
+    function = decision.function()
+    n = len(decision.conditions)
+    with_outcome = [v | function(v) << n for v in vectors]
+    if masking:
+        return shown_masking(with_outcome, n, number, function)
+    return shown_unique(with_outcome, n, number)
+
+
+def _tied_reason(program: Program, decision: Decision, number: int, masking: bool, state: _Values,
+                 zero: Callable[[str, int, int, int], bool]) -> str:
+    """Why the code before the chain in the same cycle keeps condition `number` from being shown (implication.py),
+    naming the writes the claim rests on; "" where it does not. `zero`: consumed_start_zero."""
+    consumed: set[str] = set()
+
+    def entry(kind: str, addr: int, file: int, index: int) -> int | None:
+        held = state.of(kind, addr)
+        if len(held) == 1:
+            return next(iter(held))
+        if zero(kind, addr, file, index):
+            consumed.add(f"{kind}{addr}")
+            return 0
+        return None
+
+    tied = tied_vectors(program, decision, entry)
+    if tied is None or not tied.vectors or _showable(decision, number, masking, tied.vectors):
+        return ""
+    # the writes the claim rests on: drop each one the claim holds without
+    absent: set[int] = set()
+    for w in tied.writes:
+        trial = tied_vectors(program, decision, entry, frozenset(absent | {w}), tied.start)
+        if trial is not None and trial.vectors and not _showable(decision, number, masking, trial.vectors):
+            absent.add(w)
+    ops = program.files[decision.file].ops
+    needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
+    facts = _ties(decision, number, tied)
+    cond = decision.conditions[number].text
+    where = [f"set by {', '.join(needed[:4])} before this chain on every path to it"] if needed else []
+    names = {f"{c.operand.kind}{c.operand.addr}": c.text for c in decision.conditions if c.operand is not None}
+    starts = sorted({names[k] for k in consumed if k in names})
+    if starts:
+        where.append(f"{', '.join(starts)}: a timer or counter start the service clears after every cycle, and no "
+                     "write of it runs before this chain in the cycle")
+    return (f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'}"
+            + (f" ({'; '.join(where)})" if where else ""))
+
+
+def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
+    """What the chain can see, in words: conditions that are constant there, and pairs of values that never occur
+    together (those with condition `number` first)."""
+    conds = decision.conditions
+    n = len(conds)
+    facts: list[str] = []
+    seen = {(i, b): any(v >> i & 1 == b for v in tied.vectors) for i in range(n) for b in (0, 1)}
+    for i in range(n):
+        for b in (0, 1):
+            if not seen[(i, 1 - b)] and seen[(i, b)] and f"{conds[i].text} is always {b}" not in facts:
+                facts.append(f"{conds[i].text} is always {b}")
+    pairs: list[tuple[int, str]] = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            if conds[i].text == conds[j].text:
+                continue
+            for a in (0, 1):
+                for b in (0, 1):
+                    if seen[(i, a)] and seen[(j, b)] and not any(v >> i & 1 == a and v >> j & 1 == b
+                                                                 for v in tied.vectors):
+                        text = f"{conds[i].text} = {a} only with {conds[j].text} = {1 - b}"
+                        if all(text != t for _, t in pairs):
+                            pairs.append((0 if number in (i, j) else 1, text))
+    facts += [t for _, t in sorted(pairs, key=lambda p: p[0])][:3]
+    if not any(rank == 0 for rank, _ in pairs):
+        facts += _never_together(decision, number, tied)[:2]
+    return facts
+
+
+def _never_together(decision: Decision, number: int, tied: Tied) -> list[str]:
+    """Three values, one of condition `number`, that never occur together though each two of them do."""
+    conds = decision.conditions
+    others = [i for i in range(len(conds)) if conds[i].text != conds[number].text]
+    found = []
+    for i, j in itertools.combinations(others, 2):
+        if conds[i].text == conds[j].text:
+            continue
+        for a, b, c in itertools.product((0, 1), repeat=3):
+            def occurs(*fixed: tuple[int, int]) -> bool:
+                return any(all(v >> k & 1 == x for k, x in fixed) for v in tied.vectors)
+            trio = ((number, a), (i, b), (j, c))
+            if not occurs(*trio) and all(occurs(*pair) for pair in itertools.combinations(trio, 2)):
+                found.append("never " + ", ".join(f"{conds[k].text} = {x}" for k, x in trio) + " together")
+    return found
+
+
 # ----------------------------------------------------------------------------------------------------- figures
 
 def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, int]] = frozenset(),
@@ -379,6 +477,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
         for key, found in cov.bounds.items():
             bounds.setdefault(key, set()).update(found)
     state: _Values | None = None
+    zero = None
     conditions: list[ConditionItem] = []
     for decision in table.decisions:
         recorded = vectors.get(decision.key, set())
@@ -392,7 +491,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
-            reason = _infeasible_reason(decision, number, coupled, state)
+                zero = consumed_start_zero(program, set(driven))
+            reason = (_infeasible_reason(decision, number, coupled, state)
+                      or _tied_reason(program, decision, number, coupled, state, zero))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
     return DecisionCoverage(tuple(conditions), tuple(boundaries))

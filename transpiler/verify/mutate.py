@@ -23,12 +23,14 @@ import dataclasses
 import functools
 import json
 import multiprocessing
+import multiprocessing.connection
 import random
 import re
+import signal
 import time
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol
+from typing import Any, Callable, Iterable, Iterator, Mapping, Protocol, Sequence
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -295,7 +297,7 @@ class Verdict:
 class MutantSides(Protocol):
     """Many mutants of the ST text built once (a mutant schema): `factory(number)` makes ST sides of the mutant
     numbered `number` in the judged list (1, 2, ...; 0 the original, PROBE the original recording in each side's
-    `rt.infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
+    `infected` the mutants a run infects); `unswitched` are the numbers it does not hold."""
 
     unswitched: frozenset
 
@@ -320,9 +322,13 @@ class Judge:
     compiled: CompiledProgram | None = None
     base_mp: Mapping | None = None
     schema_factory: Callable[[str, list], MutantSides] | None = None
-    # per scenario, its reference run recorded once (see prepare): mutants then run only their own half
-    recordings: tuple[Recording, ...] | None = None
+    # per scenario, its reference run recorded once (see prepare; LazyRecordings records it on first use): mutants
+    # then run only their own half
+    recordings: "Sequence[Recording] | None" = None
     comparison: Comparison | None = None        # what every run compares (comparison_for, made once by prepare)
+    # the translated side is compiled code, which can crash the process running it: every run goes to a forked
+    # process, and a crash is that mutant's error (or, probing, the unmutated translation's problem)
+    isolate: bool = False
 
     def __call__(self, mutant: Mutant) -> Verdict:
         """The mutant's text built on its own and run under every scenario (against the recordings if any)."""
@@ -405,18 +411,47 @@ class Judging:
         return self.judge.run(mutant, self.sides.factory(number), runs, start)
 
 
-def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1) -> Judging:
+class LazyRecordings:
+    """The scenarios' reference runs, each recorded the first time a mutant needs it: a shard that was given the
+    infection map by its plan file records only the runs its own mutants go through."""
+
+    def __init__(self, judge: Judge):
+        self._judge = judge
+        self._made: dict[int, Recording] = {}
+
+    def __len__(self) -> int:
+        return len(self._judge.scenarios)
+
+    def __getitem__(self, index: int) -> Recording:
+        if index not in self._made:
+            judge = self._judge
+            self._made[index] = record_reference(judge.program, judge.iomap, judge.scenarios[index], judge.names,
+                                                 compiled=judge.compiled, base_mp=judge.base_mp,
+                                                 comparison=judge.comparison)
+        return self._made[index]
+
+
+def prepare(judge: Judge, mutants: list[Mutant], jobs: int = 1,
+            infected: "tuple[frozenset[int], ...] | None" = None) -> Judging:
     """Record every scenario's reference run, build the mutant schema (where the backend has one) and probe each
-    scenario with it; the scenarios are shared out over `jobs` forked processes."""
+    scenario with it; the scenarios are shared out over `jobs` forked processes. `infected` (per scenario, the
+    mutants' numbers its run infects, as a plan file carries them from the job that probed every scenario) skips
+    the probing: the reference runs are then recorded as the mutants need them."""
     judge = dataclasses.replace(judge, comparison=judge.comparison or comparison_for(judge.program, judge.names,
                                                                                     judge.iomap))
     sides = None
     if judge.schema_factory is not None:
         from transpiler.exec.stexec import TextMutation
         sides = judge.schema_factory(judge.st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(mutants)])
+    if infected is not None and sides is not None:
+        if len(infected) != len(judge.scenarios):
+            raise ValueError("the infection map does not have one entry per scenario")
+        lazy = dataclasses.replace(judge)
+        lazy.recordings = LazyRecordings(lazy)
+        return Judging(lazy, mutants, sides, tuple(infected))
     original = judge.side_factory(judge.st_text) if sides is None else None
     task = functools.partial(_prepare_scenario, judge, sides, original)
-    found = dict(_each(task, range(len(judge.scenarios)), jobs))
+    found = dict(_each(task, range(len(judge.scenarios)), jobs, _probe_crashed(judge) if judge.isolate else None))
     ordered = [found[i] for i in range(len(judge.scenarios))]
     problems = tuple(problem for _, _, problem in ordered if problem is not None)
     infected = None
@@ -443,48 +478,113 @@ def _prepare_scenario(judge: Judge, sides: MutantSides | None, original: Callabl
                    base_mp=judge.base_mp, recording=recording, comparison=judge.comparison)
     if not r.equivalent:
         return recording, None, f"{scenario.name}: {r.divergence or r.error or 'operands missing in the translation'}"
-    return recording, frozenset(made[0].rt.infected) if sides is not None else None, None
+    return recording, frozenset(made[0].infected) if sides is not None else None, None
 
 
-def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int) -> Iterator[tuple[int, Any]]:
-    """(item, task(item)) for every item, in `jobs` forked processes when jobs > 1 (results are pickled)."""
+def _each(task: Callable[[int], Any], items: Iterable[int], jobs: int, crashed: Callable[[int, int], Any] | None = None
+          ) -> Iterator[tuple[int, Any]]:
+    """(item, task(item)) for every item, in `jobs` forked processes when jobs > 1 (results are pickled). With
+    `crashed`, the items always run in forked processes (one at least): compiled code can crash the process that
+    runs it, and an item whose process died gives crashed(item, exit code) while a new process takes the rest.
+    Without it, a process that dies is an error (RuntimeError), never a wait for results that cannot come."""
     items = list(items)
-    if jobs <= 1 or len(items) <= 1:
+    if crashed is None and (jobs <= 1 or len(items) <= 1):
         for item in items:
             yield item, task(item)
         return
     context = multiprocessing.get_context("fork")
-    tasks, results = context.Queue(), context.Queue()
+    tasks = context.Queue()
     for item in items:
         tasks.put(item)
-    for _ in range(jobs):
-        tasks.put(None)
-    workers = [context.Process(target=_worker, args=(task, tasks, results), daemon=True) for _ in range(jobs)]
-    for w in workers:
-        w.start()
+    workers: dict[int, tuple[Any, Any]] = {}        # slot -> (process, the read end of its pipe)
+    running: dict[int, int] = {}                    # slot -> the item its process started and has not answered
+
+    def start(slot: int) -> None:
+        tasks.put(None)                             # its end marker, after every item
+        reader, writer = context.Pipe(duplex=False)
+        process = context.Process(target=_worker, args=(task, tasks, writer), daemon=True)
+        process.start()
+        writer.close()
+        workers[slot] = (process, reader)
+
+    for slot in range(max(1, min(jobs, len(items)))):
+        start(slot)
+    done = 0
     try:
-        for _ in items:
-            yield results.get()
+        while done < len(items) and workers:
+            multiprocessing.connection.wait([w for pair in workers.values() for w in (pair[0].sentinel, pair[1])])
+            for slot, (process, reader) in list(workers.items()):
+                exited = process.exitcode is not None     # before reading: all it sent is in the pipe then
+                for kind, item, value in _received(reader):
+                    if kind == "start":
+                        running[slot] = item
+                    else:
+                        running.pop(slot, None)
+                        done += 1
+                        yield item, value
+                if not exited:
+                    continue
+                del workers[slot]
+                if slot in running or process.exitcode != 0:
+                    if crashed is None or slot not in running:
+                        raise RuntimeError(f"a worker process ended with exit code {process.exitcode}")
+                    item = running.pop(slot)
+                    done += 1
+                    yield item, crashed(item, process.exitcode)
+                    start(slot)
     finally:
-        for w in workers:
-            if w.is_alive():
-                w.terminate()
-            w.join()
+        for process, reader in workers.values():
+            if process.is_alive():
+                process.terminate()
+            process.join()
+            reader.close()
 
 
-def _worker(task: Callable[[int], Any], tasks, results) -> None:
-    """A forked process: runs the task on items until it takes the end marker."""
+def _received(reader) -> Iterator[tuple]:
+    """The messages waiting in a worker's pipe (none once it is closed)."""
+    try:
+        while reader.poll():
+            yield reader.recv()
+    except (EOFError, OSError):
+        return
+
+
+def _worker(task: Callable[[int], Any], tasks, pipe) -> None:
+    """A forked process: runs the task on items until it takes the end marker, saying first which item it starts
+    (a pipe's send is written before it returns, so the parent knows the item if the process dies in it)."""
     while (item := tasks.get()) is not None:
-        results.put((item, task(item)))
+        pipe.send(("start", item, None))
+        pipe.send(("done", item, task(item)))
 
 
-def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None) -> Iterator[Verdict]:
+def judge_all(judge: Judge, mutants: list[Mutant], jobs: int, judging: Judging | None = None,
+              indexes: Iterable[int] | None = None) -> Iterator[Verdict]:
     """Verdicts of the given mutants as they come in (prepare, unless `judging` is that of these mutants, then judge
-    each; with jobs > 1 in forked workers, which share what was prepared and send back only verdicts). Any list of
-    mutants can be given: a subset judges exactly as it would among all."""
+    each, or those at `indexes`; with jobs > 1 in forked workers, which share what was prepared and send back only
+    verdicts). Any list of mutants can be given: a subset judges exactly as it would among all."""
     judging = judging or prepare(judge, mutants, jobs)
-    for index, verdict in _each(functools.partial(_verdict_fields, judging), range(len(mutants)), jobs):
+    chosen = range(len(mutants)) if indexes is None else list(indexes)
+    crashed = (lambda index, code: (ERROR, f"the compiled mutant crashed the process running it ({_exit(code)})",
+                                    0.0, 0, ())) if judge.isolate else None
+    for index, verdict in _each(functools.partial(_verdict_fields, judging), chosen, jobs, crashed):
         yield Verdict(mutants[index], *verdict)
+
+
+def _probe_crashed(judge: Judge) -> Callable[[int, int], tuple]:
+    def crashed(index: int, code: int) -> tuple:
+        return None, None, (f"{judge.scenarios[index].name}: the unmutated translation crashed the process running "
+                            f"it ({_exit(code)})")
+    return crashed
+
+
+def _exit(code: int) -> str:
+    """A process's exit code as words: the signal that ended it, or the code."""
+    if code < 0:
+        try:
+            return f"signal {-code}, {signal.Signals(-code).name}"
+        except ValueError:
+            return f"signal {-code}"
+    return f"exit code {code}"
 
 
 def _verdict_fields(judging: Judging, index: int) -> tuple:

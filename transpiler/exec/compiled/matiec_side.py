@@ -173,10 +173,11 @@ class CycleOverrun(RuntimeError):
     """A cycle of the compiled translation did not end within the budget (an endless loop)."""
 
 
-def build_library(st_text: str, project: IecProject, iec2c: Path) -> Path:
-    """Compile once per distinct ST text (cached by hash); raises MatiecBuildError with the tool's message."""
+def build_library(st_text: str, project: IecProject, iec2c: Path, extra_c: str = "") -> Path:
+    """Compile once per distinct ST text (cached by hash); raises MatiecBuildError with the tool's message.
+    `extra_c` is more C for the harness (the accessors of a mutant schema's globals)."""
     home = matiec_home(iec2c)
-    harness = harness_source(project)
+    harness = harness_source(project) + extra_c
     # The harness is part of the key: a changed harness must not reuse a library built from an older one.
     digest = hashlib.sha256((st_text + str(iec2c) + harness).encode("utf-8")).hexdigest()[:20]
     folder = _cache_dir() / digest
@@ -222,8 +223,11 @@ def bind_sys(lib: ctypes.CDLL, sys: SysBinding, machine: object) -> None:
 
 def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Callable[[], object]:
     """Build the library once; each call gives the program re-initialised (config_init__, cleared I/O)."""
-    # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.
-    lib_path = build_library(st_text, project, iec2c)
+    return sides_of(load_library(build_library(st_text, project, iec2c)), st_text, project)
+
+
+def load_library(lib_path: Path) -> ctypes.CDLL:
+    """The built library loaded, its harness functions typed for ctypes."""
     lib = ctypes.CDLL(str(lib_path))
     lib.hh_get.restype = ctypes.c_longlong
     lib.hh_get.argtypes = [ctypes.c_int, ctypes.c_int]
@@ -233,6 +237,15 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
     lib.hh_get_many.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_longlong)]
     lib.hh_run_guarded.argtypes = [ctypes.c_long]
     lib.hh_run_guarded.restype = ctypes.c_int
+    return lib
+
+
+def sides_of(lib: ctypes.CDLL, st_text: str, project: IecProject,
+           start: Callable[[], None] | None = None, infected: Callable[[], set[int]] | None = None
+           ) -> Callable[[], object]:
+    # Kept whole (~83 lines): the side class closes over the loaded library, its variable ids and buffers.
+    """The side class over a loaded library: `start` runs after each re-initialisation (a schema sets its mutant
+    number), `infected` reads the mutants a probing run infected (a schema's PROBE sides only)."""
     loops = loop_sites(st_text)
     variables = _variables(project)
     ids = {path: (n, typ, shape) for n, (path, typ, shape, _) in enumerate(variables)}
@@ -258,6 +271,8 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
 
         def __init__(self) -> None:
             lib.hh_init()
+            if start is not None:
+                start()
             self.sys = SysBinding(st_text)
             self.attach_machine = lambda machine: bind_sys(lib, self.sys, machine)
 
@@ -281,6 +296,11 @@ def matiec_side_factory(st_text: str, project: IecProject, iec2c: Path) -> Calla
                 raise CycleOverrun(f"the cycle did not end within {CYCLE_BUDGET_MS / 1000:g} s (an endless loop); "
                                    "the ST lines that loop: " + ", ".join(loops or ["none found"]))
             self.sys.tick()
+
+        @property
+        def infected(self) -> set[int]:
+            """The mutants this (probing) run has infected so far."""
+            return infected() if infected is not None else set()
 
         def bulk_reader(self, places: list[Place]) -> Callable[[], list]:
             """Reads all places in one C call (texts, which C cannot return as numbers, one by one)."""

@@ -28,13 +28,13 @@ _GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "X
 _BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
 _FORGET = frozenset({"LBL", "CALL", "CASE", "JP", "EM", "SUBM", "KFIELD"})   # LA unknown after these
 # Ops that leave LA as it is (with LA apart from WA); anything not listed here and not handled forgets the chain.
-_KEEP = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN",
-                   "ADD", "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC", "NOTW", "INC",
-                   "DEC", "INCX", "DECX", "PUSH", "POP", "PSW", "PLW", "PSL", "PSX", "PLX", "SLD", "SCAT", "SST",
-                   "RPLY", "CAN", "NOP"})
-_WORD_WRITERS = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD",
-                           "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC", "NOTW", "PLW",
-                           "SUBM", "RPLY"})
+KEEPS_LA = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR",
+                      "WXORN", "ADD", "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC",
+                      "NOTW", "INC", "DEC", "INCX", "DECX", "PUSH", "POP", "PSW", "PLW", "PSL", "PSX", "PLX", "SLD",
+                      "SCAT", "SST", "RPLY", "CAN", "NOP"})
+WORD_WRITERS = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "ADD",
+                          "SUB", "MUL", "DIV", "MOD", "SHL", "SHR", "BS", "BC", "INCW", "DECW", "TWOC", "NOTW", "PLW",
+                          "SUBM", "RPLY"})
 _SYMBOL = {"and": "AND", "or": "OR", "xor": "XOR"}
 
 
@@ -257,7 +257,7 @@ class _ChainWalk:
             self.la = None
             if c == "LBL":
                 self.frames = []
-        elif c not in _KEEP or (self.shared and c in _WORD_WRITERS):
+        elif c not in KEEPS_LA or (self.shared and c in WORD_WRITERS):
             self.la = None
 
     def open_bracket(self, op: Op) -> None:

@@ -1,0 +1,485 @@
+"""The condition vectors a decision can see, given the code before it in the same cycle: a condition whose value is
+fixed or tied to another condition's by straight-line code before its chain (`R X` earlier on every path, `S X`
+under the same inputs, a marker assigned from the chain's other conditions) can be infeasible for MC/DC although
+its operand takes both values over a run.
+
+The analysis runs the code of one region symbolically: from a start op to the decision's consumer, within one
+file, reached only from its start (every jump into it comes from inside it and goes forward; no call, CASE or
+indexed bit write inside it). Every bit operand's value at the start is a free variable (or a constant where the
+program's own logic fixes it, see mcdc.constant_bits, or a consumed timer/counter start no earlier write can have
+set in this cycle, see consumed_start_zero), and so is every value the analysis does not follow (a word compare, LA
+after a join). Values are truth tables over those variables (a Python int with one bit per assignment), so a
+join of two paths is exact and the values a chain sees are over-approximated only by the free variables: a
+vector not among them can never occur, which is what an infeasible claim needs."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable, Sequence
+
+from transpiler.exec.interp.decisions import KEEPS_LA, WORD_WRITERS, Decision
+from transpiler.frontend.opcodes import implicit_writes
+from transpiler.ir import Op, Program
+
+MAX_VARS = 18                   # free variables per region (truth tables of 2**18 bits)
+_ALL = (1 << (1 << MAX_VARS)) - 1
+
+
+def _variable(k: int) -> int:
+    """The truth table of variable k: 1 in the assignments whose bit k is 1."""
+    table, width = ((1 << (1 << k)) - 1) << (1 << k), 2 << k
+    while width < 1 << MAX_VARS:
+        table |= table << width
+        width *= 2
+    return table
+
+
+_VAR = tuple(_variable(k) for k in range(MAX_VARS))
+
+_BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
+_GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "XORN": "xor"}
+_BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
+_READS = frozenset({"LD", "LDN", *_GATES, "LDBITS"})
+_WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
+Key = tuple[str, int]
+
+
+@dataclasses.dataclass(frozen=True)
+class Tied:
+    """What the code before a decision allows: the condition `vectors` it can see (bit i = condition i), the op
+    its region starts at, and the region's writes of bit operands it followed (op indices in the file)."""
+
+    vectors: frozenset[int]
+    start: int
+    writes: tuple[int, ...]
+
+
+class _TooMany(Exception):
+    """The region reads more free values than MAX_VARS."""
+
+
+@dataclasses.dataclass
+class _Path:
+    reach: int                      # the assignments that take this path
+    values: dict[Key, int | None]   # None: any value (a write not followed), a variable made when it is read
+    la: int | None                  # None: not known here (a variable made when it is used)
+    frames: list
+
+
+class _Run:
+    """One symbolic run of ops[start:consumer] (see the module docstring); `skip`: writes treated as absent (to
+    find the writes an infeasible claim rests on). Only the statements that can matter to the decision are
+    followed (`_relevant`): the others read no variables."""
+
+    def __init__(self, program: Program, f: int, start: int, consumer: int, reads: set[int],
+                 entry: Callable[[str, int, int, int], int | None], skip: frozenset[int] = frozenset()):
+        self.program = program
+        self.f = f
+        self.start = start
+        self.consumer = consumer
+        self.entry = entry
+        self.skip = skip
+        self.vars = 0
+        self.entries: dict[Key, int] = {}
+        self.reads: dict[int, int] = {}
+        self.shared = program.semantics["accumulator_model"] == "shared_bit7"
+        self.flag = program.semantics["add_overflow"] == "flag"
+        self.followed, self.needed = _relevant(program.files[f].ops, start, consumer, reads)
+
+    def fresh(self) -> int:
+        if self.vars == MAX_VARS:
+            raise _TooMany
+        self.vars += 1
+        return _VAR[self.vars - 1]
+
+    def value(self, path: _Path, key: Key) -> int:
+        if key in path.values:
+            found = path.values[key]
+            if found is None:
+                found = path.values[key] = self.fresh()
+            return found
+        return self.at_start(key)
+
+    def at_start(self, key: Key) -> int:
+        found = self.entries.get(key)
+        if found is None:
+            fixed = self.entry(key[0], key[1], self.f, self.start)
+            found = self.fresh() if fixed is None else (_ALL if fixed else 0)
+            self.entries[key] = found
+        return found
+
+    def run(self) -> _Path | None:
+        ops = self.program.files[self.f].ops
+        pending: dict[int, list[_Path]] = {}
+        path: _Path | None = _Path(_ALL, {}, None, [])
+        for i in range(self.start, self.consumer + 1):
+            joining = pending.pop(i, [])
+            if joining:
+                path = self.join(([path] if path is not None else []) + joining)
+            if path is None or not path.reach:
+                path = None
+                continue
+            if i == self.consumer:
+                return path
+            if i in self.followed:
+                path = self.step(i, ops[i], path, pending)
+            else:
+                self.havoc(ops[i], path)
+        return None
+
+    def havoc(self, op: Op, path: _Path) -> None:
+        """An op of a statement that cannot matter: what it may write is any value, read lazily."""
+        for key in _bit_writes(op, self.program, self.flag):
+            path.values[key] = None
+        path.la = None
+
+    def join(self, paths: list[_Path]) -> _Path:
+        reach = 0
+        for p in paths:
+            reach |= p.reach
+        keys = {k for p in paths for k in p.values}
+        values: dict[Key, int | None] = {}
+        for key in keys:
+            if key not in self.needed or any(key in p.values and p.values[key] is None for p in paths):
+                values[key] = None
+                continue
+            v = 0
+            for p in paths:
+                v |= p.reach & self.value(p, key)
+            values[key] = v
+        return _Path(reach, values, None, [])
+
+    def step(self, i: int, op: Op, path: _Path, pending: dict[int, list[_Path]]) -> _Path | None:
+        c = op.code
+        o = op.operand
+        if c in ("JP", "JPT", "JPF", "EM", "EMT", "EMF"):
+            la = path.la if path.la is not None or c in ("JP", "EM") else self.fresh()
+            path.la = la
+            taken = {"JP": _ALL, "EM": _ALL, "JPT": la, "EMT": la, "JPF": _ALL ^ (la or 0),
+                     "EMF": _ALL ^ (la or 0)}[c] & path.reach
+            if c.startswith("JP") and taken and op.target is not None and op.target > i:
+                pending.setdefault(op.target, []).append(_Path(taken, dict(path.values), path.la, []))
+            # a jump back leaves the region (a new pass starts from free values again); EM leaves it too
+            path.reach &= ~taken
+            return path if path.reach else None
+        for kind, addr in implicit_writes(op, self.program.semantics.profile.interface, self.flag):
+            path.values[(kind, addr)] = None
+        if c in _READS and o is not None and o.is_bit:
+            if c == "LDBITS":
+                path.la = None if self.shared else path.la
+                return path
+            read = self.fresh() if o.indexed else self.value(path, (o.kind, o.addr))
+            self.reads[i] = read
+            value = _ALL ^ read if c in ("LDN", "ANDN", "ORN", "XORN") else read
+            if c in ("LD", "LDN"):
+                path.la = value
+            else:
+                la = path.la if path.la is not None else self.fresh()
+                path.la = _combine(_GATES[c], la, value)
+            return path
+        if c in _WRITES and o is not None and o.is_bit:
+            la = path.la if path.la is not None else self.fresh()
+            path.la = la
+            if i in self.skip:
+                return path
+            key = (o.kind, o.addr)
+            if c in ("ST", "STN"):
+                path.values[key] = la if c == "ST" else _ALL ^ la
+                return path
+            old = self.value(path, key)
+            path.values[key] = {"SET": old | la, "RES": old & ~la, "SETN": old | (_ALL ^ la), "RESN": old & la}[c]
+            return path
+        if o is not None and o.is_bit:
+            # any other op naming a bit operand (PL, INC, DEC, B=, ...): it may write it in a way not followed here
+            for key in _bit_writes(op, self.program, self.flag):
+                path.values[key] = None
+            path.la = None
+            return path
+        if c in ("CMP", "SCMP", "BT", "PLL"):
+            path.la = self.reads[i] = self.fresh()
+        elif c == "NOTL":
+            path.la = None if path.la is None else _ALL ^ path.la
+        elif c == "BOPEN":
+            br = op.bracket
+            if br.mode == "LOGIC" and br.op in _BRACKET_GATES:
+                path.frames.append("load" if br.load else path.la if path.la is not None else self.fresh())
+                path.la = None
+            else:
+                path.frames.append(None)
+        elif c == "BCLOSE":
+            self.close(i, op, path)
+        elif c not in KEEPS_LA or (self.shared and c in WORD_WRITERS):
+            path.la = None
+        if c == "LBL":
+            path.frames = []
+        return path
+
+    def close(self, i: int, op: Op, path: _Path) -> None:
+        saved = path.frames.pop() if path.frames else None
+        br = op.bracket
+        if br.mode == "LOGIC" and br.op in _BRACKET_GATES:
+            inner = path.la if path.la is not None else self.fresh()
+            if br.op in ("AN", "ON", "XON"):
+                inner = _ALL ^ inner
+            if saved == "load":
+                path.la = inner
+            elif saved is None:
+                path.la = None
+            else:
+                path.la = _combine(_BRACKET_GATES[br.op], saved, inner)
+        elif op.rel:
+            path.la = self.reads[i] = self.fresh()
+        elif self.shared:
+            path.la = None
+
+
+def _bit_writes(op: Op, program: Program, flag: bool) -> list[Key]:
+    """The bit operands `op` may write (named or implicit)."""
+    found = [(k, a) for k, a in implicit_writes(op, program.semantics.profile.interface, flag)]
+    o = op.operand
+    if o is not None and o.is_bit and op.code not in _READS:
+        found += [(o.kind, o.addr + n) for n in range(op.nbits if op.code == "STBITS" else 1)]
+    return found
+
+
+def _statements(ops: Sequence[Op], start: int, consumer: int) -> list[tuple[int, int]]:
+    """ops[start:consumer] cut into statements: a new one begins at each load outside brackets."""
+    cuts = [start]
+    depth = 0
+    for i in range(start, consumer):
+        op = ops[i]
+        if i > start and depth == 0 and (op.code in ("LD", "LDN", "CMP", "SCMP", "BT", "PLL", "LBL")
+                                          or op.code == "BOPEN" and op.bracket.load):
+            cuts.append(i)
+        if op.code == "BOPEN":
+            depth += 1
+        elif op.code == "BCLOSE":
+            depth = max(0, depth - 1)
+        elif op.code == "LBL":
+            depth = 0
+    cuts.append(consumer)
+    return [(a, b) for a, b in zip(cuts, cuts[1:]) if a < b]
+
+
+def _relevant(ops: Sequence[Op], start: int, consumer: int, reads: set[int]) -> tuple[set[int], set[Key]]:
+    """The ops of the statements that can matter to the decision's conditions (read at `reads`): those that read
+    them, jump or end the module, or write an operand a later such statement reads; and the operands they read."""
+    needed: set[Key] = set()
+    followed: set[int] = set()
+    for a, b in reversed(_statements(ops, start, consumer)):
+        span = range(a, b)
+        matters = any(i in reads for i in span) or any(
+            ops[i].code in ("JP", "JPT", "JPF", "EM", "EMT", "EMF") for i in span) or any(
+            ops[i].operand is not None and ops[i].operand.is_bit and not ops[i].operand.indexed
+            and ops[i].code not in _READS and (ops[i].operand.kind, ops[i].operand.addr) in needed for i in span)
+        if not matters:
+            continue
+        followed.update(span)
+        for i in span:
+            o = ops[i].operand
+            if o is not None and o.is_bit and not o.indexed:
+                needed.add((o.kind, o.addr))
+    return followed, needed
+
+
+def _combine(gate: str, a: int, b: int) -> int:
+    return a & b if gate == "and" else a | b if gate == "or" else a ^ b
+
+
+def region_starts(program: Program, f: int, first: int, consumer: int) -> list[int]:
+    """The op indices a region ending at `consumer` can start at (see the module docstring), nearest first, none
+    after `first` (the decision's first condition)."""
+    ops = program.files[f].ops
+    sources: dict[int, list[int]] = {}
+    for j, op in enumerate(ops):
+        if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+            sources.setdefault(op.target, []).append(j)
+    called = {(t.file, t.index) for code in program.files for op in code.ops
+              for t in (op.call, *op.case_targets) if t is not None and not t.is_module and t.file >= 0}
+    starts = []
+    lowest_source = consumer + 1
+    for s in range(consumer, -1, -1):
+        # s becomes the start: ops[s] itself may be entered from anywhere; ops[s + 1 .. consumer] may not
+        if s < consumer:
+            t = s + 1
+            if (f, t) in called or any(j >= t for j in sources.get(t, ())):
+                break
+            lowest_source = min([lowest_source, *sources.get(t, ())])
+        op = ops[s]
+        if s < consumer and op.code in _BARRIERS or (op.operand is not None and op.operand.is_bit and op.operand.indexed
+                                    and op.code not in _READS):
+            break
+        if s <= first and lowest_source >= s:
+            starts.append(s)
+    return starts
+
+
+def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
+                 skip: frozenset[int] = frozenset(), start: int | None = None) -> Tied | None:
+    """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
+    fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
+    the program fixes it there, else None. None where no region covers all its conditions (or the decision is not
+    reached in it)."""
+    if program.semantics["chain_model"] != "static":
+        return None             # gates whose load/gate role is decided at run time: not followed here
+    f = decision.file
+    if any(c.file != f for c in decision.conditions):
+        return None
+    first = min(c.index for c in decision.conditions)
+    reads = {c.index for c in decision.conditions}
+    starts = [start] if start is not None else region_starts(program, f, first, decision.index)
+    best = _attempt(program, f, starts, len(starts) - 1, decision.index, reads, entry, skip)
+    if best is None:                        # the farthest start whose region fits MAX_VARS, by bisection
+        low, high = 0, len(starts) - 2
+        while low <= high:
+            mid = (low + high) // 2
+            found = _attempt(program, f, starts, mid, decision.index, reads, entry, skip)
+            if found is None:
+                high = mid - 1
+            else:
+                best, low = found, mid + 1
+    if best is None:
+        return None
+    s, run, path = best
+    if path is None or any(c.index not in run.reads for c in decision.conditions):
+        return None
+    tables = [run.reads[c.index] for c in decision.conditions]
+    found: set[int] = set()
+    _split(tables, 0, path.reach, 0, found)
+    ops = program.files[f].ops
+    writes = tuple(j for j in sorted(run.followed) if s <= j < decision.index and ops[j].code in _WRITES
+                   and ops[j].operand is not None and ops[j].operand.is_bit)
+    return Tied(frozenset(found), s, writes)
+
+
+def _attempt(program: Program, f: int, starts: list[int], k: int, consumer: int, reads: set[int],
+             entry: Callable[[str, int, int, int], int | None],
+             skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
+    """The run of the region from starts[k], or None where it needs more than MAX_VARS free values."""
+    if k < 0:
+        return None
+    run = _Run(program, f, starts[k], consumer, reads, entry, skip)
+    try:
+        return starts[k], run, run.run()
+    except _TooMany:
+        return None
+
+
+def _split(tables: Sequence[int], n: int, mask: int, vector: int, out: set[int]) -> None:
+    if not mask:
+        return
+    if n == len(tables):
+        out.add(vector)
+        return
+    _split(tables, n + 1, mask & tables[n], vector | 1 << n, out)
+    _split(tables, n + 1, mask & ~tables[n], vector, out)
+
+
+# ------------------------------------------------------------------------------- consumed starts and cycle order
+
+class _Unordered(Exception):
+    """The program's call structure gives no order of its ops within a cycle (recursion, a very long trace)."""
+
+
+_TRACE_LIMIT = 200_000
+_STARTS_WRITTEN = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "STBITS", "POP", "INC", "DEC"})
+
+
+@dataclasses.dataclass(frozen=True)
+class CycleOrder:
+    """The order in which the main program runs its ops in a cycle, calls inlined (`positions`: (file, op) -> its
+    positions), the backward jumps as (target position, jump position), and the ops a submitted job runs (after
+    the main program)."""
+
+    positions: dict[tuple[int, int], list[int]]
+    loops: tuple[tuple[int, int], ...]
+    in_jobs: frozenset[tuple[int, int]]
+
+    def may_precede(self, writer: tuple[int, int], reader: tuple[int, int]) -> bool:
+        """Whether `writer` can run before `reader` in the same cycle (reader run by the main program)."""
+        for pr in self.positions.get(reader, ()):
+            for pw in self.positions.get(writer, ()):
+                if pw < pr or any(pt <= pr and pj >= pw for pt, pj in self.loops):
+                    return True
+        return False
+
+
+def cycle_order(program: Program) -> CycleOrder | None:
+    positions: dict[tuple[int, int], list[int]] = {}
+    loops: list[tuple[int, int]] = []
+    trace: list[tuple[int, int]] = []
+
+    def walk(f: int, start: int, stack: tuple[tuple[int, int], ...]) -> None:
+        if (f, start) in stack:
+            raise _Unordered
+        ops = program.files[f].ops
+        here: dict[int, int] = {}
+        furthest = start
+        for i in range(start, len(ops)):
+            op = ops[i]
+            if len(trace) > _TRACE_LIMIT:
+                raise _Unordered
+            here[i] = len(trace)
+            positions.setdefault((f, i), []).append(len(trace))
+            trace.append((f, i))
+            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+                if op.target > i:
+                    furthest = max(furthest, op.target)
+                else:
+                    loops.append((here.get(op.target, -1), len(trace) - 1))
+            for target in (op.call, *op.case_targets):
+                if target is not None and not target.is_module and target.file >= 0:
+                    walk(target.file, target.index, stack + ((f, start),))
+            if op.code == "EM" and i >= furthest:
+                return
+
+    try:
+        walk(0, 0, ())
+        main_end = len(trace)
+        jobs: set[tuple[int, int]] = set()
+        for f, code in enumerate(program.files):
+            for op in code.ops:
+                if op.code == "SUBM" and op.call is not None and op.call.file >= 0:
+                    walk(op.call.file, op.call.index, ())
+        jobs = set(trace[main_end:])
+    except _Unordered:
+        return None
+    for f_i in jobs:
+        positions[f_i] = [p for p in positions[f_i] if p < main_end]
+    return CycleOrder(positions, tuple(loops), frozenset(jobs))
+
+
+def consumed_start_zero(program: Program, driven: set[tuple[str, int]]) -> Callable[[str, int, int, int], bool]:
+    """Whether a timer or counter start operand still holds 0 at op (file, index): the service consumes every
+    start after the cycle (A-34a, A-36a), power-on memory is 0, no scenario sets it, and no write of it can run
+    before that op in the same cycle (cycle_order); the op is run by the main program, not by a submitted job."""
+    sem = program.semantics
+    profile = sem.profile
+    ranges = []
+    if sem["timer_start_consumed"]:
+        ranges.append(("T", *profile.timer_start))
+    if sem["counter_start_consumed"]:
+        ranges.append(("C", *profile.counter_start))
+    writers: dict[tuple[str, int], list[tuple[int, int]]] = {}
+    free: set[str] = set()
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            o = op.operand
+            if o is None or not o.is_bit or op.code not in _STARTS_WRITTEN:
+                continue
+            if o.indexed:
+                free.add(o.kind)
+                continue
+            for n in range(op.nbits if op.code == "STBITS" else 1):
+                writers.setdefault((o.kind, o.addr + n), []).append((f, i))
+    order = cycle_order(program) if ranges else None
+
+    def zero(kind: str, addr: int, f: int, index: int) -> bool:
+        if order is None or kind in free or (kind, addr) in driven:
+            return False
+        if not any(kind == k and first <= addr <= last for k, first, last in ranges):
+            return False
+        if (f, index) in order.in_jobs or (f, index) not in order.positions:
+            return False
+        return not any(order.may_precede(w, (f, index)) for w in writers.get((kind, addr), ()))
+    return zero
