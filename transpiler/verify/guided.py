@@ -7,10 +7,10 @@ random cycle, a foreign word or marker set to a corner value, an input set, rema
 word, or all of it at byte patterns and corners), rare random toggles added, a word the program compares with a
 constant put next to that constant, a word's start value moved arithmetically (doubled, halved, plus or minus one).
 Each candidate runs on the reference interpreter alone (no ST side, with coverage); one that reaches a branch
-outcome or CASE entry not seen before, a marker or output the program writes in a state (0 or 1) or a change (to 0,
-to 1) not seen before, a word compare whose operands come out equal or one apart in a way not seen before (its
-boundary values: a mutated compare or constant differs from the original only there), a condition of a logic chain
-shown to decide it on its own for the first time (an MC/DC pair: an AND that became an OR differs only on such
+outcome or CASE entry not seen before, a marker or output the program writes in a state (0 or 1) not seen before, a
+word compare whose operands come out equal or one apart in a way not seen before (its boundary values: a mutated
+compare or constant differs from the original only there), a condition of a logic chain shown to decide it on its
+own for the first time (an MC/DC pair: an AND that became an OR differs only on such
 inputs), or a bit gate or divisor value or constant table entry not seen before (the value profile), is kept, cut
 just after the last cycle that brought something new, so that the co-simulation budget is spent on cycles that
 matter. What is left of the budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner
@@ -53,9 +53,8 @@ FILLER_MIN = 150            # shortest filler run when the rest of the budget is
 CHILD_CYCLES = 1000         # longest candidate run
 VALUE_SHARE = 0.25          # share of the budget for runs kept for value-profile features alone
 # Features a run may bring that rank below branches, CASE entries and marker states: the value profile, compare
-# boundaries, MC/DC pairs and changes of a written bit (0 to 1, 1 to 0: a reset that only ever finds its marker at 0
-# shows nothing); runs kept for these alone share VALUE_SHARE of the budget.
-_VALUE_FEATURES = frozenset({"value", "bound", "mcdc", "edge"})
+# boundaries and MC/DC pairs; runs kept for these alone share VALUE_SHARE of the budget.
+_VALUE_FEATURES = frozenset({"value", "bound", "mcdc"})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,7 +63,7 @@ class Probe:
 
     cycles_ok: int                 # cycles that ran without a fault of the original
     new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("value", ...),
-                                   # ("bound", op id, difference), ("mcdc", decision, condition), ("edge", bit, to)
+                                   # ("bound", op id, difference), ("mcdc", decision, condition)
     last_new: int                  # the cycle in which the last of them first appeared (-1: none)
     vectors: tuple = ()            # (cycle, decision, vector) of the condition vectors the run recorded first
     firsts: Mapping = dataclasses.field(default_factory=dict)   # feature -> the cycle it first appeared in
@@ -124,10 +123,6 @@ class Search:
         # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
         # per-cycle check costs little once the common states were seen.
         unseen = [(i, v) for i, ref in enumerate(self.toggled) for v in (0, 1) if ("bit", str(ref), v) not in self.seen]
-        # and the changes not seen yet (to 0, to 1), read against the previous cycle's values
-        unseen_edges = [(i, v) for i, ref in enumerate(self.toggled) for v in (0, 1)
-                        if ("edge", str(ref), v) not in self.seen]
-        previous = None
         for cycle in range(stimulus.cycles):
             for data in stimulus.machine_updates(cycle):
                 apply_machine_data(machine.sys, data)
@@ -169,20 +164,15 @@ class Search:
                     new |= fresh
                     firsts.update(dict.fromkeys(fresh, cycle))
                     last_new = cycle
-            if unseen or unseen_edges:
+            if unseen:
                 values = read_toggled()
                 reached = [(i, v) for i, v in unseen if values[i] == v]
-                changed = [(i, v) for i, v in unseen_edges if values[i] == v and previous is not None
-                           and previous[i] != v]
-                previous = values
-                if reached or changed:
+                if reached:
                     bits = [("bit", str(self.toggled[i]), v) for i, v in reached]
-                    bits += [("edge", str(self.toggled[i]), v) for i, v in changed]
                     new.update(bits)
                     firsts.update(dict.fromkeys(bits, cycle))
                     last_new = cycle
                     unseen = [pair for pair in unseen if pair not in reached]
-                    unseen_edges = [pair for pair in unseen_edges if pair not in changed]
         return Probe(ok, frozenset(new), last_new, tuple(vectors), firsts)
 
     def keep(self, probe: Probe, cycles: int | None = None) -> None:
