@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
+import json
 import random
 from pathlib import Path
 
 import pytest
 
 from transpiler import api
+from transpiler.cli.app import main
 from transpiler.diagnostics import Diagnostics
 from transpiler.exec.interp import compile_program
-from transpiler.verify.corners import NC_MODEL_OWNED, harvest
+from transpiler.verify.corners import NC_MODEL_OWNED, Corners, harvest
 from transpiler.verify.equiv import coverage_summary
 from transpiler.verify.guided import generate
+from transpiler.verify.mcdc import decision_coverage
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import build_machine, project_names
 from transpiler.verify.stimulus import build_stimulus, scenario_to_yaml
@@ -116,3 +119,63 @@ def test_dirty_fillers_start_every_written_marker_at_1_once(tmp_path):
     kept = generate(project.program, names, 2000, seed=3)
     dirty = [s.initial for s in kept if s.name.startswith("random_") and "M6" in s.initial]
     assert len(dirty) == 2 and {d["M6"] for d in dirty} == {0, 1} and {d["M5"] for d in dirty} == {0, 1}, dirty
+
+
+def test_a_byte_read_through_the_index_register_is_driven_to_the_boundaries_of_its_compare(tmp_path, capsys):
+    # `L B10[X]` with X = 2 reads B12, an operand no instruction names. The index analysis says which byte it is,
+    # so the stimulus starts it at power-on like a named one; the search then drives it to 6, 7 and 8 (the
+    # boundaries of `== K7`), which kills the mutants of the constant and of the address read (B11, B13 are 0).
+    source = tmp_path / "main.src"
+    source.write_text("L     K2\n=     X\nL     B10[X]\n==    K7\n=     O1\nEM\n")
+    project = api.load_project(api.project_options(source))
+    names = project_names(project.program)
+    assert ("B12", "B") in harvest(project.program, names).remanent_words
+    kept = generate(project.program, names, 300, seed=1)
+    sets = []
+    compiled = compile_program(project.program, coverage=True)
+    for scenario in kept:
+        stimulus = build_stimulus(scenario, names)
+        machine = build_machine(project.program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for cycle in range(stimulus.cycles):
+            machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+        sets.append(machine.coverage)
+    boundaries = decision_coverage(project.program, sets).boundaries
+    assert len(boundaries) == 3 and all(b.status == "reached" for b in boundaries), [b.what() for b in boundaries]
+    report = tmp_path / "m.json"
+    assert main(["mutate", str(source), "--random-cycles", "300", "--seed", "1", "--backend", "builtin", "--jobs", "1",
+                 "--report", str(report), "--min-score", "0"]) == 0
+    capsys.readouterr()
+    data = json.loads(report.read_text())
+    constants = [m for m in data["mutants"] if m["operator"] == "constant"]
+    assert len(constants) == 4 and all(m["outcome"] == "killed" for m in constants), constants
+
+
+def test_a_start_that_faults_from_clean_memory_gets_power_on_memory_that_runs(tmp_path):
+    # W10 picks an entry of a three-entry table: from clean memory (W10 = 0) the first cycle faults, and so would
+    # every filler run. The generated runs start from power-on memory in which the first cycle runs, and between
+    # them read every entry of the table (each one is a feature of the search).
+    (tmp_path / "main.src").write_text("L     W10\n-     K1\n=     X\nL     KF Speeds[X]\n=     D60\nEM\n\n"
+                                       "KFIELD Speeds\nK500\nK1000\nK2000\nENDK\n")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    names = project_names(project.program)
+    kept = generate(project.program, names, 600, seed=2)
+    assert sum(s.cycles for s in kept) > 300, [(s.name, s.cycles) for s in kept]
+    assert {s.initial.get("W10") for s in kept} >= {1, 2, 3}
+    fillers = [s for s in kept if s.name.startswith("random_")]
+    assert fillers and all(s.initial.get("W10") in (1, 2, 3) for s in fillers)
+
+
+def test_power_on_patterns_tell_every_byte_from_its_neighbours():
+    corners = Corners(constants=(), tables=(), values=(0, 1), inputs=(), foreign_words=(), foreign_markers=(),
+                      remanent_words=(("W4", "W"), ("D8", "D"), ("B3", "B")), remanent_markers=("M1",))
+    rng = random.Random(4)
+    for _ in range(50):
+        for kind in "BWD":
+            value = corners.pattern_value(rng, kind)
+            width = {"B": 1, "W": 2, "D": 4}[kind]
+            raw = value & ((1 << (8 * width)) - 1)
+            parts = [(raw >> (8 * i)) & 255 for i in range(width)]
+            assert 0 not in parts and len(set(parts)) == width, (kind, value)
+            assert -(1 << (8 * width - 1)) <= value < (1 << (8 * width - 1))
+        memory = corners.power_on(rng)
+        assert set(memory) == {"W4", "D8", "B3", "M1"} and memory["M1"] in (0, 1)

@@ -13,7 +13,7 @@ from typing import Any
 
 from transpiler.ir import Program
 from transpiler.verify.scenario import NameTable, OperandRef
-from transpiler.verify.simulate import program_operands
+from transpiler.verify.simulate import indexed_operands, program_operands
 
 # Operands the NC model itself writes for `nc:` actions (runtime_shim/hh_nc.c, iTNC and TNC 407 numbers): the
 # stimulus never sets them directly, or a strobe or mode word would change behind the model's back.
@@ -33,7 +33,8 @@ class Corners:
     """What the stimulus draws from: the program's constants and the operands it may drive."""
 
     constants: tuple[int, ...]                    # every K value and KFIELD entry of the program
-    tables: tuple[int, ...]                       # the KFIELD entries (decoded numbers such as M codes)
+    tables: tuple[int, ...]                       # KFIELD entries and numbers compared with an NC word (decoded
+                                                  # numbers such as M codes)
     values: tuple[int, ...]                       # c-1, c, c+1 of every constant, plus the range edges
     inputs: tuple[str, ...]                       # display names of the inputs the program reads
     foreign_words: tuple[tuple[str, str], ...]    # (name, kind) of B/W/D read, never written, not the NC model's
@@ -59,6 +60,25 @@ class Corners:
         else:
             value = rng.randint(-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
         return self.clamp(value, kind)
+
+    def pattern_value(self, rng: random.Random, kind: str) -> int:
+        """A value of a `kind` (B/W/D) operand whose bytes are all non-zero and all different, the upper ones small
+        (1..15, so that a word used as a loop bound stays a few thousand at most): memory at power-on that tells
+        each byte from its neighbours and from 0, so that a store or read one byte off shows."""
+        count = _WIDTH_BITS.get(kind, 16) // 8
+        low = rng.randrange(16, 256)
+        upper = rng.sample(range(1, 16), count - 1)
+        value = low + sum(b << (8 * (i + 1)) for i, b in enumerate(upper))
+        return _signed(value, kind)
+
+    def power_on(self, rng: random.Random) -> dict[str, int]:
+        """Remanent memory as an earlier run may have left it: every word the stimulus may start, half of them at a
+        byte pattern (pattern_value), the others at a corner value (word_value), and every written marker at 0
+        or 1."""
+        memory = {name: self.pattern_value(rng, kind) if rng.random() < 0.5 else self.word_value(rng, kind)
+                  for name, kind in self.remanent_words}
+        memory.update((marker, rng.randrange(2)) for marker in self.remanent_markers)
+        return memory
 
     @staticmethod
     def clamp(value: int, kind: str) -> int:
@@ -103,6 +123,13 @@ _NC_KINDS = ("m_function", "m_function", "m_function", "tool_call", "tool_call",
              "mode", "mode", "fn19", "restart")
 
 
+def _signed(value: int, kind: str) -> int:
+    """`value` wrapped into the signed range of a `kind` (B/W/D) operand (K$FF compared with a byte is -1)."""
+    bits = _WIDTH_BITS.get(kind, 16)
+    value &= (1 << bits) - 1
+    return value - (1 << bits) if value >> (bits - 1) else value
+
+
 def harvest(program: Program, names: NameTable) -> Corners:
     """The constants of the program (compare operands, K values, KFIELD tables such as decoded M-function numbers,
     CASE limits, tool/pocket and mode values) and the operands the stimulus may drive."""
@@ -118,8 +145,18 @@ def harvest(program: Program, names: NameTable) -> Corners:
             elif operand.kind == "KF":
                 constants.update(operand.kfield)
                 tables.update(operand.kfield)
-    values = {c + d for c in constants for d in (-1, 0, 1)} | set(_EDGES)
     used, written, _ = program_operands(program)
+    # operands reached through the index register count as named ones: a table read or filled through X
+    indexed_read, indexed_written = indexed_operands(program)
+    used = used | indexed_read | indexed_written
+    written = written | indexed_written
+    # a constant compared with a byte or word counts at that width too (K$FF against a byte is -1)
+    compared = _compares(program)[0]
+    constants |= {const for _, const in compared}
+    # a number compared with a word of the NC interface (the M code, a tool number) is one the program decodes, as
+    # the entries of a table are: NC jobs draw from these
+    tables |= {const for word, const in compared if (word.kind, word.addr) in NC_MODEL_OWNED and const >= 0}
+    values = {c + d for c in constants for d in (-1, 0, 1)} | set(_EDGES)
     profile = program.semantics.profile
 
     def name(ref: OperandRef) -> str:
@@ -153,10 +190,10 @@ def harvest(program: Program, names: NameTable) -> Corners:
 _COPY_DEPTH = 3             # copies followed back from a compared word (`L W32` `= W8` ... `L W8` `< K10`)
 
 
-def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
-    """Each word compared with a constant by a load and a compare in a row (`L W10` `> K100`, or `L K100` `< W10`),
-    and each word it is copied from (a load and a store in a row, a few copies back), where the stimulus may drive
-    that word: the program often works on a copy of the word the machine supplies."""
+def _compares(program: Program) -> tuple[set[tuple[OperandRef, int]], dict[OperandRef, set[OperandRef]]]:
+    """(each word compared with a constant by a load and a compare in a row (`L W10` `> K100`, or `L K100`
+    `< W10`), with the constant at the word's width; each word's sources: the words loaded and stored into it in
+    a row)."""
     compared: set[tuple[OperandRef, int]] = set()
     sources: dict[OperandRef, set[OperandRef]] = {}
     for code in program.files:
@@ -169,7 +206,14 @@ def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tu
                 continue
             word, const = (prev.operand, op.operand) if op.operand.kind == "K" else (op.operand, prev.operand)
             if const.kind == "K" and _plain_word(word):
-                compared.add((_ref(word), const.addr))
+                compared.add((_ref(word), _signed(const.addr, word.kind)))
+    return compared, sources
+
+
+def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
+    """Each word compared with a constant (_compares), and each word it is copied from (a few copies back), where
+    the stimulus may drive that word: the program often works on a copy of the word the machine supplies."""
+    compared, sources = _compares(program)
     pairs: set[tuple[str, str, int]] = set()
     for word, const in compared:
         reached, frontier = {word}, {word}

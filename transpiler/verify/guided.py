@@ -3,17 +3,22 @@ branches both ways and enter its CASE entries, deterministic for a seed.
 
 As a fuzzer does, the search keeps a corpus (the user's scenarios, then every generated one that raised
 coverage) and mutates its members: an NC job moved to a corner value (verify/corners.py), an NC job inserted at a
-random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner,
-rare random toggles added, a word the program compares with a constant put next to that constant, a word's start
-value moved arithmetically (doubled, halved, plus or minus one). Each candidate runs on the reference interpreter alone (no ST side, with coverage);
-one that reaches a branch outcome or CASE entry not seen before, a marker or output the program writes in a
-state (0 or 1) not seen before, a word compare whose operands come out equal or one apart in a way not seen
-before (its boundary values: a mutated compare or constant differs from the original only there), a condition of a
-logic chain shown to decide it on its own for the first time (an MC/DC pair: an AND that became an OR differs only
-on such inputs), or a bit gate or divisor value not seen before (the value profile), is kept, cut just after the
-last cycle that brought something new, so that the co-simulation budget is spent on cycles that matter. What is
-left of the budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner values at random
-cycles.
+random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner (one
+word, or all of it at byte patterns and corners), rare random toggles added, a word the program compares with a
+constant put next to that constant, a word's start value moved arithmetically (doubled, halved, plus or minus one).
+Each candidate runs on the reference interpreter alone (no ST side, with coverage); one that reaches a branch
+outcome or CASE entry not seen before, a marker or output the program writes in a state (0 or 1) not seen before, a
+word compare whose operands come out equal or one apart in a way not seen before (its boundary values: a mutated
+compare or constant differs from the original only there), a condition of a logic chain shown to decide it on its
+own for the first time (an MC/DC pair: an AND that became an OR differs only on such
+inputs), or a bit gate or divisor value or constant table entry not seen before (the value profile), is kept, cut
+just after the last cycle that brought something new, so that the co-simulation budget is spent on cycles that
+matter. What is left of the budget at the end runs as corner-random stimulus: inputs toggling, NC jobs with corner
+values at random cycles, from clean memory and from dirty memory (every word at a byte pattern or corner value, so
+that a store one byte off shows) in turn.
+
+Where the original faults in its first cycle from clean memory (a table index or divisor read from memory nobody
+wrote), a run starts from power-on memory drawn until one gets through that cycle.
 
 A candidate in which the original program faults (an NC handshake that cannot finish, a runtime fault) is cut
 before the faulting cycle: the generated stimulus only asks what the original answers."""
@@ -43,7 +48,8 @@ SEARCH_MAX = 120_000
 STALE_LIMIT = 400           # candidates in a row without anything new: the search stops
 FILLER_ATTEMPTS = 8
 FILLER_KINDS = 4            # healthy or not, clean or dirty memory at power-on
-FILLER_MIN = 200            # shortest filler run when the rest of the budget is split
+POWER_ON_TRIES = 64         # power-on memories drawn where the original faults at once from clean memory
+FILLER_MIN = 150            # shortest filler run when the rest of the budget is split
 CHILD_CYCLES = 1000         # longest candidate run
 VALUE_SHARE = 0.25          # share of the budget for runs kept for value-profile features alone
 # Features a run may bring that rank below branches, CASE entries and marker states: the value profile, compare
@@ -232,7 +238,10 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
             draw = rng.random()
             if corners.inputs and draw < 0.3:
                 initial[rng.choice(corners.inputs)] = rng.randrange(2)
-            elif corners.remanent_words and draw < 0.8:
+            elif draw >= 0.9:
+                # all of it at once, as an earlier run may have left it (words at byte patterns or corners)
+                initial.update(corners.power_on(rng))
+            elif corners.remanent_words and draw < 0.7:
                 name, kind = rng.choice(corners.remanent_words)
                 initial[name] = corners.word_value(rng, kind)
             elif corners.remanent_markers:
@@ -258,7 +267,8 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
     normally-closed contacts made, or all 0), NC jobs with corner values every 20-200 cycles, and a foreign word or
     marker set to a corner value with each job. `dirty`: the memory the program writes starts as remanent memory
     left by an earlier run would (the markers at these values, some words at corners), so that a store that only
-    ever writes the power-on value still shows whether it happens."""
+    ever writes the power-on value still shows whether it happens: the markers at these values, every word at a
+    byte pattern or a corner value (Corners.power_on)."""
     events: list[Event] = []
     cycle = rng.randrange(2, 20)
     while cycle < cycles:
@@ -271,15 +281,69 @@ def corner_random(program: Program, corners: Corners, names: NameTable, cycles: 
         cycle += rng.randrange(20, 200)
     initial: dict[str, Any] = {n: 1 for n in corners.inputs} if healthy else {}
     if dirty is not None:
+        initial.update(corners.power_on(rng))
         initial.update(dirty)
-        initial.update((word, corners.word_value(rng, kind)) for word, kind in corners.remanent_words
-                       if rng.random() < 0.3)
     inputs = list(corners.inputs)
     scenario = Scenario(name=name, cycles=cycles, profile=program.semantics.profile.name,
                         machine_parameters=machine_parameters, initial=initial, events=events,
                         random=RandomStimulus(seed=rng.randrange(1 << 30), inputs=inputs,
                                               toggle_probability=0.01 if healthy else 0.05) if inputs else None)
     return bind(scenario, names)
+
+
+def _fill(search: Search, runner, budget: int, kept: list[Scenario], corpus: list[Scenario], seed: int,
+          rng: random.Random) -> list[Scenario]:
+    """Corner-random runs (`runner`) for what is left of the budget: healthy and not, from clean and from dirty
+    memory. The four kinds share `budget` (a share too short to matter goes to the one running now); clean and dirty
+    alternate, so that a short rest still has runs from both. `kept` and `corpus`: the search's runs, whose power-on
+    memory a filler that faults at once may start from."""
+    corners = search.corners
+    filled: list[Scenario] = []
+    spent = 0
+    attempt = 0
+    # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
+    dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
+    while spent < budget and attempt < FILLER_ATTEMPTS:
+        share = (budget - spent) // max(1, FILLER_KINDS - attempt)
+        cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
+        make = runner(cycles, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""), attempt % 4 < 2)
+        memory = None if attempt % 2 == 0 else dirty if attempt % 4 == 1 else \
+            {marker: 1 - value for marker, value in dirty.items()}
+        filler = _starting(search, make(memory), make, [*kept, *filled, *corpus], corners, rng)
+        attempt += 1
+        probe = search.probe(filler)
+        if probe is None or probe.cycles_ok == 0:
+            continue
+        search.keep(probe, probe.cycles_ok)
+        filled.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, search.names))
+        spent += probe.cycles_ok
+    return filled
+
+
+def _starting(search: Search, scenario: Scenario, make, runs: list[Scenario], corners: Corners,
+              rng: random.Random) -> Scenario:
+    """`scenario`, or where the original faults in its first cycle with it (a table index or a divisor read from
+    memory at power-on), `make(memory)` with memory drawn afresh (Corners.power_on), else with the power-on memory
+    of one of `runs`, the first that gets through its first cycle (`scenario` when none does)."""
+    if _gets_going(search, scenario):
+        return scenario
+    # fresh draws first (each run then starts from other memory), the memories of runs that got going after them
+    for attempt in range(POWER_ON_TRIES + len(runs)):
+        if attempt < POWER_ON_TRIES:
+            memory = corners.power_on(rng)
+        else:
+            run = runs[attempt - POWER_ON_TRIES]
+            memory = {name: value for name, value in run.initial.items() if name not in corners.inputs}
+        candidate = make(memory)
+        if _gets_going(search, candidate):
+            return candidate
+    return scenario
+
+
+def _gets_going(search: Search, scenario: Scenario) -> bool:
+    # one cycle is enough to tell (and costs one interpreter cycle)
+    probe = search.probe(_cut(scenario, 1, search.names))
+    return probe is not None and probe.cycles_ok > 0
 
 
 def _cut(scenario: Scenario, cycles: int, names: NameTable) -> Scenario:
@@ -310,12 +374,17 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
             corpus.append(bind(scenario.model_copy(update={"expect": []}), names))
     kept: list[Scenario] = []
     spent = 0
-    search.interpreter_cycles = 0       # the seeds' own runs are not part of the search budget
+
+    def runner(cycles: int, name: str, healthy: bool):
+        """A corner-random run of `cycles` cycles from the power-on memory given to it."""
+        return lambda memory: corner_random(program, corners, names, cycles, rng, name, machine_parameters, healthy,
+                                            memory)
     # Without scenarios of the user, the corpus starts from corner-random runs (kept only where they add).
     if not corpus:
         for n, healthy in enumerate((True, False)):
-            corpus.append(corner_random(program, corners, names, min(budget, 400), rng, f"corner_seed{seed}_{n}",
-                                        machine_parameters, healthy))
+            make = runner(min(budget, 400), f"corner_seed{seed}_{n}", healthy)
+            corpus.append(_starting(search, make(None), make, [], corners, rng))
+    search.interpreter_cycles = 0       # the seeds' own runs are not part of the search budget
     serial = 0
     stale = 0
     spent_on_values = 0
@@ -342,23 +411,5 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         corpus.append(child)
         spent += length
         spent_on_values += length if value_only else 0
-    attempt = 0
-    # the two dirty kinds start each written marker at opposite values: one of them starts it at 1
-    dirty = {marker: rng.randrange(2) for marker in corners.remanent_markers}
-    while spent < budget and attempt < FILLER_ATTEMPTS:
-        # healthy and not, from clean and from dirty memory: the four kinds share what is left of the budget (a
-        # share too short to matter goes to the one running now)
-        share = (budget - spent) // max(1, FILLER_KINDS - attempt)
-        cycles = budget - spent if share < FILLER_MIN or attempt >= FILLER_KINDS - 1 else share
-        filler = corner_random(program, corners, names, cycles, rng, f"random_seed{seed}" + (f"_{attempt}" if attempt else ""),
-                               machine_parameters, healthy=attempt % 2 == 0,
-                               dirty=None if attempt % 4 < 2 else dirty if attempt % 4 == 2 else
-                               {marker: 1 - value for marker, value in dirty.items()})
-        attempt += 1
-        probe = search.probe(filler)
-        if probe is None or probe.cycles_ok == 0:
-            continue
-        search.keep(probe, probe.cycles_ok)
-        kept.append(filler if probe.cycles_ok == filler.cycles else _cut(filler, probe.cycles_ok, names))
-        spent += probe.cycles_ok
+    kept += _fill(search, runner, budget - spent, kept, corpus, seed, rng)
     return kept

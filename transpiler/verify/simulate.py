@@ -15,6 +15,7 @@ from transpiler.exec.interp import CompiledProgram, Machine, MachineConfigError,
 from transpiler.ir import Program
 from transpiler.frontend.parse import MpParser
 from transpiler.frontend.opcodes import implicit_writes
+from transpiler.verify.index_range import index_ranges
 from transpiler.verify.scenario import TABLE_FILES, MachineData, NameTable, OperandRef, Scenario, compose_yaml, \
     normalize_value
 from transpiler.language.semantics import PROFILES
@@ -59,6 +60,26 @@ def program_operands(program: Program) -> tuple[set[OperandRef], set[OperandRef]
     written = set(operand_writers(program))     # one rule for "written" (the index register X is never named here)
     outputs = {r for r in used if r.kind == "O"}
     return used, written, outputs
+
+
+def indexed_operands(program: Program, span: int = 64) -> tuple[set[OperandRef], set[OperandRef]]:
+    """(the operands instructions through the index register read, the ones they write): base + X for the values X
+    can hold at the instruction (verify/index_range), where those are known and at most `span` apart; B/W/D
+    operands step by their width from base + the smallest X (the index counts bytes)."""
+    ranges = index_ranges(program)
+    read: set[OperandRef] = set()
+    written: set[OperandRef] = set()
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            o = op.operand
+            x = ranges.get((f, i))
+            if o is None or not o.indexed or o.kind not in _NAMED_KINDS or o.kind == "S" or x is None \
+                    or x[1] - x[0] > span:
+                continue
+            step = {"W": 2, "D": 4}.get(o.kind, 1)
+            refs = {OperandRef(o.kind, a) for a in range(o.addr + x[0], o.addr + x[1] + 1, step) if a >= 0}
+            (written if op.code in _WRITES else read).update(refs)
+    return read, written
 
 
 def project_names(program: Program) -> NameTable:

@@ -105,9 +105,10 @@ def compile_program(program: Program, *, exact: bool | None = None, coverage: bo
     and records the distinct vectors of condition values and outcome of every decision (decisions.py, MC/DC); bit
     logic is then not folded into one expression per run, each condition is read into a local of its own.
 
-    `value_profile` (with coverage) also marks each pair of values a bit gate combines and each zero or non-zero
-    divisor (see value_slots): a stimulus search counts those as features of their own, since a mutated gate
-    differs from the original only there. The exact re-run of a cycle does not mark them."""
+    `value_profile` (with coverage) also marks each pair of values a bit gate combines, each zero or non-zero
+    divisor and each entry of a constant table read (see value_slots): a stimulus search counts those as features
+    of their own, since a mutated gate, divisor or index differs from the original only there. The exact re-run of
+    a cycle does not mark them."""
     if exact is None:
         exact = coverage
     # Native memoryview casts when the host byte order is the profile's, struct calls otherwise.
@@ -157,14 +158,18 @@ def boundary_slots(program: Program) -> list[tuple[int, int]]:
 
 def value_slots(program: Program) -> list[tuple[int, int]]:
     """The value profile's slots in op order: (op id, LA) for LA 0 and 1 of every AND/OR gate whose operand differs
-    from LA (an AND that became an OR differs only there), and (op id, divisor != 0) of every DIV and MOD (the
-    translation checks the divisor where the original has no branch). Word compares have boundary_slots."""
+    from LA (an AND that became an OR differs only there), (op id, divisor != 0) of every DIV and MOD (the
+    translation checks the divisor where the original has no branch), and (op id, X) of every entry X of a constant
+    table (KF) an op reads (a mutated index or table differs only in the entries read). Word compares have
+    boundary_slots."""
     slots: list[tuple[int, int]] = []
     opid = 0
     for code in program.files:
         for op in code.ops:
             if op.code in _GATES or op.code in ("DIV", "MOD"):
                 slots += [(opid, 0), (opid, 1)]
+            elif op.operand is not None and op.operand.kind == "KF" and op.operand.kfield:
+                slots += [(opid, entry) for entry in range(len(op.operand.kfield))]
             opid += 1
     return slots
 
@@ -451,6 +456,10 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
                                      f"stk.extend(({', '.join(words)},))", opid)
                     self.out(indent, "else:", opid)
                     run_end = offset + count
+            if op.operand is not None and op.operand.kind == "KF" and (opid, 0) in self.value_slot:
+                # the value profile: which entry of the table is read (a read outside it faults in the op)
+                self.out(indent + (offset < run_end), f"if 0 <= X < {len(op.operand.kfield)}: "
+                                                      f"_vp[{self.value_slot[opid, 0]} + X] = 1", opid)
             if offset < run_end:
                 self._op(op, opid, f, seg_of, indent + 1)
             else:
