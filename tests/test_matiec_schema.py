@@ -36,8 +36,8 @@ def _parts(name: str, random_cycles: int = 300):
     return project, transpiled, names, sorted(loaded, key=lambda s: s.cycles), mp
 
 
-def _judge(name: str, side_factory, schema_factory=None) -> Judge:
-    project, transpiled, names, scenarios, mp = _parts(name)
+def _judge(name: str, side_factory, schema_factory=None, random_cycles: int = 300) -> Judge:
+    project, transpiled, names, scenarios, mp = _parts(name, random_cycles)
     return Judge(project.program, io_map_of(transpiled.result), names, scenarios, transpiled.st_text,
                  side_factory(transpiled), compile_program(project.program), mp, schema_factory and
                  schema_factory(transpiled))
@@ -128,8 +128,11 @@ def test_matiec_schema_gives_every_mutant_the_verdict_of_its_own_build(tmp_path,
     from transpiler.exec.compiled.matiec_side import matiec_side_factory
     monkeypatch.setenv("HH2IEC_CACHE", str(tmp_path))
     iec2c = find_iec2c()
+    # The construct's scenario with a few generated cycles: stimulus that kills some mutants and leaves others, so
+    # that both lists are compared (the full generated budget kills all of them).
     judge = _judge("case_chain", lambda t: (lambda text: matiec_side_factory(text, t.result.project, iec2c)),
-                   lambda t: (lambda text, mutations: MatiecSchema(text, mutations, t.result.project, iec2c)))
+                   lambda t: (lambda text, mutations: MatiecSchema(text, mutations, t.result.project, iec2c)),
+                   random_cycles=40)
     sites = mutation_sites(judge.st_text)
     schema = judge.schema_factory(judge.st_text, _mutations(judge.st_text))
     assert not schema.unswitched
