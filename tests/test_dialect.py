@@ -12,7 +12,7 @@ import pytest
 from lxml import etree
 
 from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou, VarSection
-from transpiler.backends.plcopen.writer import GVL_DATA_NAME, NS, render_target_xml
+from transpiler.backends.plcopen.writer import GVL_DATA_NAME, NS
 from transpiler.backends.plcopen.xsd import schema_path, validate_xml
 from transpiler.backends.st.check import check_blark
 from transpiler.backends.st import exprs as E

@@ -404,14 +404,14 @@ def _inputs_digest(command: str, project: Project, mp_path: Path | None, files: 
     return inputs_digest(command, __version__, [*sources, ("machine parameters", mp_path), *files], all_settings)
 
 
-def _generated_runs(command: str, project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping | None,
-                    random_cycles: int, seed: int, plan_file: Path | None, digest: str) -> tuple[list, float]:
+def _generated_runs(project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping | None,
+                    random_cycles: int, seed: int, plan: "PlanFile | None") -> tuple[list, float]:
     """The runs of the coverage-guided search (verify/guided.py; the user's scenarios its seeds) and the seconds it
-    took; with `plan_file`, the runs it chose when the plan was made, read back instead of searching again."""
+    took; with a plan file, the runs it chose when the plan was made, read back instead of searching again."""
     import time
     from transpiler.verify.guided import generate
-    if plan_file is not None:
-        return read_plan_file(plan_file, command, digest, names), 0.0
+    if plan is not None:
+        return [plan.generated_run(i, names) for i in range(len(plan.generated))], 0.0
     start = time.perf_counter()
     runs = generate(project.program, names, random_cycles, seed, seeds, machine_parameters=mp_path, base_mp=mp)
     return runs, time.perf_counter() - start
@@ -421,46 +421,66 @@ def _shard_problem(message: str, at: Path | None = None) -> CompileFailed:
     return CompileFailed([Diagnostic.of("E-SHARD", Span(str(at), 1, 1) if at is not None else NO_SPAN, message)])
 
 
-def read_plan_file(path: Path, command: str, digest: str, names, *, folder: Path | None = None) -> list:
-    """The generated runs of a plan file written by `--plan N --plan-file FILE` on the same inputs; raises
-    HH2IECError (E-SHARD) when the file is not a plan of `command` or was made from other inputs."""
-    data = _plan_file_data(Path(path), command, digest)
-    return [_planned_run(text, Path(path), i, folder, names) for i, text in enumerate(data["generated"])]
+@dataclasses.dataclass(frozen=True)
+class PlanFile:
+    """A plan file written by `--plan N --plan-file FILE`, read once and checked (PlanFile.read): its units (name
+    and cost of each), the generated runs as scenario texts and, for mutate, the infection map."""
 
+    path: Path
+    units: tuple[dict, ...]
+    generated: tuple[str, ...]
+    infected: object = None                 # as written: checked against the runs by PlanFile.infection
 
-def _planned_run(text: str, path: Path, index: int, folder: Path | None, names):
-    """Generated run `index` (0-based) of a plan file, as a scenario."""
-    from transpiler.verify.scenario import ScenarioError, scenario_from_text
-    try:
-        return scenario_from_text(text, f"{path}#generated{index + 1}", folder or Path.cwd(), names)
-    except ScenarioError as exc:
-        raise CompileFailed(list(exc.diagnostics)) from None
+    @classmethod
+    def read(cls, path: Path, command: str, digest: str) -> "PlanFile":
+        """Raises HH2IECError (E-SHARD) when the file is not a plan of `command`, was made from other inputs than
+        those of `digest`, or its units or generated runs are damaged."""
+        import json
+        from transpiler.verify.shard import FORMAT
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
+            raise _shard_problem(f"cannot read the plan file: {exc}", path) from None
+        if not isinstance(data, dict) or data.get("format") != FORMAT or data.get("kind") != "hh2iec-plan":
+            raise _shard_problem("not a plan file of this hh2iec (write one with --plan N --plan-file FILE)", path)
+        if data.get("command") != command:
+            raise _shard_problem(f"a plan file of `{data.get('command')}`, not of `{command}`", path)
+        if data.get("digest") != digest:
+            raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
+                                 "version) than this run's: make it again with the same arguments", path)
+        units, generated = data.get("units", []), data.get("generated", [])
+        if (not isinstance(units, list) or not isinstance(generated, list)
+                or not all(isinstance(t, str) for t in generated)):
+            raise _shard_problem("the plan file's units or generated runs are damaged: make it again", path)
+        for number, unit in enumerate(units, 1):
+            if (not isinstance(unit, dict) or unit.get("unit") != number or not isinstance(unit.get("name"), str)
+                    or not isinstance(unit.get("cost"), (int, float)) or isinstance(unit.get("cost"), bool)):
+                raise _shard_problem(f"the plan file's unit {number} is damaged: make it again", path)
+        return cls(path, tuple(units), tuple(generated), data.get("infected"))
 
+    def generated_run(self, index: int, names):
+        """Generated run `index` (0-based), as a scenario."""
+        from transpiler.verify.scenario import ScenarioError, scenario_from_text
+        try:
+            return scenario_from_text(self.generated[index], f"{self.path}#generated{index + 1}", Path.cwd(), names)
+        except ScenarioError as exc:
+            raise CompileFailed(list(exc.diagnostics)) from None
 
-def _plan_file_data(path: Path, command: str, digest: str) -> dict:
-    """A plan file's content, checked: a plan of `command` made from the inputs of `digest`, whose units are
-    numbered 1..n with a name and a cost each, and whose generated runs are texts (E-SHARD otherwise)."""
-    import json
-    from transpiler.verify.shard import FORMAT
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise _shard_problem(f"cannot read the plan file: {exc}", path) from None
-    if not isinstance(data, dict) or data.get("format") != FORMAT or data.get("kind") != "hh2iec-plan":
-        raise _shard_problem("not a plan file of this hh2iec (write one with --plan N --plan-file FILE)", path)
-    if data.get("command") != command:
-        raise _shard_problem(f"a plan file of `{data.get('command')}`, not of `{command}`", path)
-    if data.get("digest") != digest:
-        raise _shard_problem("the plan file was made from other inputs (sources, scenarios, settings or hh2iec "
-                             "version) than this run's: make it again with the same arguments", path)
-    units, generated = data.get("units", []), data.get("generated", [])
-    if not isinstance(units, list) or not isinstance(generated, list) or not all(isinstance(t, str) for t in generated):
-        raise _shard_problem("the plan file's units or generated runs are damaged: make it again", path)
-    for number, unit in enumerate(units, 1):
-        if (not isinstance(unit, dict) or unit.get("unit") != number or not isinstance(unit.get("name"), str)
-                or not isinstance(unit.get("cost"), (int, float)) or isinstance(unit.get("cost"), bool)):
-            raise _shard_problem(f"the plan file's unit {number} is damaged: make it again", path)
-    return data
+    def infection(self, scenarios: list) -> tuple[frozenset[int], ...] | None:
+        """The infection map per run in judging order (plan numbers of the mutants), or None when the plan has none
+        (a backend without schemata); E-SHARD when it does not fit these runs and units."""
+        entries = self.infected
+        if entries is None:
+            return None
+        count = len(self.units)
+        if (not isinstance(entries, list) or len(entries) != len(scenarios)
+                or any(not isinstance(e, dict) or e.get("run") != s.name or not isinstance(e.get("mutants"), list)
+                       or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= count
+                                  for n in e["mutants"]) for e, s in zip(entries, scenarios))):
+            raise _shard_problem("the plan file's infection map does not fit its runs and mutants: make it again",
+                                 self.path)
+        return tuple(frozenset(e["mutants"]) for e in entries)
 
 
 def plan_file_text(plan: Plan) -> str:
@@ -552,14 +572,15 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
         raise CompileFailed(list(chosen.diagnostics) + [Diagnostic.of("E-TOOL", NO_SPAN, chosen.note)])
     names = project_names(project.program)
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
-    if plan_file is not None and share is not None:
-        runs, plan = _runs_of_plan_file(project, Path(plan_file), digest, names, scenarios, share, diags)
+    planned = PlanFile.read(plan_file, "equiv", digest) if plan_file is not None else None
+    if planned is not None and share is not None:
+        runs, plan = _runs_of_plan_file(project, planned, digest, names, scenarios, share, diags)
         plan = dataclasses.replace(plan, setup_seconds=time.perf_counter() - start)
     else:
         loaded = _load_scenarios(project, scenarios, names, diags)
         setup_seconds = time.perf_counter() - start
-        generated, search_seconds = _generated_runs("equiv", project, names, loaded, mp_path, base_mp,
-                                                    random_cycles, seed, plan_file, digest)
+        generated, search_seconds = _generated_runs(project, names, loaded, mp_path, base_mp, random_cycles, seed,
+                                                    planned)
         runs = loaded + generated
         plan = Plan("equiv", digest, tuple(s.name for s in runs), tuple(float(s.cycles) for s in runs),
                     tuple(generated), setup_seconds, search_seconds)
@@ -567,14 +588,13 @@ def _equivalence_setup(project: Project, scenarios: list[Path], random_cycles: i
                        tuple(transpiled.result.untranslated))
 
 
-def _runs_of_plan_file(project: Project, path: Path, digest: str, names, scenarios: list[Path], share: "Share",
-                       diags: Diagnostics) -> tuple[list, Plan]:
+def _runs_of_plan_file(project: Project, planned: PlanFile, digest: str, names, scenarios: list[Path],
+                       share: "Share", diags: Diagnostics) -> tuple[list, Plan]:
     """The plan of a plan file and the runs `share` makes, in plan order (None for the others). Only those
     scenario files and generated runs are loaded: the job that wrote the plan loaded and checked every one of the
     same inputs (the digest says so), and a shard need not parse the runs of the other shards again."""
-    data = _plan_file_data(path, "equiv", digest)
-    units, texts = data["units"], data["generated"]
-    if len(units) != len(scenarios) + len(texts):
+    units, path = planned.units, planned.path
+    if len(units) != len(scenarios) + len(planned.generated):
         raise _shard_problem("the plan file's units are not its scenarios and generated runs: make it again", path)
     plan = Plan("equiv", digest, tuple(u["name"] for u in units), tuple(float(u["cost"]) for u in units))
     wanted = plan.selected(share)
@@ -585,8 +605,7 @@ def _runs_of_plan_file(project: Project, path: Path, digest: str, names, scenari
         runs[number - 1] = run
     for number in wanted:
         if number > len(scenarios):
-            runs[number - 1] = _planned_run(texts[number - 1 - len(scenarios)], path, number - 1 - len(scenarios),
-                                            None, names)
+            runs[number - 1] = planned.generated_run(number - 1 - len(scenarios), names)
     for number in wanted:
         if runs[number - 1].name != plan.names[number - 1] or float(runs[number - 1].cycles) != plan.costs[number - 1]:
             raise _shard_problem(f"run {number} of the plan file is not the run these inputs give: make it again",
@@ -719,15 +738,15 @@ def mutation_page(project: Project, mutation: Mutation, min_score: float) -> byt
 def _mutation_runs(project: Project, names, seeds: list, mp_path: Path | None, mp: Mapping | None,
                    scenarios: list[Path],
                    equivalent_file: Path | None, mutants_file: Path | None, settings: tuple[int, int, str, int],
-                   share: Share) -> tuple[str, list, float]:
-    """The inputs' digest of a mutation check (`settings`: random cycles, seed, backend choice and count) and its
-    generated runs with the seconds their search took."""
+                   share: Share) -> tuple[str, list, float, PlanFile | None]:
+    """The inputs' digest of a mutation check (`settings`: random cycles, seed, backend choice and count), its
+    generated runs with the seconds their search took, and the plan file they were read from (if any)."""
     random_cycles, seed, backend, count = settings
     digest = _inputs_digest("mutate", project, mp_path, [*(("scenario", path) for path in scenarios),
                                                          ("equivalent", equivalent_file), ("mutants", mutants_file)],
                             {"random_cycles": random_cycles, "seed": seed, "backend": backend, "count": count})
-    return (digest, *_generated_runs("mutate", project, names, seeds, mp_path, mp, random_cycles, seed,
-                                     share.plan_file, digest))
+    planned = PlanFile.read(share.plan_file, "mutate", digest) if share.plan_file is not None else None
+    return (digest, *_generated_runs(project, names, seeds, mp_path, mp, random_cycles, seed, planned), planned)
 
 
 def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list, search_seconds: float,
@@ -740,8 +759,8 @@ def _mutation_plan(digest: str, mutants: list, scenarios: list, generated: list,
     return plan, {mutants[i - 1]: i for i in plan.selected(share)}
 
 
-def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share, jobs: int,
-                 progress: Callable[[int, int], None] | None) -> tuple[Plan, list]:
+def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share, planned: PlanFile | None,
+                 jobs: int, progress: Callable[[int, int], None] | None) -> tuple[Plan, list]:
     """The verdicts of the mutants `share` judges (`unit_ids`: each with its plan number). Making a plan (a sample
     share) probes with every mutant of the plan and keeps the infection map in it; a shard given a plan file with a
     map uses it instead of probing every run again."""
@@ -754,10 +773,9 @@ def _judge_share(judge, plan: Plan, mutants: list, unit_ids: dict, share: Share,
         return plan, verdicts
     chosen = list(unit_ids)
     local = None
-    if share.plan_file is not None:
-        planned = _planned_infection(share.plan_file, plan.digest, judge.scenarios)
-        if planned is not None:
-            local = tuple(frozenset(k + 1 for k, m in enumerate(chosen) if unit_ids[m] in runs) for runs in planned)
+    infection = planned.infection(judge.scenarios) if planned is not None else None
+    if infection is not None:
+        local = tuple(frozenset(k + 1 for k, m in enumerate(chosen) if unit_ids[m] in runs) for runs in infection)
     return plan, _judged(judge, chosen, jobs, progress, local)[0]
 
 
@@ -795,23 +813,6 @@ def _judged(judge, mutants: list, jobs: int, progress: Callable[[int, int], None
     return verdicts, judging.infected
 
 
-def _planned_infection(path: Path, digest: str, scenarios: list) -> tuple[frozenset[int], ...] | None:
-    """The infection map of a mutate plan file, per run in judging order (plan numbers of the mutants), or None
-    when the plan has none (a backend without schemata); E-SHARD when it does not fit these runs."""
-    data = _plan_file_data(Path(path), "mutate", digest)
-    entries = data.get("infected")
-    if entries is None:
-        return None
-    units = len(data["units"])
-    if (not isinstance(entries, list) or len(entries) != len(scenarios)
-            or any(not isinstance(e, dict) or e.get("run") != s.name or not isinstance(e.get("mutants"), list)
-                   or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= units
-                              for n in e["mutants"]) for e, s in zip(entries, scenarios))):
-        raise _shard_problem("the plan file's infection map does not fit its runs and mutants: make it again",
-                             Path(path))
-    return tuple(frozenset(e["mutants"]) for e in entries)
-
-
 def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: int = 2000, seed: int = 1,
            backend: str = "auto", mp_file: Path | None = None, jobs: int = 1, count: int = 0,
            equivalent_file: Path | None = None, mutants_file: Path | None = None,
@@ -846,7 +847,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
     loaded = _load_scenarios(project, scenarios, names, diags)
     users = list(loaded)                    # the user's scenarios, before the generated ones join them
     base_mp = mp if mp_path is not None else None      # None: the project has no machine data of its own
-    digest, generated, search_seconds = _mutation_runs(project, names, loaded, mp_path, base_mp, scenarios,
+    digest, generated, search_seconds, planned = _mutation_runs(project, names, loaded, mp_path, base_mp, scenarios,
                                                        equivalent_file, mutants_file,
                                                        (random_cycles, seed, backend, count), share)
     loaded += generated
@@ -863,7 +864,7 @@ def mutate(project: Project, *, scenarios: Iterable[Path] = (), random_cycles: i
             mutants = [m for m in choose(sites, count, seed) if listed is None or m.key in listed]
             plan, unit_ids = _mutation_plan(digest, mutants, judge.scenarios, generated, search_seconds, share)
             start = time.perf_counter()
-            plan, verdicts = _judge_share(judge, plan, mutants, unit_ids, share, jobs, progress)
+            plan, verdicts = _judge_share(judge, plan, mutants, unit_ids, share, planned, jobs, progress)
             mutants = list(unit_ids)
             seconds = time.perf_counter() - start
         finally:

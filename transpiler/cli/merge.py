@@ -16,7 +16,7 @@ from typing import Callable
 
 from transpiler import api
 from transpiler.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, project_from_args, write_reports
-from transpiler.diagnostics import NO_SPAN, Span
+from transpiler.diagnostics import NO_SPAN
 
 
 def register(sub: argparse._SubParsersAction, common) -> None:

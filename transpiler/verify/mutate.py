@@ -41,7 +41,6 @@ from transpiler.diagnostics import CompileFailed, Diagnostic, Span
 from transpiler.exec.interp import CompiledProgram
 from transpiler.exec.st_lines import st_origin
 from transpiler.ir import Program
-from transpiler.verify import pipeline
 from transpiler.verify.cosim import Comparison, StSide, comparison_for, cosimulate, record_reference
 from transpiler.verify.recording import Recording
 from transpiler.verify.rundata import SHIPPED
