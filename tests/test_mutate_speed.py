@@ -4,38 +4,16 @@ each scenario recorded once (verify/recording.py), all mutants compiled once as 
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
-from transpiler import api
-from transpiler.api import _load_scenarios, _translate
-from transpiler.backends.report.report import io_map_of
-from transpiler.exec.interp import compile_program
+from tests.construct_judges import construct_judge, plain
 from transpiler.exec.stexec import PROBE, TextMutation, load_st
 from transpiler.verify.cosim import BuiltinSchema, builtin_side_factory, cosimulate
-from transpiler.verify.guided import generate
-from transpiler.verify.mutate import (NEVER_INFECTED, SURVIVED, Judge, judge_all, mutation_sites, prepare)
-from transpiler.verify.simulate import project_names
+from transpiler.verify.mutate import NEVER_INFECTED, SURVIVED, judge_all, mutation_sites, prepare
 
-CONSTRUCTS = Path(__file__).resolve().parents[1] / "samples" / "constructs"
-
-
-def _judge(name: str, random_cycles: int = 300) -> Judge:
-    folder = CONSTRUCTS / name
-    project = api.load_project(api.project_options(folder), api.semantics_for(scenario=folder / "scenario.yaml"))
-    mp_path, mp, transpiled, diags = _translate(project, {"st"}, None, False)
-    names = project_names(project.program)
-    loaded = _load_scenarios(project, [folder / "scenario.yaml"], names, diags)
-    loaded += generate(project.program, names, random_cycles, 1, loaded, machine_parameters=mp_path, base_mp=mp)
-    return Judge(project.program, io_map_of(transpiled.result), names, sorted(loaded, key=lambda s: s.cycles),
-                 transpiled.st_text, lambda text: builtin_side_factory(text), compile_program(project.program), mp,
-                 lambda text, mutations: BuiltinSchema(text, mutations))
-
-
-def _plain(verdict) -> tuple[str, str]:
-    """What must not change: the outcome and, for every mutant that ran, its killer or message."""
-    return verdict.outcome, "" if verdict.by == NEVER_INFECTED else verdict.by
+def _judge(name: str, random_cycles: int = 300):
+    return construct_judge(name, lambda t: builtin_side_factory, lambda t: BuiltinSchema, random_cycles)
 
 
 @pytest.mark.parametrize("name, jobs", [("case_chain", 1), ("word_arith_flags", 2)])
@@ -46,9 +24,9 @@ def test_every_mutant_gets_the_verdict_of_its_own_text_run_in_lockstep(name, job
     # every scenario beside the reference interpreter, as mutate judged before.
     judge = _judge(name)
     sites = mutation_sites(judge.st_text)
-    before = [_plain(judge(m)) for m in sites]
+    before = [plain(judge(m)) for m in sites]
     verdicts = list(judge_all(judge, sites, jobs))
-    after = {v.mutant: _plain(v) for v in verdicts}
+    after = {v.mutant: plain(v) for v in verdicts}
     assert [after[m] for m in sites] == before
     assert {outcome for outcome, _ in before} >= {"killed"}
     # the runs a verdict names are the ones it went through: the killer (what the mutation report's killedBy says)
@@ -61,10 +39,12 @@ def test_every_mutant_gets_the_verdict_of_its_own_text_run_in_lockstep(name, job
 def test_a_construct_with_swapped_case_labels_and_rejected_mutants_is_covered():
     # the verdict comparison above is only worth something if the constructs have mutants of every path:
     # switched CASE labels, switched statements and conditions, and mutants left to their own text
-    judging = prepare(_judge("word_arith_flags"), mutation_sites(_judge("word_arith_flags").st_text))
+    judge = _judge("word_arith_flags")
+    judging = prepare(judge, mutation_sites(judge.st_text))
     assert judging.sides is not None and judging.infected is not None and judging.sides.unswitched
-    sites = mutation_sites(_judge("case_chain").st_text)
-    schema = BuiltinSchema(_judge("case_chain").st_text, [TextMutation(i + 1, m.changes) for i, m in enumerate(sites)])
+    text = _judge("case_chain", random_cycles=0).st_text
+    sites = mutation_sites(text)
+    schema = BuiltinSchema(text, [TextMutation(i + 1, m.changes) for i, m in enumerate(sites)])
     swaps = [i + 1 for i, m in enumerate(sites) if m.operator == "swap_case"]
     assert swaps and not set(swaps) & schema.unswitched
 
