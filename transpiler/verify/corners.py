@@ -151,7 +151,7 @@ def harvest(program: Program, names: NameTable) -> Corners:
     used = used | indexed_read | indexed_written
     written = written | indexed_written
     # a constant compared with a byte or word counts at that width too (K$FF against a byte is -1)
-    compared = _compares(program)[0]
+    compared, sources = _compares(program)
     constants |= {const for _, const in compared}
     # a number compared with a word of the NC interface (the M code, a tool number) is one the program decodes, as
     # the entries of a table are: NC jobs draw from these
@@ -176,7 +176,7 @@ def harvest(program: Program, names: NameTable) -> Corners:
     remanent = sorted((r for r in set(written) | filled_elsewhere if drivable(r)), key=lambda r: (r.kind, r.addr))
     remanent_words = tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS)
     return Corners(
-        compare_pairs=_compare_pairs(program, dict(foreign_words + remanent_words), name),
+        compare_pairs=_compare_pairs(compared, sources, dict(foreign_words + remanent_words), name),
         constants=tuple(sorted(constants)),
         tables=tuple(sorted(tables)),
         values=tuple(sorted(values)),
@@ -210,10 +210,10 @@ def _compares(program: Program) -> tuple[set[tuple[OperandRef, int]], dict[Opera
     return compared, sources
 
 
-def _compare_pairs(program: Program, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
-    """Each word compared with a constant (_compares), and each word it is copied from (a few copies back), where
-    the stimulus may drive that word: the program often works on a copy of the word the machine supplies."""
-    compared, sources = _compares(program)
+def _compare_pairs(compared, sources, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
+    """Each word compared with a constant, and each word it is copied from (a few copies back; `compared` and
+    `sources` as _compares gives them), where the stimulus may drive that word: the program often works on a copy
+    of the word the machine supplies."""
     pairs: set[tuple[str, str, int]] = set()
     for word, const in compared:
         reached, frontier = {word}, {word}

@@ -62,11 +62,19 @@ class Probe:
     """One candidate run on the reference interpreter."""
 
     cycles_ok: int                 # cycles that ran without a fault of the original
-    new: frozenset                 # features not seen before this run: (op id, outcome), ("bit", ...), ("value", ...),
-                                   # ("bound", op id, difference), ("mcdc", decision, condition)
-    last_new: int                  # the cycle in which the last of them first appeared (-1: none)
     vectors: tuple = ()            # (cycle, decision, vector) of the condition vectors the run recorded first
-    firsts: Mapping = dataclasses.field(default_factory=dict)   # feature -> the cycle it first appeared in
+    # the features not seen before this run, each with the cycle it first appeared in: (op id, outcome),
+    # ("bit", ...), ("value", ...), ("bound", op id, difference), ("mcdc", decision, condition)
+    firsts: Mapping = dataclasses.field(default_factory=dict)
+
+    @property
+    def new(self) -> frozenset:
+        return frozenset(self.firsts)
+
+    @property
+    def last_new(self) -> int:
+        """The cycle in which the last new feature first appeared (-1: none)."""
+        return max(self.firsts.values(), default=-1)
 
     @property
     def last_before_mcdc(self) -> int:
@@ -114,8 +122,7 @@ class Search:
         except (CompileFailed, ValueError):
             return None
         local: set = set()
-        new: set = set()
-        last_new, count, value_count, bound_count, vector_count, ok = -1, 0, 0, 0, 0, 0
+        count, value_count, bound_count, vector_count, ok = 0, 0, 0, 0, 0
         vectors: list[tuple[int, int, int]] = []
         run_vectors: dict[int, set[int]] = {}
         firsts: dict = {}
@@ -161,23 +168,18 @@ class Search:
                 local |= fresh
                 fresh -= self.seen
                 if fresh:
-                    new |= fresh
                     firsts.update(dict.fromkeys(fresh, cycle))
-                    last_new = cycle
             if unseen:
                 values = read_toggled()
                 reached = [(i, v) for i, v in unseen if values[i] == v]
                 if reached:
-                    bits = [("bit", str(self.toggled[i]), v) for i, v in reached]
-                    new.update(bits)
-                    firsts.update(dict.fromkeys(bits, cycle))
-                    last_new = cycle
+                    firsts.update(dict.fromkeys((("bit", str(self.toggled[i]), v) for i, v in reached), cycle))
                     unseen = [pair for pair in unseen if pair not in reached]
-        return Probe(ok, frozenset(new), last_new, tuple(vectors), firsts)
+        return Probe(ok, tuple(vectors), firsts)
 
     def keep(self, probe: Probe, cycles: int | None = None) -> None:
         """Take the run's features and condition vectors of its first `cycles` cycles (all: None) as seen."""
-        self.seen |= probe.new if cycles is None else {f for f in probe.new if probe.firsts.get(f, 0) < cycles}
+        self.seen |= probe.new if cycles is None else {f for f, cycle in probe.firsts.items() if cycle < cycles}
         for cycle, number, vector in probe.vectors:
             if cycles is None or cycle < cycles:
                 self.vectors.setdefault(number, set()).add(vector)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable, Sequence
 
-from transpiler.exec.interp.decisions import KEEPS_LA, WORD_WRITERS, Decision
+from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Op, Program
 
@@ -37,9 +37,7 @@ def _variable(k: int) -> int:
 _VAR = tuple(_variable(k) for k in range(MAX_VARS))
 
 _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
-_GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "XORN": "xor"}
-_BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
-_READS = frozenset({"LD", "LDN", *_GATES, "LDBITS"})
+_READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 Key = tuple[str, int]
 
@@ -175,7 +173,7 @@ class _Run:
                 path.la = value
             else:
                 la = path.la if path.la is not None else self.fresh()
-                path.la = _combine(_GATES[c], la, value)
+                path.la = _combine(GATES[c], la, value)
             return path
         if c in _WRITES and o is not None and o.is_bit:
             la = path.la if path.la is not None else self.fresh()
@@ -201,7 +199,7 @@ class _Run:
             path.la = None if path.la is None else _ALL ^ path.la
         elif c == "BOPEN":
             br = op.bracket
-            if br.mode == "LOGIC" and br.op in _BRACKET_GATES:
+            if br.mode == "LOGIC" and br.op in BRACKET_GATES:
                 path.frames.append("load" if br.load else path.la if path.la is not None else self.fresh())
                 path.la = None
             else:
@@ -217,7 +215,7 @@ class _Run:
     def close(self, i: int, op: Op, path: _Path) -> None:
         saved = path.frames.pop() if path.frames else None
         br = op.bracket
-        if br.mode == "LOGIC" and br.op in _BRACKET_GATES:
+        if br.mode == "LOGIC" and br.op in BRACKET_GATES:
             inner = path.la if path.la is not None else self.fresh()
             if br.op in ("AN", "ON", "XON"):
                 inner = _ALL ^ inner
@@ -226,7 +224,7 @@ class _Run:
             elif saved is None:
                 path.la = None
             else:
-                path.la = _combine(_BRACKET_GATES[br.op], saved, inner)
+                path.la = _combine(BRACKET_GATES[br.op], saved, inner)
         elif op.rel:
             path.la = self.reads[i] = self.fresh()
         elif self.shared:
@@ -286,16 +284,35 @@ def _combine(gate: str, a: int, b: int) -> int:
     return a & b if gate == "and" else a | b if gate == "or" else a ^ b
 
 
-def region_starts(program: Program, f: int, first: int, consumer: int) -> list[int]:
+@dataclasses.dataclass(frozen=True)
+class Entries:
+    """Where control comes to an op other than from the op before it: the ops called or entered through CASE (file,
+    index), and per file the jumps to each op (target -> the ops jumping there). The same for every decision of a
+    program: made once (program_entries) and handed to every region_starts."""
+
+    called: frozenset[tuple[int, int]]
+    jumps: tuple[dict[int, list[int]], ...]
+
+
+def program_entries(program: Program) -> Entries:
+    jumps: list[dict[int, list[int]]] = []
+    for code in program.files:
+        sources: dict[int, list[int]] = {}
+        for j, op in enumerate(code.ops):
+            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+                sources.setdefault(op.target, []).append(j)
+        jumps.append(sources)
+    called = frozenset((t.file, t.index) for code in program.files for op in code.ops
+                       for t in (op.call, *op.case_targets) if t is not None and not t.is_module and t.file >= 0)
+    return Entries(called, tuple(jumps))
+
+
+def region_starts(program: Program, f: int, first: int, consumer: int, entries: Entries | None = None) -> list[int]:
     """The op indices a region ending at `consumer` can start at (see the module docstring), nearest first, none
     after `first` (the decision's first condition)."""
     ops = program.files[f].ops
-    sources: dict[int, list[int]] = {}
-    for j, op in enumerate(ops):
-        if op.code in ("JP", "JPT", "JPF") and op.target is not None:
-            sources.setdefault(op.target, []).append(j)
-    called = {(t.file, t.index) for code in program.files for op in code.ops
-              for t in (op.call, *op.case_targets) if t is not None and not t.is_module and t.file >= 0}
+    entries = entries or program_entries(program)
+    sources, called = entries.jumps[f], entries.called
     starts = []
     lowest_source = consumer + 1
     for s in range(consumer, -1, -1):
@@ -315,7 +332,8 @@ def region_starts(program: Program, f: int, first: int, consumer: int) -> list[i
 
 
 def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
-                 skip: frozenset[int] = frozenset(), start: int | None = None) -> Tied | None:
+                 skip: frozenset[int] = frozenset(), start: int | None = None,
+                 entries: Entries | None = None) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
     the program fixes it there, else None. None where no region covers all its conditions (or the decision is not
@@ -327,7 +345,7 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
         return None
     first = min(c.index for c in decision.conditions)
     reads = {c.index for c in decision.conditions}
-    starts = [start] if start is not None else region_starts(program, f, first, decision.index)
+    starts = [start] if start is not None else region_starts(program, f, first, decision.index, entries)
     best = _attempt(program, f, starts, len(starts) - 1, decision.index, reads, entry, skip)
     if best is None:                        # the farthest start whose region fits MAX_VARS, by bisection
         low, high = 0, len(starts) - 2
@@ -436,7 +454,6 @@ def cycle_order(program: Program) -> CycleOrder | None:
     try:
         walk(0, 0, ())
         main_end = len(trace)
-        jobs: set[tuple[int, int]] = set()
         for f, code in enumerate(program.files):
             for op in code.ops:
                 if op.code == "SUBM" and op.call is not None and op.call.file >= 0:

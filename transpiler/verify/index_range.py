@@ -23,6 +23,7 @@ import bisect
 import dataclasses
 from typing import Mapping
 
+from transpiler.exec.interp.decisions import BRACKET_GATES
 from transpiler.ir import FileCode, Op, Program
 
 Interval = tuple[int, int]
@@ -33,7 +34,6 @@ _LOGIC_LOADS = frozenset({"LD", "LDN", "BT", "PLL", "SCMP"})
 _GATES_AND = frozenset({"AND", "ANDN"})
 _GATES_OR = frozenset({"OR", "ORN"})
 _GATES_XOR = frozenset({"XOR", "XORN"})
-_BRACKET_GATE = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
 _BIT_ONLY = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "NOP", "LBL", "PSX", "PUSH", "PSW", "PSL"})
 _WA_WRITERS = frozenset({"WLDN", "WNEG", "LDBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR", "WXORN", "MUL", "DIV",
                          "MOD", "SHL", "SHR", "BS", "BC", "TWOC", "NOTW", "PLW", "RPLY", "SUBM", "SLD", "SCAT"})
@@ -283,8 +283,8 @@ class _Analysis:
             return dataclasses.replace(s, la=s.la.negated())
         if c == "BOPEN":
             br = op.bracket
-            if br is not None and br.mode == "LOGIC" and br.op in _BRACKET_GATE:
-                frame = (s.la, _BRACKET_GATE[br.op], br.load)
+            if br is not None and br.mode == "LOGIC" and br.op in BRACKET_GATES:
+                frame = (s.la, BRACKET_GATES[br.op], br.load)
             else:
                 frame = None
             return dataclasses.replace(s, frames=s.frames + (frame,), la=_NOTHING)

@@ -32,7 +32,7 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.corners import NC_MODEL_OWNED
-from transpiler.verify.implication import Tied, consumed_start_zero, tied_vectors
+from transpiler.verify.implication import Tied, consumed_start_zero, program_entries, tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -379,24 +379,47 @@ def _showable(decision: Decision, number: int, masking: bool, vectors: frozenset
     return shown_unique(with_outcome, n, number)
 
 
-def _tied_reason(program: Program, decision: Decision, number: int, masking: bool, state: _Values,
-                 zero: Callable[[str, int, int, int], bool]) -> str:
+class _Implications:
+    """The implication analysis of one coverage computation (implication.py): where control enters the program,
+    worked out once, and what the code before each decision lets it see, worked out once per decision, whichever of
+    its conditions asks. `zero`: consumed_start_zero."""
+
+    def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool]):
+        self.program, self.state, self.zero = program, state, zero
+        self.entries = program_entries(program)
+        self._first: dict[tuple[int, int], tuple[Tied | None, frozenset[str]]] = {}
+
+    def entry(self, consumed: set[str]) -> Callable[[str, int, int, int], int | None]:
+        """An operand's value at a region start where the program fixes it there; a consumed timer or counter start
+        taken as 0 is added to `consumed`."""
+        def value(kind: str, addr: int, file: int, index: int) -> int | None:
+            held = self.state.of(kind, addr)
+            if len(held) == 1:
+                return next(iter(held))
+            if self.zero(kind, addr, file, index):
+                consumed.add(f"{kind}{addr}")
+                return 0
+            return None
+        return value
+
+    def first(self, decision: Decision) -> tuple[Tied | None, frozenset[str]]:
+        """What the longest region before `decision` lets it see, and the starts taken as 0 there."""
+        if decision.key not in self._first:
+            consumed: set[str] = set()
+            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries)
+            self._first[decision.key] = (tied, frozenset(consumed))
+        return self._first[decision.key]
+
+
+def _tied_reason(analysis: _Implications, decision: Decision, number: int, masking: bool) -> str:
     """Why the code before the chain in the same cycle keeps condition `number` from being shown (implication.py),
-    naming the writes the claim rests on; "" where it does not. `zero`: consumed_start_zero."""
-    consumed: set[str] = set()
-
-    def entry(kind: str, addr: int, file: int, index: int) -> int | None:
-        held = state.of(kind, addr)
-        if len(held) == 1:
-            return next(iter(held))
-        if zero(kind, addr, file, index):
-            consumed.add(f"{kind}{addr}")
-            return 0
-        return None
-
-    tied = tied_vectors(program, decision, entry)
+    naming the writes the claim rests on; "" where it does not."""
+    program = analysis.program
+    tied, first_consumed = analysis.first(decision)
     if tied is None or not tied.vectors or _showable(decision, number, masking, tied.vectors):
         return ""
+    consumed = set(first_consumed)
+    entry = analysis.entry(consumed)
     # the writes the claim rests on: drop each one the claim holds without
     absent: set[int] = set()
     for w in tied.writes:
@@ -478,7 +501,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
         for key, found in cov.bounds.items():
             bounds.setdefault(key, set()).update(found)
     state: _Values | None = None
-    zero = None
+    implications: _Implications | None = None
     conditions: list[ConditionItem] = []
     for decision in table.decisions:
         recorded = vectors.get(decision.key, set())
@@ -495,9 +518,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
-                zero = consumed_start_zero(program, set(driven))
+                implications = _Implications(program, state, consumed_start_zero(program, set(driven)))
             reason = (_infeasible_reason(decision, number, coupled, state)
-                      or _tied_reason(program, decision, number, coupled, state, zero))
+                      or _tied_reason(implications, decision, number, coupled))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
     return DecisionCoverage(tuple(conditions), tuple(boundaries))

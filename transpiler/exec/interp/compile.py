@@ -35,7 +35,7 @@ import types
 from typing import Callable
 
 from transpiler.exec.interp.decisions import decision_table
-from transpiler.exec.interp.gen_access import AccessCode
+from transpiler.exec.interp.gen_access import CHAIN_OPS, AccessCode
 from transpiler.exec.interp.gen_flow import FlowCode
 from transpiler.exec.interp.gen_stack import StackStringCode
 from transpiler.exec.interp.gen_word import WordCode
@@ -83,6 +83,10 @@ class CompiledProgram:
     def decision_count(self) -> int:
         return len(self.decision_ops)
 
+    @property
+    def decision_shift(self) -> int:
+        return decision_shift(self.decision_count)
+
     def make(self, env: dict[str, object]) -> tuple[tuple[Callable[[int], None], ...], Callable, Callable]:
         """Instantiate against a machine: (file functions, get_registers, set_registers)."""
         namespace: dict[str, object] = {"__builtins__": __builtins__}
@@ -91,6 +95,12 @@ class CompiledProgram:
 
     def op_of_line(self, lineno: int) -> int:
         return self.line_ops[lineno - 1] if 0 < lineno <= len(self.line_ops) else -1
+
+
+def decision_shift(count: int) -> int:
+    """Bits of a recorded condition vector's key that number its decision (the vector is shifted past them): the
+    generated code packs, CoverageMarks unpacks, both with this."""
+    return max(1, count).bit_length()
 
 
 def compile_program(program: Program, *, exact: bool | None = None, coverage: bool = False,
@@ -140,7 +150,6 @@ def branch_slots(program: Program) -> list[tuple[int, int]]:
 
 _GATES = frozenset({"AND", "ANDN", "OR", "ORN"})
 _LA_CONDITIONS = frozenset({"CMP", "SCMP", "BT", "PLL", "BCLOSE"})    # conditions whose value is the LA they make
-_PLAIN_CHAIN = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
 
 
 def boundary_slots(program: Program) -> list[tuple[int, int]]:
@@ -277,7 +286,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
         self.decision_ops: list[int] = []
         if coverage:
             self._decisions(program)
-        self.decision_shift = max(1, len(self.decision_ops)).bit_length()
+        self.decision_shift = decision_shift(len(self.decision_ops))
         self.branch_slots = branch_slots(program)
         self.branch_slot = {key: slot for slot, key in enumerate(self.branch_slots)}
         self.value_slots = value_slots(program) if value_profile else []
@@ -295,7 +304,7 @@ class _Generator(AccessCode, WordCode, FlowCode, StackStringCode):
             ops = program.files[d.file].ops
             base = self.op_base[d.file]
             first = min(c.index for c in d.conditions)
-            plain = all(op.code in _PLAIN_CHAIN and not op.operand.indexed for op in ops[first:d.index])
+            plain = all(op.code in CHAIN_OPS and not op.operand.indexed for op in ops[first:d.index])
             if plain:
                 values = tuple(self.bit(c.operand) for c in d.conditions)
             else:

@@ -30,7 +30,7 @@ class CoverageMarks:
         # MC/DC: every distinct (condition vector, outcome) of every decision, as one int key (compile.py) in a dict
         # used as an ordered set, so that the vectors a rolled-back cycle recorded can be taken out again.
         self.decision_count = compiled.decision_count
-        self.decision_shift = max(1, compiled.decision_count).bit_length()
+        self.decision_shift = compiled.decision_shift
         self.vectors: dict[int, int] = {}
 
     def arrays_for(self, compiled: CompiledProgram) -> tuple[list[int], list[int], list[int], list[int], list[int],

@@ -24,8 +24,8 @@ from transpiler.ir import Op, Operand, Program
 # or "xor".
 
 CONSUMERS = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "JPT", "JPF", "CALLT", "CALLF", "EMT", "EMF"})
-_GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "XORN": "xor"}
-_BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
+GATES = {"AND": "and", "ANDN": "and", "OR": "or", "ORN": "or", "XOR": "xor", "XORN": "xor"}
+BRACKET_GATES = {"A": "and", "AN": "and", "O": "or", "ON": "or", "XO": "xor", "XON": "xor"}
 _FORGET = frozenset({"LBL", "CALL", "CASE", "JP", "EM", "SUBM", "KFIELD"})   # LA unknown after these
 # Ops that leave LA as it is (with LA apart from WA); anything not listed here and not handled forgets the chain.
 KEEPS_LA = frozenset({"WLD", "WLDN", "WNEG", "LDBITS", "WST", "STBITS", "WAND", "WANDN", "WOR", "WORN", "WXOR",
@@ -232,10 +232,10 @@ class _ChainWalk:
         if c in ("LD", "LDN"):
             cond = self.read(i, op, o.display(), _bit_key(o), o, c == "LDN")
             self.la = ("not", cond) if c == "LDN" else cond
-        elif c in _GATES:
+        elif c in GATES:
             cond = self.read(i, op, o.display(), _bit_key(o), o, c.endswith("N"))
             cond = ("not", cond) if c.endswith("N") else cond
-            self.la = None if self.la is None else (_GATES[c], self.la, cond)
+            self.la = None if self.la is None else (GATES[c], self.la, cond)
         elif c == "CMP":
             cmp = self.compares[-1]
             plain = "[" not in cmp.left + cmp.right and cmp.left != "WA"
@@ -261,7 +261,7 @@ class _ChainWalk:
             self.la = None
 
     def open_bracket(self, op: Op) -> None:
-        if op.bracket.mode == "LOGIC" and op.bracket.op in _BRACKET_GATES:
+        if op.bracket.mode == "LOGIC" and op.bracket.op in BRACKET_GATES:
             self.frames.append(self.la if not op.bracket.load else ("load",))
             self.la = None
         else:
@@ -270,7 +270,7 @@ class _ChainWalk:
     def close_bracket(self, i: int, op: Op) -> None:
         saved = self.frames.pop() if self.frames else None
         br = op.bracket
-        if br.mode == "LOGIC" and br.op in _BRACKET_GATES:
+        if br.mode == "LOGIC" and br.op in BRACKET_GATES:
             inner = self.la
             if inner is not None and br.op in ("AN", "ON", "XON"):
                 inner = ("not", inner)
@@ -279,7 +279,7 @@ class _ChainWalk:
             elif saved == ("load",):
                 self.la = inner
             else:
-                self.la = (_BRACKET_GATES[br.op], saved, inner)
+                self.la = (BRACKET_GATES[br.op], saved, inner)
         elif op.rel:
             self.la = self.read(i, op, f"bracket {op.rel}", None)
         elif self.shared:

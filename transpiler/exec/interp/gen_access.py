@@ -9,7 +9,7 @@ from transpiler.exec.interp.gen_exprs import M32, int32, norm, signed_literal
 from transpiler.ir import Op, Operand
 
 
-_CHAIN_OPS = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
+CHAIN_OPS = frozenset({"LD", "LDN", "AND", "ANDN", "OR", "ORN", "XOR", "XORN"})
 _CHAIN_SYMBOLS = {"AND": "and", "OR": "or", "XOR": "^"}
 _CHAIN_LIMIT = 32          # ops per folded LA expression: each change of operator nests a parenthesis
 
@@ -162,7 +162,7 @@ class AccessCode:
 
     def _bit_logic(self, c: str, o: Operand, opid: int, ind: int) -> None:
         """LD LDN AND ANDN OR ORN XOR XORN, ST STN, SET RES SETN RESN."""
-        if self.fuse_la and not o.indexed and c in _CHAIN_OPS and opid not in self.cond_slot:
+        if self.fuse_la and not o.indexed and c in CHAIN_OPS and opid not in self.cond_slot:
             self._chain(c, o, opid, ind)
         elif self.fuse_la and not o.indexed and c == "ST" and self.la_chain is not None:
             chain, self.la_chain = self.la_chain, None

@@ -24,12 +24,12 @@ from decimal import Decimal, InvalidOperation
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.ir import Program
+from transpiler.ir import Program, sext
 from transpiler.exec.compiled.shim import HandshakeTimeout, NcModel
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.compile import GENERATED_FILENAME, CompiledProgram, compile_program
 from transpiler.exec.interp.faults import BudgetExceeded, CycleReport, Fault, JobCancelled, MachineConfigError, MachineHalted, RuntimeFault
-from transpiler.exec.interp.state import MachineState, Snapshot, byte_cells, nonzero_positions, sext
+from transpiler.exec.interp.state import MachineState, Snapshot, byte_cells, nonzero_positions
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.exec.interp.support import Runtime
 from transpiler.language.presets import load_presets
@@ -503,11 +503,6 @@ class Machine:
         """(decision number, vector) of every vector recorded after the first `count` (see vector_count)."""
         marks = self.runtime.marks
         return [] if marks is None else marks.vectors_since(count)
-
-    def decision_vectors(self) -> dict[int, frozenset[int]]:
-        """Decision number (decisions.decision_table order) -> the distinct vectors recorded so far."""
-        marks = self.runtime.marks
-        return {} if marks is None else marks.decision_vectors()
 
     @property
     def coverage(self) -> Coverage:
