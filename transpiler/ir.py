@@ -13,6 +13,16 @@ BIT_KINDS = frozenset("MIOTC")
 MEM_KINDS = frozenset("BWD")
 WIDTH = {"B": 8, "W": 16, "D": 32, "K": 32, "KF": 32, "X": 32}
 BYTES = {"B": 1, "W": 2, "D": 4}
+# The values a byte, word or double word takes from a user (a scenario, a data table): signed or unsigned in its width.
+VALUE_RANGES: Mapping[str, tuple[int, int]] = {"B": (-(1 << 7), (1 << 8) - 1), "W": (-(1 << 15), (1 << 16) - 1),
+                                               "D": (-(1 << 31), (1 << 32) - 1)}
+
+
+def sext(value: int, bits: int) -> int:
+    """The low `bits` bits of value as a signed number."""
+    mask = (1 << bits) - 1
+    value &= mask
+    return value - (1 << bits) if value >> (bits - 1) else value
 
 
 @quick_init

@@ -16,7 +16,7 @@ from typing import Iterable, Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend.sources import ProjectFolders, read_source
-from transpiler.ir import DataRow, Symbol
+from transpiler.ir import VALUE_RANGES, WIDTH, DataRow, Symbol, sext
 
 TABLE_NAMES = ("MP_Data.tab", "MP_Config.tab")       # the order they are read in; PLC:\MP\ on the control
 TABLE_FOLDER = "MP"
@@ -24,9 +24,7 @@ COLUMNS = ("NR", "NAME", "VALUE", "UNIT", "COMMENT")
 REQUIRED = ("NAME", "VALUE")
 DATA_KINDS = "MBWDS"
 # A value may be written signed or unsigned in its width (255 and -1 are the same byte).
-RANGES: Mapping[str, tuple[int, int]] = {"M": (0, 1), "B": (-(1 << 7), (1 << 8) - 1),
-                                         "W": (-(1 << 15), (1 << 16) - 1), "D": (-(1 << 31), (1 << 32) - 1)}
-WIDTH_BITS = {"B": 8, "W": 16, "D": 32}
+RANGES: Mapping[str, tuple[int, int]] = {"M": (0, 1), **VALUE_RANGES}
 _NUMBER = re.compile(r"[+-]?(\d+|\$[0-9A-Fa-f]+|%[01]+)")
 _BEGIN = re.compile(r"\s*BEGIN\s+(\S+)(?:\s+.*)?", re.IGNORECASE)
 
@@ -166,11 +164,7 @@ def table_value(kind: str, text: str) -> tuple[int | str | None, str]:
     if not lo <= value <= hi:
         what = "a marker holds 0 or 1" if kind == "M" else f"a {_KIND_NAMES[kind]} holds {lo}..{hi}"
         return None, f"{value} does not fit: {what}"
-    if kind in WIDTH_BITS:
-        bits = WIDTH_BITS[kind]
-        value &= (1 << bits) - 1
-        value = value - (1 << bits) if value >> (bits - 1) else value
-    return value, ""
+    return (sext(value, WIDTH[kind]) if kind in VALUE_RANGES else value), ""
 
 
 def bind_rows(file: str, rows: Iterable[TableRow], symbols: Mapping[str, Symbol], string_len: int,

@@ -17,6 +17,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, 
     model_validator
 
 from transpiler.diagnostics import CompileFailed, Diagnostic, Diagnostics, Span
+from transpiler.ir import VALUE_RANGES, sext
 from transpiler.language.semantics import PROFILES
 
 # ---------------------------------------------------------------------------------------------
@@ -35,12 +36,6 @@ class OperandRef(NamedTuple):
 
 BIT_KINDS = frozenset("MIOTC")
 WIDTHS: Mapping[str, int] = {"B": 8, "W": 16, "D": 32}
-# Scenario values may be written signed or unsigned, so each width accepts both spellings.
-VALUE_RANGES: Mapping[str, tuple[int, int]] = {
-    "B": (-(1 << 7), (1 << 8) - 1),
-    "W": (-(1 << 15), (1 << 16) - 1),
-    "D": (-(1 << 31), (1 << 32) - 1),
-}
 # Column order of default traces: inputs first, then outputs, markers, timers, counters, memory.
 KIND_ORDER = "IOMTCBWDS"
 
@@ -65,9 +60,7 @@ def normalize_value(kind: str, value: Any) -> int | str:
     if kind == "S":
         return str(value)
     if kind in WIDTHS:
-        width = WIDTHS[kind]
-        v = int(value) & ((1 << width) - 1)
-        return v - (1 << width) if v >> (width - 1) else v
+        return sext(int(value), WIDTHS[kind])
     return 1 if value else 0
 
 

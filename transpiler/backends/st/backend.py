@@ -622,9 +622,9 @@ class StBackend:
         sections = []
         for key, title in GROUP_TITLES.items():
             if key in groups:
-                # The data tables are kept over a power cycle like the table files on the control.
-                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title,
-                                           retain=key == "data" and self.dialect.retain))
+                # The data tables are kept over a power cycle (VAR_GLOBAL RETAIN, which every target hh2iec writes
+                # for has) like the table files on the control.
+                sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=title, retain=key == "data"))
         for key in groups:
             if key not in GROUP_TITLES:
                 sections.append(VarSection("VAR_GLOBAL", tuple(groups[key]), comment=group_title(key)))

@@ -36,9 +36,6 @@ class Dialect:
     task_priority: int | None = None
     # A native project folder written beside project.st (backends/twincat for "twincat").
     project_folder: str | None = None
-    # VAR_GLOBAL RETAIN (kept over a power cycle): the PLC data tables are declared so, like the table files the
-    # control keeps; every target hh2iec writes for has it.
-    retain: bool = True
 
     @property
     def task_by_hand(self) -> bool:

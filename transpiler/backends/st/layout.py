@@ -35,7 +35,6 @@ class GlobalVar:
     address: str | None = None
     initial: str | None = None
     comment: str | None = None
-    retain: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -362,7 +361,7 @@ class Layout:
 
     def add_data(self, name: str, typ: str, initial: str, comment: str) -> None:
         """A global of the PLC data tables (group `data`): the stored value of one table row."""
-        self._add_global(GlobalVar(name, typ, "data", initial=initial, comment=comment, retain=True))
+        self._add_global(GlobalVar(name, typ, "data", initial=initial, comment=comment))
 
     # ---- access
 

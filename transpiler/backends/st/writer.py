@@ -91,8 +91,6 @@ def _environment() -> jinja2.Environment:
         comment_lines=comment_lines,
         trailing_comment=trailing_comment,
         indent_body=indent_body,
-        section_header=section_header,
-        located_blocks=located_blocks,
         declaration=declaration,
         var_sections=var_sections,
     ))

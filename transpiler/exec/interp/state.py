@@ -33,12 +33,6 @@ def nonzero_positions(data: bytes | bytearray) -> list[int]:
 _NONZERO_TO_ONE = bytes([0]) + bytes([1]) * 255
 
 
-def sext(value: int, bits: int) -> int:
-    """The low `bits` bits of value as a signed number."""
-    mask = (1 << bits) - 1
-    value &= mask
-    return value - (1 << bits) if value >> (bits - 1) else value
-
 
 def memory_size(profile: Profile) -> int:
     """Byte memory size: the profile range plus interface bytes, rounded up to whole double words."""

@@ -5,12 +5,13 @@ from __future__ import annotations
 import collections
 from typing import Callable
 
+from transpiler.ir import sext
 from transpiler.language.semantics import Semantics
 from transpiler.exec.interp.compile import CompiledProgram
 from transpiler.exec.interp.coverage import CoverageMarks
 from transpiler.exec.interp.sysmodel import SysContext
 from transpiler.exec.interp.faults import BudgetExceeded, Fault, JobCancelled
-from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState, sext
+from transpiler.exec.interp.state import INT32_MIN, MEM_WIDTH, MachineState
 from transpiler.exec.interp.pure_modules import PURE_MODULES, PureEnv, written as pure_written
 from transpiler.exec.interp.submit import SubmitQueue
 from transpiler.language.module_table import MODULE_TABLE
