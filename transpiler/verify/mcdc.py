@@ -31,7 +31,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
-from transpiler.verify.corners import NC_MODEL_OWNED
+from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import Tied, consumed_start_zero, program_entries, tied_vectors
 from transpiler.verify.index_range import index_ranges
 
@@ -382,10 +382,12 @@ def _showable(decision: Decision, number: int, masking: bool, vectors: frozenset
 class _Implications:
     """The implication analysis of one coverage computation (implication.py): where control enters the program,
     worked out once, and what the code before each decision lets it see, worked out once per decision, whichever of
-    its conditions asks. `zero`: consumed_start_zero."""
+    its conditions asks. `zero`: consumed_start_zero; `facts`: the NC model's facts that hold in this program
+    (nc_facts.applicable_facts)."""
 
-    def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool]):
-        self.program, self.state, self.zero = program, state, zero
+    def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool],
+                 facts: Sequence[NcFact] = ()):
+        self.program, self.state, self.zero, self.facts = program, state, zero, tuple(facts)
         self.entries = program_entries(program)
         self._first: dict[tuple[int, int], tuple[Tied | None, frozenset[str]]] = {}
 
@@ -406,7 +408,7 @@ class _Implications:
         """What the longest region before `decision` lets it see, and the starts taken as 0 there."""
         if decision.key not in self._first:
             consumed: set[str] = set()
-            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries)
+            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries, facts=self.facts)
             self._first[decision.key] = (tied, frozenset(consumed))
         return self._first[decision.key]
 
@@ -421,14 +423,23 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     consumed = set(first_consumed)
     entry = analysis.entry(consumed)
     # the writes the claim rests on: drop each one the claim holds without
+    def holds(skip: frozenset[int], facts: Sequence[NcFact]) -> bool:
+        trial = tied_vectors(program, decision, entry, skip, tied.start, analysis.entries, facts)
+        return trial is not None and bool(trial.vectors) and not _showable(decision, number, masking, trial.vectors)
+
     absent: set[int] = set()
     for w in tied.writes:
-        trial = tied_vectors(program, decision, entry, frozenset(absent | {w}), tied.start)
-        if trial is not None and trial.vectors and not _showable(decision, number, masking, trial.vectors):
+        if holds(frozenset(absent | {w}), analysis.facts):
             absent.add(w)
+    # the NC model's facts it rests on, likewise (the narrower ones, later in the table, dropped first)
+    resting = list(analysis.facts)
+    for fact in reversed(analysis.facts):
+        if holds(frozenset(absent), [f for f in resting if f is not fact]):
+            resting.remove(fact)
     ops = program.files[decision.file].ops
     needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
-    facts = _ties(decision, number, tied)
+    # where an NC fact ties three conditions, the pairs alone seldom say it: name a triple that never occurs too
+    facts = _ties(decision, number, tied, triples=bool(resting))
     cond = decision.conditions[number].text
     where = [f"set by {', '.join(needed[:4])} before this chain on every path to it"] if needed else []
     names = {f"{c.operand.kind}{c.operand.addr}": c.text for c in decision.conditions if c.operand is not None}
@@ -436,13 +447,15 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     if starts:
         where.append(f"{', '.join(starts)}: a timer or counter start the service clears after every cycle, and no "
                      "write of it runs before this chain in the cycle")
+    where += [fact.text for fact in resting]
     return (f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'}"
             + (f" ({'; '.join(where)})" if where else ""))
 
 
-def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
+def _ties(decision: Decision, number: int, tied: Tied, triples: bool = False) -> list[str]:
     """What the chain can see, in words: conditions that are constant there, and pairs of values that never occur
-    together (those with condition `number` first)."""
+    together (those with condition `number` first); triples of values too where no pair names condition `number`,
+    or where `triples` asks for them."""
     conds = decision.conditions
     n = len(conds)
     facts: list[str] = []
@@ -464,7 +477,7 @@ def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
                         if all(text != t for _, t in pairs):
                             pairs.append((0 if number in (i, j) else 1, text))
     facts += [t for _, t in sorted(pairs, key=lambda p: p[0])][:3]
-    if not any(rank == 0 for rank, _ in pairs):
+    if triples or not any(rank == 0 for rank, _ in pairs):
         facts += _never_together(decision, number, tied)[:2]
     return facts
 
@@ -518,7 +531,8 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
-                implications = _Implications(program, state, consumed_start_zero(program, set(driven)))
+                implications = _Implications(program, state, consumed_start_zero(program, set(driven)),
+                                             applicable_facts(program, set(driven)))
             reason = (_infeasible_reason(decision, number, coupled, state)
                       or _tied_reason(implications, decision, number, coupled))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
