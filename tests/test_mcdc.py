@@ -17,7 +17,9 @@ from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 from transpiler.verify.implication import tied_vectors
 from transpiler.verify.mcdc import decision_coverage, shown_masking, shown_unique
-from transpiler.verify.nc_facts import applicable_facts
+from transpiler.verify.implication import consumed_start_zero
+from transpiler.verify.mcdc import _Implications, constant_bits
+from transpiler.verify.nc_facts import NC_FACTS, applicable_facts
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -432,8 +434,9 @@ def test_recorded_vectors_of_nc_driven_chains_are_allowed_by_the_nc_facts(tmp_pa
               "L W262\n>= K1\nA M4522\n= O5\n")
     program = _program(tmp_path, _ACK_TOOL + "L M4073\nAN M4093\nEMF\n" + "".join(chains) + "EM\n")
     table = decision_table(program)
-    facts = applicable_facts(program, set())
-    assert len(facts) == 2
+    assert len(applicable_facts(program, set())) == len(NC_FACTS)
+    analysis = _Implications(program, constant_bits(program, table, set()), consumed_start_zero(program, set()),
+                             applicable_facts(program, set()), table)
     machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
     rng = random.Random(5)
     for cycle in range(2000):
@@ -444,7 +447,7 @@ def test_recorded_vectors_of_nc_driven_chains_are_allowed_by_the_nc_facts(tmp_pa
         machine.run_cycle(cycle, [("I", 1, rng.randrange(2))], jobs)
     checked = 0
     for decision in table.decisions:
-        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None, facts=facts)
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None, facts=analysis.facts_at)
         if tied is None:
             continue
         mask = (1 << len(decision.conditions)) - 1
@@ -452,3 +455,30 @@ def test_recorded_vectors_of_nc_driven_chains_are_allowed_by_the_nc_facts(tmp_pa
         assert recorded and recorded <= tied.vectors, decision.text()
         checked += 1
     assert checked >= len(chains)
+    # after `= M4093` (which can write 1) the handshake facts of M4093 no longer hold; before it they do
+    def acks(start: int) -> set:
+        return {f.operands for f in analysis.facts_at(0, start) if ("M", 4093) in f.plc_owned}
+    assert acks(0) == {(("M", 4073), ("M", 4093)), (("M", 4520), ("M", 4093))} and acks(3) == set()
+
+
+def test_a_strobe_is_never_seen_with_its_acknowledgement_unless_the_program_set_it_before(tmp_path: Path) -> None:
+    # The NC raises M4073 only while it reads M4093 as 0 and drops it once it reads 1: read before any write of
+    # M4093 in the cycle, M4073 = 1 comes only with M4093 = 0, so M4093 never decides `M4073 AND NOT M4093`
+    # alone. A reset of M4093 before the chain keeps that; a scenario setting M4093 too (the NC reads it in the
+    # same phase). `= M4093` before the chain (which can write 1) does not: the pair shows up there.
+    # Catches: the handshake fact taken at a point where the program may have set the acknowledgement.
+    chain, ack = "L M4073\nAN M4093\n= O2\n", "L M4073\nA I1\n= M4093\n"
+    calls = [({"I1": 0}, [{"tool_call": {"tool": 4, "pocket": 5}}]), ({"I1": 0}, []), ({"I1": 1}, []),
+             ({"I1": 1}, []), ({"I1": 0}, [])]
+    for before in ("", "L I2\nR M4093\n"):
+        program = _program(tmp_path, before + chain + ack + "EM\n")
+        items, _ = _status(program, [_run_nc(program, calls)])
+        item = items[("M4093", "O2", 1)]
+        assert item.status == "infeasible" and "raises the strobe M4073 only while it reads" in item.reason, item
+        items, _ = _status(program, [_run_nc(program, calls)], driven={("M", 4093)})
+        assert items[("M4093", "O2", 1)].status == "infeasible"
+    written = _program(tmp_path, ack + chain + "EM\n")
+    items, _ = _status(written, [])
+    assert items[("M4093", "O2", 1)].status == "missing"
+    items, _ = _status(written, [_run_nc(written, calls)])
+    assert items[("M4093", "O2", 1)].status == "shown"

@@ -59,7 +59,7 @@ def test_every_fact_holds_in_every_phase_of_random_nc_jobs() -> None:
             for kind, addr, value in nc.phase(cycle, lambda marker: acks.get(marker, 0)):
                 assert (kind, addr) in NC_MODEL_OWNED
                 state[(kind, addr)] = value
-            _check(state, seen)
+            _check({**state, **{("M", a): v for a, v in acks.items()}}, seen)
             for a in _ACKS:                         # the PLC side: follows its strobe, mostly
                 strobe = state.get(("M", a - 20), 0) or state.get(("M", 4520), 0) and a == 4093
                 if rng.random() < 0.5:
@@ -71,7 +71,8 @@ def test_every_fact_holds_in_every_phase_of_random_nc_jobs() -> None:
 def test_every_fact_holds_on_the_reference_machine(tmp_path: Path) -> None:
     # The same through the interpreter's NC side: a program acknowledges the TOOL CALL and TOOL DEF strobes when
     # an input says so; the machine's own memory is checked after every cycle.
-    (tmp_path / "main.src").write_text("L M4073\nO M4520\nA I1\n= M4093\nL M4074\nA I2\n= M4094\nEM\n")
+    (tmp_path / "main.src").write_text("L M4073\nO M4520\nA I1\n= M4093\nL M4074\nA I2\n= M4094\nL M4072\nA I1\n"
+                                       "= M4092\nEM\n")
     program = compile_project(ProjectOptions(main=tmp_path / "main.src"), make_semantics("itnc530", {})).program
     assert applicable_facts(program, set()) == NC_FACTS
     machine = Machine(program, compiled=compile_program(program))
@@ -79,29 +80,46 @@ def test_every_fact_holds_on_the_reference_machine(tmp_path: Path) -> None:
     seen: set = set()
     for cycle in range(3000):
         jobs = [_job(rng)] if rng.random() < 0.05 else []
-        jobs = [j for j in jobs if next(iter(j)) in ("tool_call", "tool_def")]
-        machine.run_cycle(cycle, [("I", 1, rng.randrange(2)), ("I", 2, rng.randrange(2))], jobs)
-        state = {k: machine.read(*k) for fact in NC_FACTS for k in fact.operands}
-        _check(state, seen)
+        jobs = [j for j in jobs if next(iter(j)) in ("tool_call", "tool_def", "m_function", "mode")]
+        # the cycle's phases one by one: the facts hold when the program starts (the acknowledgements as the NC
+        # read them), and those without an operand of the PLC's also after the program
+        machine.apply_writes([("I", 1, rng.randrange(2)), ("I", 2, rng.randrange(2))])
+        machine.nc_phase(cycle, jobs)
+        machine.input_latch()
+        machine.data_phase()
+        machine.timer_service()
+        _check({k: machine.read(*k) for fact in NC_FACTS for k in fact.operands}, seen)
+        machine.program_phase(cycle)
+        machine.output_flush()
+        machine.end_cycle()
+        for fact in NC_FACTS:
+            if not fact.plc_owned:
+                assert fact.holds({k: machine.read(*k) for k in fact.operands}), fact.text
     assert {(1, 0, 0), (0, 1, 0), (0, 0, 1)} <= seen
 
 
 def test_a_fact_does_not_apply_where_its_operands_can_be_written_otherwise(tmp_path: Path) -> None:
-    # Written by the program (by name, or a double word over the pocket word), set by a scenario, or another word
-    # over it named (the stimulus may set it): the facts naming that operand are left out, the others kept.
-    def facts(text: str, driven=frozenset()):
+    # Written by the program (by name, or a double word over the pocket word, or through the index register where
+    # it may reach them), set by a scenario, or another word over it named (the stimulus may set it): the facts
+    # naming that operand are left out, the others kept. An acknowledgement is the PLC's own: written by the
+    # program or a scenario, its handshake fact still applies (mcdc checks the writes before each chain).
+    def facts(text: str, driven=frozenset()) -> set:
         (tmp_path / "main.src").write_text(text)
         program = compile_project(ProjectOptions(main=tmp_path / "main.src"),
                                   make_semantics("itnc530", {})).program
-        return [NC_FACTS.index(f) for f in applicable_facts(program, set(driven))]
+        return {f.operands[:2] for f in applicable_facts(program, set(driven))}
 
-    assert facts("L M4521\n= O1\nEM\n") == [0, 1]
-    assert facts("L I1\nS M4522\nEM\n") == []
-    assert facts("L K1\n= W262\nEM\n") == [0]
-    assert facts("L K1\n= D260\nEM\n") == [0]
-    assert facts("L D260\n= D0\nEM\n") == [0]
-    assert facts("L M4521\n= O1\nEM\n", {("M", 4073)}) == [0]
-    assert facts("L M4521\n= O1\nEM\n", {("W", 264)}) == [0]
+    flags, strobe_fact, tool_ack = (("M", 4521), ("M", 4522)), (("M", 4073), ("M", 4521)), (("M", 4073), ("M", 4093))
+    every = facts("L M4521\n= O1\nEM\n")
+    assert len(every) == len(NC_FACTS) and {flags, strobe_fact, tool_ack} <= every
+    assert facts("L I1\nS M4522\nEM\n") == every - {flags, strobe_fact}
+    assert facts("L K1\n= W262\nEM\n") == every - {strobe_fact}
+    assert facts("L K1\n= D260\nEM\n") == every - {strobe_fact}
+    assert facts("L D260\n= D0\nEM\n") == every - {strobe_fact}
+    assert facts("L M4521\n= O1\nEM\n", {("M", 4073)}) == every - {strobe_fact, tool_ack}
+    assert facts("L M4521\n= O1\nEM\n", {("W", 264)}) == every - {strobe_fact}
+    assert facts("L I1\n= M4093\nEM\n", {("M", 4093)}) == every
+    assert not facts("L W100\n= X\nL I1\n= M10[X]\nEM\n")
 
 
 @pytest.mark.parametrize("semantics", [{}, {"load_extension": "zero"}, {"compare_signedness": "unsigned"},

@@ -49,6 +49,7 @@ _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
 _READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 Key = tuple[str, int]
+FactsAt = Callable[[int, int], Sequence[NcFact]]     # the NC facts that hold at a region start (file, op index)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -342,11 +343,11 @@ def region_starts(program: Program, f: int, first: int, consumer: int, entries: 
 
 def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
                  skip: frozenset[int] = frozenset(), start: int | None = None,
-                 entries: Entries | None = None, facts: Sequence[NcFact] = ()) -> Tied | None:
+                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = ()) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
     the program fixes it there, else None; `facts`: the NC model's facts that hold in this program (see the module
-    docstring). None where no region covers all its conditions (or the decision is not reached in it)."""
+    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -372,22 +373,38 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
         return None
     tables = [run.reads[c.index] for c in decision.conditions]
     found: set[int] = set()
-    _split(tables, 0, path.reach & _facts_allow(run, facts), 0, found)
+    held = facts(f, s) if callable(facts) else facts
+    _split(tables, 0, path.reach & _facts_allow(run, held), 0, found)
     ops = program.files[f].ops
     writes = tuple(j for j in sorted(run.followed) if s <= j < decision.index and ops[j].code in _WRITES
                    and ops[j].operand is not None and ops[j].operand.is_bit)
     return Tied(frozenset(found), s, writes)
 
 
-_FACT_SLOTS = 12              # reads tied by the NC model's facts in one region, at most (else none are)
+_FACT_SLOTS = 12              # reads tied by one group of the NC model's facts in a region, at most (else none are)
 
 
 def _facts_allow(run: _Run, facts: Sequence[NcFact]) -> int:
     """The assignments of the run's free values that `facts` allow (every one where they tie no read): its reads of
     a fact's bit operands (their start values) and its compares of a fact's word with a constant, each tried over
-    every state of the facts' operands that satisfies them all."""
-    if not facts:
-        return _ALL
+    every state of the facts' operands that satisfies them all. Facts that share no operand are independent: each
+    group of facts linked by shared operands is tried on its own."""
+    result = _ALL
+    for group in _groups(facts):
+        result &= _group_allows(run, group)
+    return result
+
+
+def _groups(facts: Sequence[NcFact]) -> list[list[NcFact]]:
+    groups: list[list[NcFact]] = []
+    for fact in facts:
+        linked = [g for g in groups if any(set(fact.operands) & set(f.operands) for f in g)]
+        merged = [fact] + [f for g in linked for f in g]
+        groups = [g for g in groups if g not in linked] + [merged]
+    return groups
+
+
+def _group_allows(run: _Run, facts: Sequence[NcFact]) -> int:
     bits = sorted({k for fact in facts for k in fact.bits})
     words = sorted({k for fact in facts for k in fact.words})
     slots: list[tuple[int, Callable[[dict], int]]] = []

@@ -32,7 +32,8 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
-from transpiler.verify.implication import Tied, consumed_start_zero, program_entries, tied_vectors
+from transpiler.verify.implication import CycleOrder, Tied, consumed_start_zero, cycle_order, program_entries, \
+    tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -386,10 +387,59 @@ class _Implications:
     (nc_facts.applicable_facts)."""
 
     def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool],
-                 facts: Sequence[NcFact] = ()):
+                 facts: Sequence[NcFact] = (), table: DecisionTable | None = None):
         self.program, self.state, self.zero, self.facts = program, state, zero, tuple(facts)
         self.entries = program_entries(program)
         self._first: dict[tuple[int, int], tuple[Tied | None, frozenset[str]]] = {}
+        self._held: dict[tuple[int, int], tuple[NcFact, ...]] = {}
+        self._order: CycleOrder | None | bool = False         # False: not worked out yet
+        self._writes: dict[tuple[str, int], list[tuple[int, int, set[int]]]] | None = None
+        self._table = table
+
+    def facts_at(self, file: int, start: int) -> tuple[NcFact, ...]:
+        """The facts that hold at a region start: all of self.facts but those with an operand the program owns
+        (NcFact.plc_owned) that a write able to break the fact may change before that op in the cycle."""
+        if (file, start) not in self._held:
+            self._held[(file, start)] = tuple(f for f in self.facts if self._kept(f, file, start))
+        return self._held[(file, start)]
+
+    def _kept(self, fact: NcFact, file: int, start: int) -> bool:
+        if not fact.plc_owned:
+            return True
+        if self._order is False:
+            self._order = cycle_order(self.program)
+        order = self._order
+        if order is None or (file, start) in order.in_jobs or (file, start) not in order.positions:
+            return False
+        writes = self._bit_writes()
+        for key in fact.plc_owned:
+            for f, i, values in writes.get(key, ()):
+                if order.may_precede((f, i), (file, start)) and any(not _keeps(fact, key, v) for v in values):
+                    return False
+        return True
+
+    def _bit_writes(self) -> dict[tuple[str, int], list[tuple[int, int, set[int]]]]:
+        """Each named write of a bit operand: (file, op index, the values it can write)."""
+        if self._writes is None:
+            table = self._table or decision_table(self.program)
+            by_consumer = {d.key: d for d in table.decisions}
+            writes: dict[tuple[str, int], list[tuple[int, int, set[int]]]] = {}
+            sem = self.program.semantics
+            for f, code in enumerate(self.program.files):
+                for i, op in enumerate(code.ops):
+                    for key in implicit_writes(op, sem.profile.interface, sem["add_overflow"] == "flag"):
+                        writes.setdefault(key, []).append((f, i, {0, 1}))
+                    o = op.operand
+                    if o is None or not o.is_bit or o.indexed or op.code not in _BIT_STORES:
+                        continue
+                    decision = by_consumer.get((f, i))
+                    outcomes = _outcomes(decision, self.state) if decision is not None else {0, 1}
+                    values = {"ST": outcomes, "STN": {1 - v for v in outcomes}, "SET": {1}, "SETN": {1},
+                              "RES": {0}, "RESN": {0}}.get(op.code, {0, 1})
+                    for n in range(op.nbits if op.code == "STBITS" else 1):
+                        writes.setdefault((o.kind, o.addr + n), []).append((f, i, values))
+            self._writes = writes
+        return self._writes
 
     def entry(self, consumed: set[str]) -> Callable[[str, int, int, int], int | None]:
         """An operand's value at a region start where the program fixes it there; a consumed timer or counter start
@@ -408,7 +458,8 @@ class _Implications:
         """What the longest region before `decision` lets it see, and the starts taken as 0 there."""
         if decision.key not in self._first:
             consumed: set[str] = set()
-            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries, facts=self.facts)
+            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries,
+                                facts=self.facts_at)
             self._first[decision.key] = (tied, frozenset(consumed))
         return self._first[decision.key]
 
@@ -429,11 +480,12 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
 
     absent: set[int] = set()
     for w in tied.writes:
-        if holds(frozenset(absent | {w}), analysis.facts):
+        if holds(frozenset(absent | {w}), analysis.facts_at(decision.file, tied.start)):
             absent.add(w)
     # the NC model's facts it rests on, likewise (the narrower ones, later in the table, dropped first)
-    resting = list(analysis.facts)
-    for fact in reversed(analysis.facts):
+    held = analysis.facts_at(decision.file, tied.start)
+    resting = list(held)
+    for fact in reversed(held):
         if holds(frozenset(absent), [f for f in resting if f is not fact]):
             resting.remove(fact)
     ops = program.files[decision.file].ops
@@ -450,6 +502,21 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     where += [fact.text for fact in resting]
     return (f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'}"
             + (f" ({'; '.join(where)})" if where else ""))
+
+
+_BIT_STORES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC", "DEC", "STBITS"})
+
+
+def _keeps(fact: NcFact, key: tuple[str, int], value: int) -> bool:
+    """Whether writing `value` to the fact's bit operand `key` leaves the fact true in every state it holds in."""
+    others = [k for k in fact.operands if k != key]
+    if any(k[0] in ("B", "W", "D") for k in others):
+        return False                    # not needed by the facts there are: words stay the NC's alone
+    for bits in itertools.product((0, 1), repeat=len(others)):
+        state = dict(zip(others, bits))
+        if any(fact.holds({**state, key: v}) for v in (0, 1)) and not fact.holds({**state, key: value}):
+            return False
+    return True
 
 
 def _ties(decision: Decision, number: int, tied: Tied, triples: bool = False) -> list[str]:
@@ -532,7 +599,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             if state is None:
                 state = constant_bits(program, table, set(driven))
                 implications = _Implications(program, state, consumed_start_zero(program, set(driven)),
-                                             applicable_facts(program, set(driven)))
+                                             applicable_facts(program, set(driven)), table)
             reason = (_infeasible_reason(decision, number, coupled, state)
                       or _tied_reason(implications, decision, number, coupled))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))

@@ -45,12 +45,15 @@ class NcFact:
     """A relation between operands the NC model owns that holds whenever the PLC program runs. `holds` takes the
     operands' values (bits 0/1, words signed in their width); `edges` are the word values around which its truth
     may change (it is the same for every value between two neighbouring edges): a word is tried at each edge, one
-    below and one above, and at its limits."""
+    below and one above, and at its limits. `plc_owned`: operands of the fact the program writes (a handshake's
+    acknowledgement): the NC reads them in its phase, so the fact holds when the program starts and stays true at
+    a point of the cycle only while no write before that point can break it (mcdc.py checks the cycle order)."""
 
     operands: tuple[Key, ...]
     holds: Callable[[Mapping[Key, int]], bool]
     edges: tuple[int, ...]
     text: str
+    plc_owned: tuple[Key, ...] = ()
 
     @property
     def words(self) -> tuple[Key, ...]:
@@ -72,6 +75,22 @@ def _flags_describe_the_call(v: Mapping[Key, int]) -> bool:
     return all(v[k] == (k == which) for k in _FLAGS)
 
 
+def _handshake(strobe: int, ack: int) -> NcFact:
+    """hh_nc.c step(): the NC raises a strobe only when it reads the acknowledgement as 0 in that phase, and drops
+    it in the phase it reads the acknowledgement as 1. The scenario's writes come before the NC phase of their
+    cycle, so the NC reads them too."""
+    s, a = ("M", strobe), ("M", ack)
+    return NcFact((s, a), lambda v: not (v[s] and v[a]), (),
+                  f"the NC raises the strobe M{strobe} only while it reads the acknowledgement M{ack} as 0 and "
+                  f"drops it in the phase it reads 1, so when the cycle's program starts M{strobe} = 1 only with "
+                  f"M{ack} = 0; no write before this chain in the cycle can set M{ack} (NC model)", (a,))
+
+
+# The strobe/acknowledgement pairs of hh_nc.c (ITNC_KINDS, the TOOL CALL's second strobe M4520 with M4093, the TNC
+# 407's M-function pair).
+_HANDSHAKES = ((4070, 4090), (4071, 4091), (4072, 4092), (4073, 4093), (4520, 4093), (4074, 4094), (4075, 4095),
+               (2045, 2482))
+
 NC_FACTS: tuple[NcFact, ...] = (
     NcFact(_FLAGS, _one_flag_at_most, (),
            "M4521, M4522 and M4523 are never 1 two at a time: the NC sets exactly one of them with each TOOL CALL "
@@ -80,6 +99,7 @@ NC_FACTS: tuple[NcFact, ...] = (
            "while the TOOL CALL strobe M4073 is 1, exactly one of M4521 (W264 = 0), M4522 (W262 >= 1) and M4523 "
            "(W262 <= 0) is 1, the one that fits W264 and W262: the NC writes all of them with the strobe and writes "
            "none of them again (no TOOL DEF either) before that handshake ends (NC model)"),
+    *(_handshake(strobe, ack) for strobe, ack in _HANDSHAKES),
 )
 
 
@@ -98,10 +118,11 @@ def applicable_facts(program: Program, driven: set[tuple[str, int]]) -> tuple[Nc
     """The facts of NC_FACTS nothing but the NC can break in this program: none of their operands is written by the
     program (by name, through the index register where it can reach them, by a data table), set by a scenario
     (`driven`), or overlapped by another byte, word or double word the program names (which the generated
-    stimulus may set)."""
+    stimulus may set). A fact's `plc_owned` operands may be written by name and by a scenario (see NcFact); not
+    through the index register or by a data table (which loads after the NC phase)."""
     _, written, _ = program_operands(program)
-    written_cells = [_span(r.kind, r.addr) for r in written] + [_span(r.kind, r.addr) for r in program.data_rows]
-    written_cells += [_span(k, a) for k, a in driven]
+    named_cells = [_span(r.kind, r.addr) for r in written] + [_span(k, a) for k, a in driven]
+    written_cells = [_span(r.kind, r.addr) for r in program.data_rows]
     named_read, _ = indexed_operands(program)
     used, _, _ = program_operands(program)
     ranges = index_ranges(program)
@@ -125,6 +146,8 @@ def applicable_facts(program: Program, driven: set[tuple[str, int]]) -> tuple[Nc
     for fact in NC_FACTS:
         cells = [_span(*k) for k in fact.operands]
         if any(_overlaps(c, w) for c in cells for w in written_cells):
+            continue
+        if any(_overlaps(_span(*k), w) for k in fact.operands if k not in fact.plc_owned for w in named_cells):
             continue
         if any(_overlaps(_span(*k), o[:3]) and o[3] != k for k in fact.words for o in others):
             continue
