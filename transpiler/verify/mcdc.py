@@ -432,7 +432,7 @@ class _Implications:
                     o = op.operand
                     if o is None or not o.is_bit or o.indexed or op.code not in _BIT_STORES:
                         continue
-                    decision = by_consumer.get((f, i))
+                    decision = by_consumer.get((f, _first_consumer(code.ops, f, i, by_consumer, self.entries)))
                     outcomes = _outcomes(decision, self.state) if decision is not None else {0, 1}
                     values = {"ST": outcomes, "STN": {1 - v for v in outcomes}, "SET": {1}, "SETN": {1},
                               "RES": {0}, "RESN": {0}}.get(op.code, {0, 1})
@@ -505,6 +505,17 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
 
 
 _BIT_STORES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC", "DEC", "STBITS"})
+_LA_STORES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
+
+
+def _first_consumer(ops, f: int, i: int, by_consumer, entries) -> int:
+    """The op whose decision the store at ops[i] consumes: the first of the stores in a row before it (`= M1`
+    `= M2` store one LA), where control comes to none of the later ones from elsewhere."""
+    j = i
+    while (f, j) not in by_consumer and j > 0 and ops[j - 1].code in _LA_STORES and ops[j].code in _LA_STORES \
+            and not entries.jumps[f].get(j) and (f, j) not in entries.called:
+        j -= 1
+    return j
 
 
 def _keeps(fact: NcFact, key: tuple[str, int], value: int) -> bool:
