@@ -465,7 +465,8 @@ def test_a_strobe_is_never_seen_with_its_acknowledgement_unless_the_program_set_
     # The NC raises M4073 only while it reads M4093 as 0 and drops it once it reads 1: read before any write of
     # M4093 in the cycle, M4073 = 1 comes only with M4093 = 0, so M4093 never decides `M4073 AND NOT M4093`
     # alone. A reset of M4093 before the chain keeps that, and so does storing a chain that is always 0 (also as
-    # the second store of one chain); a scenario setting M4093 too (the NC reads it in the same phase). `= M4093` before the chain (which can write 1) does not: the pair shows up there.
+    # the second store of one chain); a scenario setting M4093 too (the NC reads it in the same phase). `= M4093`
+    # before the chain (which can write 1) does not: the pair shows up there.
     # Catches: the handshake fact taken at a point where the program may have set the acknowledgement.
     chain, ack = "L M4073\nAN M4093\n= O2\n", "L M4073\nA I1\n= M4093\n"
     calls = [({"I1": 0}, [{"tool_call": {"tool": 4, "pocket": 5}}]), ({"I1": 0}, []), ({"I1": 1}, []),

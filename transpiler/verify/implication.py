@@ -347,7 +347,8 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
     the program fixes it there, else None; `facts`: the NC model's facts that hold in this program (see the module
-    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no region covers all its conditions (or the decision is not reached in it)."""
+    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no
+    region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
