@@ -12,7 +12,8 @@ from transpiler import api
 from transpiler.cli.app import main
 from transpiler.diagnostics import Diagnostics
 from transpiler.exec.interp import compile_program
-from transpiler.verify.corners import NC_MODEL_OWNED, Corners, harvest
+from transpiler.verify.corners import Corners, harvest
+from transpiler.verify.nc_facts import NC_MODEL_OWNED
 from transpiler.verify.equiv import coverage_summary
 from transpiler.verify.guided import generate
 from transpiler.verify.mcdc import decision_coverage

@@ -17,6 +17,9 @@ from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 from transpiler.verify.implication import tied_vectors
 from transpiler.verify.mcdc import decision_coverage, shown_masking, shown_unique
+from transpiler.verify.implication import consumed_start_zero
+from transpiler.verify.mcdc import _Implications, constant_bits
+from transpiler.verify.nc_facts import NC_FACTS, applicable_facts
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -352,3 +355,131 @@ def test_a_timer_start_read_before_its_only_write_in_the_cycle_is_always_0(tmp_p
     called = _program(tmp_path, "CM Start\nL I1\nAN T0\n= O1\nEM\nLBL Start\nL I2\n= T0\nEM\n")
     items, _ = _status(called, [_run(called, [{"I1": 1}])])
     assert items[("T0", "O1", 1)].status == "missing"
+
+
+def _run_nc(program, rows: list[tuple[dict[str, int], list[dict]]]) -> Machine:
+    """One cycle per row: inputs I<n> and the NC jobs queued in that cycle."""
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, (inputs, jobs) in enumerate(rows):
+        machine.run_cycle(cycle, [("I", int(name[1:]), value) for name, value in inputs.items()], jobs)
+    return machine
+
+
+def _tool_calls(program, calls) -> list[Machine]:
+    """One run per TOOL CALL (tool, pocket), acknowledged (I1) a few cycles after it starts, then TOOL DEFs."""
+    runs = []
+    for tool, pocket in calls:
+        rows = [({"I1": 0}, [{"tool_call": {"tool": tool, "pocket": pocket}}]), ({"I1": 0}, []), ({"I1": 1}, []),
+                ({"I1": 0}, [{"tool_def": {"tool": 3, "pocket": -1}}]), ({"I1": 0}, []), ({"I1": 1}, []),
+                ({"I1": 0}, []), ({"I1": 0}, [])]
+        runs.append(_run_nc(program, rows))
+    return runs
+
+
+_ACK_TOOL = "L M4073\nA I1\n= M4093\nL M4074\nA I1\n= M4094\n"
+
+
+def test_the_nc_never_sets_two_tool_call_markers_together(tmp_path: Path) -> None:
+    # M4522 AND NOT M4521: showing M4521 needs M4522 = 1 with M4521 = 1, which the NC never writes (exactly one of
+    # M4521..M4523 with each TOOL CALL). Infeasible, naming the NC model; missing again where a scenario sets
+    # M4521 (it could then be 1 with M4522), or where the program writes it itself.
+    # Catches: the fact applied to an operand something else writes, a claim without saying it rests on the NC.
+    program = _program(tmp_path, _ACK_TOOL + "L M4522\nAN M4521\n= O1\nEM\n")
+    runs = _tool_calls(program, [(0, 5), (4, 5), (4, -1)])
+    items, _ = _status(program, runs)
+    t0 = items[("M4521", "O1", 1)]
+    assert t0.status == "infeasible", t0
+    assert "never 1 two at a time" in t0.reason and "(NC model)" in t0.reason and "M4073" not in t0.reason
+    assert items[("M4522", "O1", 0)].status == "shown"
+    items, _ = _status(program, runs, driven={("M", 4521)})
+    assert items[("M4521", "O1", 1)].status == "missing"
+    written = _program(tmp_path, _ACK_TOOL + "L I2\nS M4521\nL M4522\nAN M4521\n= O1\nEM\n")
+    items, _ = _status(written, _tool_calls(written, [(4, 5)]))
+    assert items[("M4521", "O1", 1)].status == "missing"
+
+
+def test_while_the_tool_strobe_is_up_the_markers_describe_the_pocket(tmp_path: Path) -> None:
+    # Behind `L M4073` `AN M4093` `EMF` the strobe is 1: M4523 AND NOT M4521 AND W262 == -1 then has M4523 = 1
+    # whenever the other two are (M4521 = 0 and a pocket of -1 leave M4523 as the one marker), so M4523 never
+    # decides alone; M4521 cannot either (M4523 = 1 with M4521 = 1 never). Without the strobe test before it, the
+    # same chain can see M4523 = 0 with W262 = -1 (a TOOL DEF after the call): M4523 stays missing there, and
+    # two cycles show it. Catches: the strobe fact applied to a chain not gated by the strobe.
+    chain = "L M4523\nAN M4521\nA[\nL W262\n== K-1\n]\n= O1\n"
+    gated = _program(tmp_path, _ACK_TOOL + "L M4073\nAN M4093\nEMF\n" + chain + "EM\n")
+    runs = _tool_calls(gated, [(0, -1), (4, -1), (4, 0), (4, 5)])
+    items, _ = _status(gated, runs)
+    no_pocket, t0 = items[("M4523", "O1", 0)], items[("M4521", "O1", 1)]
+    assert no_pocket.status == "infeasible" and "while the TOOL CALL strobe M4073 is 1" in no_pocket.reason, no_pocket
+    assert t0.status == "infeasible" and "never 1 two at a time" in t0.reason, t0
+    assert items[("W262 == K-1", "O1", 2)].status == "shown"
+    # the same chain with nothing gating it: TOOL DEF -1 after a call with a pocket gives M4523 = 0, W262 = -1
+    free = _program(tmp_path, _ACK_TOOL + chain + "EM\n")
+    items, _ = _status(free, [])
+    assert items[("M4523", "O1", 0)].status == "missing"
+    items, _ = _status(free, _tool_calls(free, [(4, 5), (4, -1)]))
+    assert items[("M4523", "O1", 0)].status == "shown"
+    # the program writing the pocket word itself: no strobe fact
+    written = _program(tmp_path, _ACK_TOOL + "L I3\nJPF Keep\nL K-1\n= W262\nLBL Keep\nL M4073\nAN M4093\nEMF\n"
+                       + chain + "EM\n")
+    items, _ = _status(written, _tool_calls(written, [(4, -1)]))
+    assert items[("M4523", "O1", 0)].status == "missing"
+
+
+def test_recorded_vectors_of_nc_driven_chains_are_allowed_by_the_nc_facts(tmp_path: Path) -> None:
+    # Soundness of the facts as constraints: every vector random TOOL CALLs and TOOL DEFs make the chains record is
+    # among the ones the analysis allows with the facts. Catches: a compare outcome worked out wrongly, a fact
+    # that the model breaks.
+    chains = ("L M4522\nAN M4521\n= O1\n", "L M4523\nAN M4521\nA[\nL W262\n== K-1\n]\n= O2\n",
+              "L M4523\nAN M4521\nA[\nL W262\n== K0\n]\n= O3\n", "L M4521\nO[\nL W264\n<> K0\n]\nA M4073\n= O4\n",
+              "L W262\n>= K1\nA M4522\n= O5\n")
+    program = _program(tmp_path, _ACK_TOOL + "L M4073\nAN M4093\nEMF\n" + "".join(chains) + "EM\n")
+    table = decision_table(program)
+    assert len(applicable_facts(program, set())) == len(NC_FACTS)
+    analysis = _Implications(program, constant_bits(program, table, set()), consumed_start_zero(program, set()),
+                             applicable_facts(program, set()), table)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(5)
+    for cycle in range(2000):
+        jobs = []
+        if rng.random() < 0.1:
+            kind = rng.choice(("tool_call", "tool_def"))
+            jobs = [{kind: {"tool": rng.choice((0, 2)), "pocket": rng.choice((-2, -1, 0, 1, 7))}}]
+        machine.run_cycle(cycle, [("I", 1, rng.randrange(2))], jobs)
+    checked = 0
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None, facts=analysis.facts_at)
+        if tied is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded and recorded <= tied.vectors, decision.text()
+        checked += 1
+    assert checked >= len(chains)
+    # after `= M4093` (which can write 1) the handshake facts of M4093 no longer hold; before it they do
+    def acks(start: int) -> set:
+        return {f.operands for f in analysis.facts_at(0, start) if ("M", 4093) in f.plc_owned}
+    assert acks(0) == {(("M", 4073), ("M", 4093)), (("M", 4520), ("M", 4093))} and acks(3) == set()
+
+
+def test_a_strobe_is_never_seen_with_its_acknowledgement_unless_the_program_set_it_before(tmp_path: Path) -> None:
+    # The NC raises M4073 only while it reads M4093 as 0 and drops it once it reads 1: read before any write of
+    # M4093 in the cycle, M4073 = 1 comes only with M4093 = 0, so M4093 never decides `M4073 AND NOT M4093`
+    # alone. A reset of M4093 before the chain keeps that, and so does storing a chain that is always 0 (also as
+    # the second store of one chain); a scenario setting M4093 too (the NC reads it in the same phase). `= M4093`
+    # before the chain (which can write 1) does not: the pair shows up there.
+    # Catches: the handshake fact taken at a point where the program may have set the acknowledgement.
+    chain, ack = "L M4073\nAN M4093\n= O2\n", "L M4073\nA I1\n= M4093\n"
+    calls = [({"I1": 0}, [{"tool_call": {"tool": 4, "pocket": 5}}]), ({"I1": 0}, []), ({"I1": 1}, []),
+             ({"I1": 1}, []), ({"I1": 0}, [])]
+    for before in ("", "L I2\nR M4093\n", "L M10\n= M11\n= M4093\n"):     # M10: never written, always 0
+        program = _program(tmp_path, before + chain + ack + "EM\n")
+        items, _ = _status(program, [_run_nc(program, calls)])
+        item = items[("M4093", "O2", 1)]
+        assert item.status == "infeasible" and "raises the strobe M4073 only while it reads" in item.reason, item
+        items, _ = _status(program, [_run_nc(program, calls)], driven={("M", 4093)})
+        assert items[("M4093", "O2", 1)].status == "infeasible"
+    written = _program(tmp_path, ack + chain + "EM\n")
+    items, _ = _status(written, [])
+    assert items[("M4093", "O2", 1)].status == "missing"
+    items, _ = _status(written, [_run_nc(written, calls)])
+    assert items[("M4093", "O2", 1)].status == "shown"

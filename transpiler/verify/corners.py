@@ -12,15 +12,9 @@ import random
 from typing import Any
 
 from transpiler.ir import Program
+from transpiler.verify.nc_facts import NC_MODEL_OWNED
 from transpiler.verify.scenario import NameTable, OperandRef
 from transpiler.verify.simulate import indexed_operands, program_operands
-
-# Operands the NC model itself writes for `nc:` actions (runtime_shim/hh_nc.c, iTNC and TNC 407 numbers): the
-# stimulus never sets them directly, or a strobe or mode word would change behind the model's back.
-NC_MODEL_OWNED = frozenset({
-    ("W", 256), ("W", 260), ("W", 262), ("W", 264), ("W", 272), ("D", 280), ("D", 284), ("D", 356),
-    *(("M", m) for m in (4070, 4071, 4072, 4073, 4074, 4075, 4172, 4173, 4174, 4520, 4521, 4522, 4523, 2045)),
-})
 
 # Values worth trying on any word besides the program's constants: the edges of the signed ranges and 0.
 _EDGES = (0, 1, -1, 127, 128, 255, 256, 32767, -32768, 65535)

@@ -10,16 +10,25 @@ program's own logic fixes it, see mcdc.constant_bits, or a consumed timer/counte
 set in this cycle, see consumed_start_zero), and so is every value the analysis does not follow (a word compare, LA
 after a join). Values are truth tables over those variables (a Python int with one bit per assignment), so a
 join of two paths is exact and the values a chain sees are over-approximated only by the free variables: a
-vector not among them can never occur, which is what an infeasible claim needs."""
+vector not among them can never occur, which is what an infeasible claim needs.
+
+Facts of the NC model (nc_facts.NC_FACTS, where they apply) narrow the free variables further: the start values of
+the NC's markers the region reads, and the outcomes of its compares of the NC's words with a constant (`L W262`
+`== K-1`), can only take the combinations some state of those operands that satisfies every fact gives. The NC
+writes between cycles only and nothing else writes those operands, so a read anywhere in the cycle sees that
+state."""
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from typing import Callable, Sequence
 
 from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.frontend.opcodes import implicit_writes
+from transpiler.exec.interp.gen_exprs import int32
 from transpiler.ir import Op, Program
+from transpiler.verify.nc_facts import NcFact
 
 MAX_VARS = 18                   # free variables per region (truth tables of 2**18 bits)
 _ALL = (1 << (1 << MAX_VARS)) - 1
@@ -40,6 +49,7 @@ _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
 _READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 Key = tuple[str, int]
+FactsAt = Callable[[int, int], Sequence[NcFact]]     # the NC facts that hold at a region start (file, op index)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -333,11 +343,12 @@ def region_starts(program: Program, f: int, first: int, consumer: int, entries: 
 
 def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
                  skip: frozenset[int] = frozenset(), start: int | None = None,
-                 entries: Entries | None = None) -> Tied | None:
+                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = ()) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
-    the program fixes it there, else None. None where no region covers all its conditions (or the decision is not
-    reached in it)."""
+    the program fixes it there, else None; `facts`: the NC model's facts that hold in this program (see the module
+    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no
+    region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -363,11 +374,96 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
         return None
     tables = [run.reads[c.index] for c in decision.conditions]
     found: set[int] = set()
-    _split(tables, 0, path.reach, 0, found)
+    held = facts(f, s) if callable(facts) else facts
+    _split(tables, 0, path.reach & _facts_allow(run, held), 0, found)
     ops = program.files[f].ops
     writes = tuple(j for j in sorted(run.followed) if s <= j < decision.index and ops[j].code in _WRITES
                    and ops[j].operand is not None and ops[j].operand.is_bit)
     return Tied(frozenset(found), s, writes)
+
+
+_FACT_SLOTS = 12              # reads tied by one group of the NC model's facts in a region, at most (else none are)
+
+
+def _facts_allow(run: _Run, facts: Sequence[NcFact]) -> int:
+    """The assignments of the run's free values that `facts` allow (every one where they tie no read): its reads of
+    a fact's bit operands (their start values) and its compares of a fact's word with a constant, each tried over
+    every state of the facts' operands that satisfies them all. Facts that share no operand are independent: each
+    group of facts linked by shared operands is tried on its own."""
+    result = _ALL
+    for group in _groups(facts):
+        result &= _group_allows(run, group)
+    return result
+
+
+def _groups(facts: Sequence[NcFact]) -> list[list[NcFact]]:
+    groups: list[list[NcFact]] = []
+    for fact in facts:
+        linked = [g for g in groups if any(set(fact.operands) & set(f.operands) for f in g)]
+        merged = [fact] + [f for g in linked for f in g]
+        groups = [g for g in groups if g not in linked] + [merged]
+    return groups
+
+
+def _group_allows(run: _Run, facts: Sequence[NcFact]) -> int:
+    bits = sorted({k for fact in facts for k in fact.bits})
+    words = sorted({k for fact in facts for k in fact.words})
+    slots: list[tuple[int, Callable[[dict], int]]] = []
+    for key in bits:
+        if key in run.entries:
+            slots.append((run.entries[key], lambda state, key=key: state[key]))
+    ops = run.program.files[run.f].ops
+    edges = {k: {e for fact in facts if k in fact.words for e in fact.edges} for k in words}
+    sem = run.program.semantics
+    for i, table in run.reads.items():
+        op, prev = ops[i], ops[i - 1] if i > run.start else None
+        # WA is the word loaded just before only where nothing jumps to the compare itself (the region is entered
+        # at its start alone, see region_starts)
+        word = prev.operand if prev is not None and prev.code == "WLD" and not any(
+            ops[j].target == i for j in range(run.start, i)) else None
+        if op.code != "CMP" or op.operand is None or op.operand.kind != "K" or word is None or word.indexed \
+                or (word.kind, word.addr) not in edges:
+            continue
+        key = (word.kind, word.addr)
+        edges[key].add(int32(op.operand.addr))
+        slots.append((table, lambda state, key=key, op=op: _compare_value(sem, key[0], state[key], op.rel,
+                                                                          op.operand.addr)))
+    if not slots or len(slots) > _FACT_SLOTS:
+        return _ALL
+    points = {}
+    for key, found in edges.items():
+        half = 1 << (8 * {"B": 1, "W": 2, "D": 4}[key[0]] - 1)
+        low, high = -half, half - 1           # memory holds every bit pattern once: signed values are all of them
+        points[key] = sorted({min(high, max(low, e + d)) for e in found for d in (-1, 0, 1)} | {low, high})
+    allowed: set[tuple[int, ...]] = set()
+    for state in _states(bits, words, points):
+        if all(fact.holds(state) for fact in facts):
+            allowed.add(tuple(read(state) for _, read in slots))
+    result = 0
+    for values in allowed:
+        term = _ALL
+        for (table, _), v in zip(slots, values):
+            term &= table if v else _ALL ^ table
+        result |= term
+    return result
+
+
+def _states(bits: list[Key], words: list[Key], points: dict[Key, list[int]]):
+    """Every combination of bit values and word points, as dicts."""
+    for values in itertools.product(*([(0, 1)] * len(bits)), *(points[k] for k in words)):
+        yield dict(zip([*bits, *words], values))
+
+
+def _compare_value(sem, kind: str, word: int, rel: str, constant: int) -> int:
+    """The outcome of `L <word>` `<rel> K<constant>` for the word's value (signed in its width), as the interpreter
+    computes it (A-06 load extension, the compare's signedness; a constant operand compares at 32 bits)."""
+    if sem["load_extension"] == "zero" and kind != "D":
+        word &= (1 << (8 * {"B": 1, "W": 2}[kind])) - 1
+    left, right = word, int32(constant)
+    if sem["compare_signedness"] == "unsigned":
+        left, right = left & 0xFFFFFFFF, right & 0xFFFFFFFF
+    return int({"==": left == right, "<>": left != right, "<": left < right, ">": left > right,
+                "<=": left <= right, ">=": left >= right}[rel])
 
 
 def _attempt(program: Program, f: int, starts: list[int], k: int, consumer: int, reads: set[int],

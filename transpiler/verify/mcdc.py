@@ -19,7 +19,8 @@ the values the register can hold there reach), a condition the outcome cannot de
 constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
 chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
 a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
-cycle), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py), and a boundary
+value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
-from transpiler.verify.corners import NC_MODEL_OWNED
-from transpiler.verify.implication import Tied, consumed_start_zero, program_entries, tied_vectors
+from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
+from transpiler.verify.implication import CycleOrder, Tied, consumed_start_zero, cycle_order, program_entries, \
+    tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -382,12 +384,63 @@ def _showable(decision: Decision, number: int, masking: bool, vectors: frozenset
 class _Implications:
     """The implication analysis of one coverage computation (implication.py): where control enters the program,
     worked out once, and what the code before each decision lets it see, worked out once per decision, whichever of
-    its conditions asks. `zero`: consumed_start_zero."""
+    its conditions asks. `zero`: consumed_start_zero; `facts`: the NC model's facts that hold in this program
+    (nc_facts.applicable_facts)."""
 
-    def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool]):
-        self.program, self.state, self.zero = program, state, zero
+    def __init__(self, program: Program, state: _Values, zero: Callable[[str, int, int, int], bool],
+                 facts: Sequence[NcFact] = (), table: DecisionTable | None = None):
+        self.program, self.state, self.zero, self.facts = program, state, zero, tuple(facts)
         self.entries = program_entries(program)
         self._first: dict[tuple[int, int], tuple[Tied | None, frozenset[str]]] = {}
+        self._held: dict[tuple[int, int], tuple[NcFact, ...]] = {}
+        self._order: CycleOrder | None | bool = False         # False: not worked out yet
+        self._writes: dict[tuple[str, int], list[tuple[int, int, set[int]]]] | None = None
+        self._table = table
+
+    def facts_at(self, file: int, start: int) -> tuple[NcFact, ...]:
+        """The facts that hold at a region start: all of self.facts but those with an operand the program owns
+        (NcFact.plc_owned) that a write able to break the fact may change before that op in the cycle."""
+        if (file, start) not in self._held:
+            self._held[(file, start)] = tuple(f for f in self.facts if self._kept(f, file, start))
+        return self._held[(file, start)]
+
+    def _kept(self, fact: NcFact, file: int, start: int) -> bool:
+        if not fact.plc_owned:
+            return True
+        if self._order is False:
+            self._order = cycle_order(self.program)
+        order = self._order
+        if order is None or (file, start) in order.in_jobs or (file, start) not in order.positions:
+            return False
+        writes = self._bit_writes()
+        for key in fact.plc_owned:
+            for f, i, values in writes.get(key, ()):
+                if order.may_precede((f, i), (file, start)) and any(not _keeps(fact, key, v) for v in values):
+                    return False
+        return True
+
+    def _bit_writes(self) -> dict[tuple[str, int], list[tuple[int, int, set[int]]]]:
+        """Each named write of a bit operand: (file, op index, the values it can write)."""
+        if self._writes is None:
+            table = self._table or decision_table(self.program)
+            by_consumer = {d.key: d for d in table.decisions}
+            writes: dict[tuple[str, int], list[tuple[int, int, set[int]]]] = {}
+            sem = self.program.semantics
+            for f, code in enumerate(self.program.files):
+                for i, op in enumerate(code.ops):
+                    for key in implicit_writes(op, sem.profile.interface, sem["add_overflow"] == "flag"):
+                        writes.setdefault(key, []).append((f, i, {0, 1}))
+                    o = op.operand
+                    if o is None or not o.is_bit or o.indexed or op.code not in _BIT_STORES:
+                        continue
+                    decision = by_consumer.get((f, _first_consumer(code.ops, f, i, by_consumer, self.entries)))
+                    outcomes = _outcomes(decision, self.state) if decision is not None else {0, 1}
+                    values = {"ST": outcomes, "STN": {1 - v for v in outcomes}, "SET": {1}, "SETN": {1},
+                              "RES": {0}, "RESN": {0}}.get(op.code, {0, 1})
+                    for n in range(op.nbits if op.code == "STBITS" else 1):
+                        writes.setdefault((o.kind, o.addr + n), []).append((f, i, values))
+            self._writes = writes
+        return self._writes
 
     def entry(self, consumed: set[str]) -> Callable[[str, int, int, int], int | None]:
         """An operand's value at a region start where the program fixes it there; a consumed timer or counter start
@@ -406,7 +459,8 @@ class _Implications:
         """What the longest region before `decision` lets it see, and the starts taken as 0 there."""
         if decision.key not in self._first:
             consumed: set[str] = set()
-            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries)
+            tied = tied_vectors(self.program, decision, self.entry(consumed), entries=self.entries,
+                                facts=self.facts_at)
             self._first[decision.key] = (tied, frozenset(consumed))
         return self._first[decision.key]
 
@@ -421,14 +475,24 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     consumed = set(first_consumed)
     entry = analysis.entry(consumed)
     # the writes the claim rests on: drop each one the claim holds without
+    def holds(skip: frozenset[int], facts: Sequence[NcFact]) -> bool:
+        trial = tied_vectors(program, decision, entry, skip, tied.start, analysis.entries, facts)
+        return trial is not None and bool(trial.vectors) and not _showable(decision, number, masking, trial.vectors)
+
     absent: set[int] = set()
     for w in tied.writes:
-        trial = tied_vectors(program, decision, entry, frozenset(absent | {w}), tied.start)
-        if trial is not None and trial.vectors and not _showable(decision, number, masking, trial.vectors):
+        if holds(frozenset(absent | {w}), analysis.facts_at(decision.file, tied.start)):
             absent.add(w)
+    # the NC model's facts it rests on, likewise (the narrower ones, later in the table, dropped first)
+    held = analysis.facts_at(decision.file, tied.start)
+    resting = list(held)
+    for fact in reversed(held):
+        if holds(frozenset(absent), [f for f in resting if f is not fact]):
+            resting.remove(fact)
     ops = program.files[decision.file].ops
     needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
-    facts = _ties(decision, number, tied)
+    # where an NC fact ties three conditions, the pairs alone seldom say it: name a triple that never occurs too
+    facts = _ties(decision, number, tied, triples=bool(resting))
     cond = decision.conditions[number].text
     where = [f"set by {', '.join(needed[:4])} before this chain on every path to it"] if needed else []
     names = {f"{c.operand.kind}{c.operand.addr}": c.text for c in decision.conditions if c.operand is not None}
@@ -436,13 +500,41 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     if starts:
         where.append(f"{', '.join(starts)}: a timer or counter start the service clears after every cycle, and no "
                      "write of it runs before this chain in the cycle")
+    where += [fact.text for fact in resting]
     return (f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'}"
             + (f" ({'; '.join(where)})" if where else ""))
 
 
-def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
+_BIT_STORES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC", "DEC", "STBITS"})
+_LA_STORES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
+
+
+def _first_consumer(ops, f: int, i: int, by_consumer, entries) -> int:
+    """The op whose decision the store at ops[i] consumes: the first of the stores in a row before it (`= M1`
+    `= M2` store one LA), where control comes to none of the later ones from elsewhere."""
+    j = i
+    while (f, j) not in by_consumer and j > 0 and ops[j - 1].code in _LA_STORES and ops[j].code in _LA_STORES \
+            and not entries.jumps[f].get(j) and (f, j) not in entries.called:
+        j -= 1
+    return j
+
+
+def _keeps(fact: NcFact, key: tuple[str, int], value: int) -> bool:
+    """Whether writing `value` to the fact's bit operand `key` leaves the fact true in every state it holds in."""
+    others = [k for k in fact.operands if k != key]
+    if any(k[0] in ("B", "W", "D") for k in others):
+        return False                    # not needed by the facts there are: words stay the NC's alone
+    for bits in itertools.product((0, 1), repeat=len(others)):
+        state = dict(zip(others, bits))
+        if any(fact.holds({**state, key: v}) for v in (0, 1)) and not fact.holds({**state, key: value}):
+            return False
+    return True
+
+
+def _ties(decision: Decision, number: int, tied: Tied, triples: bool = False) -> list[str]:
     """What the chain can see, in words: conditions that are constant there, and pairs of values that never occur
-    together (those with condition `number` first)."""
+    together (those with condition `number` first); triples of values too where no pair names condition `number`,
+    or where `triples` asks for them."""
     conds = decision.conditions
     n = len(conds)
     facts: list[str] = []
@@ -464,7 +556,7 @@ def _ties(decision: Decision, number: int, tied: Tied) -> list[str]:
                         if all(text != t for _, t in pairs):
                             pairs.append((0 if number in (i, j) else 1, text))
     facts += [t for _, t in sorted(pairs, key=lambda p: p[0])][:3]
-    if not any(rank == 0 for rank, _ in pairs):
+    if triples or not any(rank == 0 for rank, _ in pairs):
         facts += _never_together(decision, number, tied)[:2]
     return facts
 
@@ -518,7 +610,8 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 continue
             if state is None:
                 state = constant_bits(program, table, set(driven))
-                implications = _Implications(program, state, consumed_start_zero(program, set(driven)))
+                implications = _Implications(program, state, consumed_start_zero(program, set(driven)),
+                                             applicable_facts(program, set(driven)), table)
             reason = (_infeasible_reason(decision, number, coupled, state)
                       or _tied_reason(implications, decision, number, coupled))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
