@@ -16,12 +16,14 @@ _FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "EN
 def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
     """False when an earlier error removed a line (in one of `lost_lines`' files) or a control statement of the
     file: a path that then seems to run off the end is a consequence of that error, not a second fault."""
-    files = {low.src.path} | {stmt.span.file for stmt in low.src.statements}
-    if not lost_lines.isdisjoint(files):
+    statements = low.src.statements
+    if lost_lines and (low.src.path in lost_lines or any(stmt.span.file in lost_lines for stmt in statements)):
         return False
-    lowered = {op.span for op in low.ops}
-    return all(stmt.span in lowered for stmt in low.src.statements
-               if isinstance(stmt, ast.Instr) and stmt.mnemonic in _FLOW_MNEMONICS)
+    # (an op has the mnemonic of the statement it was lowered from: only the control statements' spans are
+    # looked up, instead of hashing the span of every op)
+    lowered = {op.span for op in low.ops if op.mnemonic in _FLOW_MNEMONICS}
+    return all(stmt.span in lowered for stmt in statements
+               if type(stmt) is ast.Instr and stmt.mnemonic in _FLOW_MNEMONICS)
 
 
 def successors(ops: tuple[Op, ...], i: int) -> list[int]:
