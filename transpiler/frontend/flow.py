@@ -43,21 +43,31 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
     entries = [0] if file_index == 0 else []
     entries += list(f.labels.values())
     seen: set[int] = set()
-    stack = [e for e in entries if e < len(ops)]
+    n = len(ops)
+    stack = [e for e in entries if e < n]
     falls_off = file_index == 0 and not ops
     while stack:
         i = stack.pop()
         if i in seen:
             continue
         seen.add(i)
-        code = ops[i].code
+        # successors(ops, i), inlined: this walk visits every op of the program
+        op = ops[i]
+        code = op.code
         if code == "KFIELD" or code == "EM":      # (EM: no successor)
             continue
-        for s in ((i + 1,) if code not in ("JP", "JPT", "JPF") else successors(ops, i)):
-            if s >= len(ops):
-                falls_off = True
-            elif s not in seen:
-                stack.append(s)
+        if code == "JP" or code == "JPT" or code == "JPF":
+            if op.target is not None:
+                if op.target >= n:
+                    falls_off = True
+                elif op.target not in seen:
+                    stack.append(op.target)
+            if code == "JP":
+                continue
+        if i + 1 >= n:
+            falls_off = True
+        elif i + 1 not in seen:
+            stack.append(i + 1)
     if falls_off:
         diags.report("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
                     "a path reaches the end of the file without EM")
