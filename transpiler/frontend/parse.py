@@ -154,17 +154,17 @@ def _const_value(token: Token, documented: bool = False) -> int:
 def _code_lines(lines: Iterable[Line], pending: list[str]) -> Iterator[tuple[str, Span, tuple[str, ...]]]:
     """(stripped code, span, comments) of every line with code; the comments of comment-only lines go to the next
     line with code, and those after the last one are left in `pending` (a file's trailing comments)."""
-    for line in lines:
-        code = line.code.strip()
+    for code, comment, span in lines:
+        code = code.strip()
         if not code:
-            if line.comment is not None:
-                pending.append(line.comment.strip())
+            if comment is not None:
+                pending.append(comment.strip())
             continue
-        own = (line.comment.strip(),) if line.comment is not None else ()
+        own = (comment.strip(),) if comment is not None else ()
         if pending:
             own = tuple(pending) + own
             pending.clear()
-        yield code, line.span, own
+        yield code, span, own
 
 
 @dataclasses.dataclass
