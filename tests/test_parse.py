@@ -189,6 +189,23 @@ def test_template_cache_gives_the_same_result_as_a_direct_parse():
         assert parser.parse_line(line) == cached         # and again from the line cache
 
 
+def test_lines_of_an_accepted_shape_give_what_each_line_gives_alone():
+    """A file's lines of one shape (`L MG_a`, `L x1`, ...) after the first are taken from the accepted shape: the
+    statements and diagnostics are those of parsing and checking each line on its own."""
+    for shape in SHAPES:
+        if shape.startswith("KFIELD"):        # (opens a table: the lines after it do not stand alone)
+            continue
+        texts = [shape.format(name, name) for name in NAME_CORPUS] * 2
+        lines = [Line(text, None, Span("f.src", i + 1)) for i, text in enumerate(texts)]
+        diags = Diagnostics()
+        together = SrcParser().parse_file("f.src", lines, len(lines), diags).statements
+        alone, alone_diags = [], Diagnostics()
+        for line in lines:
+            alone.extend(SrcParser().parse_file("f.src", [line], len(lines), alone_diags).statements)
+        assert together == tuple(alone), shape
+        assert [d.render() for d in diags.items] == [d.render() for d in alone_diags.items], shape
+
+
 def test_comments_are_attached_to_the_statement_they_annotate():
     lines = ["; header of the file", "", "; before the label", "LBL Start   ; on the label",
              "L  I1", "; before the store", ";;;X9.7a", "=  O1 ; same line", "KFIELD T ; the table",

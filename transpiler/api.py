@@ -15,7 +15,6 @@ from decimal import Decimal
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
-from transpiler.atomic import write_files_atomically
 from transpiler.diagnostics import NO_SPAN, CompileFailed, Diagnostic, Diagnostics, Span
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.mainfile import main_candidates
@@ -165,6 +164,7 @@ class Transpilation:
     def write(self, out_dir: Path) -> None:
         """Write every file into `out_dir` all-or-nothing (OSError when the folder cannot be written); names with
         '/' go into sub-folders, which are created."""
+        from transpiler.atomic import write_files_atomically     # (only a command that writes needs it)
         write_files_atomically({inside(Path(out_dir), name): data for name, data in self.files.items()})
 
 

@@ -35,9 +35,16 @@ def quick_init(cls: type[T]) -> type[T]:
             namespace[f"_default_{f.name}"] = f.default
             params.append(f"{f.name}=_default_{f.name}")
         if slotted:
-            namespace[f"_store_{f.name}"] = cls.__dict__[f.name].__set__
-            stores.append(f"    _store_{f.name}(self, {f.name})")
-    if not slotted:
+            stores.append(f"    self.{f.name} = {f.name}")
+    if slotted:
+        # The record is filled in as an instance of a plain class with the same slots (whose fields take an ordinary,
+        # fast attribute store), then given back its own class: CPython allows that switch between classes of the
+        # same layout, and nothing else can see the record in between.
+        namespace["_fields_only"] = type(f"{cls.__name__}Fields", (), {"__slots__": cls.__slots__})
+        namespace["_set_class"] = object.__setattr__
+        stores = (["    record_class = type(self)", "    _set_class(self, '__class__', _fields_only)"] + stores
+                  + ["    self.__class__ = record_class"])
+    else:
         # (one store per field into the instance dict: faster than building keyword arguments for dict.update)
         stores = ["    _stored = self.__dict__"] + [f"    _stored[{f.name!r}] = {f.name}" for f in fields]
     if hasattr(cls, "__post_init__"):

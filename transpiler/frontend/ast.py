@@ -19,6 +19,11 @@ class OperandSyntax:
     indexed: bool
     text: str
 
+    def __hash__(self) -> int:
+        # (the text as written, normalised, tells the operands apart; the dataclass's hash of all four fields made
+        # the lowering's per-line cache lookups cost more than the rest of a repeated line's lowering)
+        return hash(self.text)
+
 
 @quick_init
 @dataclasses.dataclass(frozen=True, slots=True)

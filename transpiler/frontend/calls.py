@@ -12,6 +12,7 @@ from transpiler.records import replaced
 
 _Key = tuple[int, int]                                  # (file index, op index) of a routine entry
 _Edges = dict[_Key, list[tuple[CallTarget, Span]]]      # callee and the span of the call
+_CALLS = frozenset({"CALL", "CALLT", "CALLF"})
 
 
 def exports_of(lowerings: list[FileLowering], diags: Diagnostics) -> dict[str, CallTarget]:
@@ -126,21 +127,25 @@ def _call_edges(files: tuple[FileCode, ...]) -> tuple[dict[_Key, CallTarget], _E
         node = todo.pop()
         if node.key in edges:
             continue
-        out: list[tuple[CallTarget, Span]] = []
+        out: list[tuple[CallTarget, Span]] = []        # callee and the span of the call
+        ops = files[node.file].ops
         for i in routine_body(files, node):
-            op = files[node.file].ops[i]
-            callees: list[tuple[CallTarget, Span]] = []
-            if op.code in ("CALL", "CALLT", "CALLF") and op.call is not None and not op.call.is_module and op.call.file >= 0:
-                callees.append((op.call, op.span))
-            elif op.code == "CASE":
+            op = ops[i]
+            code = op.code
+            if code in _CALLS:
+                if op.call is None or op.call.is_module or op.call.file < 0:
+                    continue
+                callees = [(op.call, op.span)]
+            elif code == "CASE":
                 # each entry is a call site of its own, located at its CM line
-                callees.extend((t, op.case_notes[k][0] if k < len(op.case_notes) else op.span)
-                               for k, t in enumerate(op.case_targets) if t is not None and t.file >= 0)
-            elif op.code == "SUBM" and op.call is not None and op.call.file >= 0:
-                if op.call.key not in nodes:
+                callees = [(t, op.case_notes[k][0] if k < len(op.case_notes) else op.span)
+                           for k, t in enumerate(op.case_targets) if t is not None and t.file >= 0]
+            else:
+                if code == "SUBM" and op.call is not None and op.call.file >= 0 and op.call.key not in nodes:
                     nodes[op.call.key] = op.call
                     roots.append(op.call)
                     todo.append(op.call)
+                continue
             for c, call_span in callees:
                 out.append((c, call_span))
                 if c.key not in nodes:

@@ -98,6 +98,11 @@ class ChainLowering:
         self.diags.report("E-UNSUPPORTED", instr.span, f"{m} is not supported")
         return None, chain_open, last_acc
 
+    def pure(self, m: str) -> bool:
+        """Whether the op of mnemonic m depends only on its operand and the chain state (no diagnostics, no queued
+        jumps or brackets): a pure group lowered it."""
+        return self._group_of.get(m) in _PURE_GROUPS
+
     def _keep_shape(self, group: Callable, key: tuple, lowered: Lowered) -> Lowered:
         op, chain_open, last_acc = lowered
         if op is not None and group in _PURE_GROUPS:

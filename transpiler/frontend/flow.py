@@ -16,12 +16,14 @@ _FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "EN
 def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
     """False when an earlier error removed a line (in one of `lost_lines`' files) or a control statement of the
     file: a path that then seems to run off the end is a consequence of that error, not a second fault."""
-    files = {low.src.path} | {stmt.span.file for stmt in low.src.statements}
-    if not lost_lines.isdisjoint(files):
+    statements = low.src.statements
+    if lost_lines and (low.src.path in lost_lines or any(stmt.span.file in lost_lines for stmt in statements)):
         return False
-    lowered = {op.span for op in low.ops}
-    return all(stmt.span in lowered for stmt in low.src.statements
-               if isinstance(stmt, ast.Instr) and stmt.mnemonic in _FLOW_MNEMONICS)
+    # (an op has the mnemonic of the statement it was lowered from: only the control statements' spans are
+    # looked up, instead of hashing the span of every op)
+    lowered = {op.span for op in low.ops if op.mnemonic in _FLOW_MNEMONICS}
+    return all(stmt.span in lowered for stmt in statements
+               if type(stmt) is ast.Instr and stmt.mnemonic in _FLOW_MNEMONICS)
 
 
 def successors(ops: tuple[Op, ...], i: int) -> list[int]:
@@ -41,21 +43,31 @@ def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
     entries = [0] if file_index == 0 else []
     entries += list(f.labels.values())
     seen: set[int] = set()
-    stack = [e for e in entries if e < len(ops)]
+    n = len(ops)
+    stack = [e for e in entries if e < n]
     falls_off = file_index == 0 and not ops
     while stack:
         i = stack.pop()
         if i in seen:
             continue
         seen.add(i)
-        code = ops[i].code
+        # successors(ops, i), inlined: this walk visits every op of the program
+        op = ops[i]
+        code = op.code
         if code == "KFIELD" or code == "EM":      # (EM: no successor)
             continue
-        for s in ((i + 1,) if code not in ("JP", "JPT", "JPF") else successors(ops, i)):
-            if s >= len(ops):
-                falls_off = True
-            elif s not in seen:
-                stack.append(s)
+        if code == "JP" or code == "JPT" or code == "JPF":
+            if op.target is not None:
+                if op.target >= n:
+                    falls_off = True
+                elif op.target not in seen:
+                    stack.append(op.target)
+            if code == "JP":
+                continue
+        if i + 1 >= n:
+            falls_off = True
+        elif i + 1 not in seen:
+            stack.append(i + 1)
     if falls_off:
         diags.report("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
                     "a path reaches the end of the file without EM")

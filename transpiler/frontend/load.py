@@ -132,7 +132,7 @@ class _Loader:
         src_files: list[ast.SourceFile] = []
         seen: set[Path] = set()
         def_requests: list[tuple[ast.DefineFile, str, Path]] = []
-        self._load_sources(opts.main.resolve(), seen, src_files, def_requests)
+        self._load_sources(self.folders.resolved(opts.main), seen, src_files, def_requests)
         if src_files and is_module(src_files[0]):
             # one clear error, not an E-SYM-UNDEF per symbol the main program's definition files would give
             self.diags.report("E-MAIN-MODULE", Span(src_files[0].path, 1, 1), f"{opts.main.name} is a module (it exports labels with GLOBAL "
@@ -144,7 +144,7 @@ class _Loader:
         loaded: dict[Path, ast.DefFile] = {}
         for extra in opts.extra_global_defs:
             self._def_missing = False
-            d = self._load_def(extra.resolve(), NO_SPAN, loaded, set())
+            d = self._load_def(self.folders.resolved(extra), NO_SPAN, loaded, set())
             if self._def_missing:
                 self.symbols_incomplete.add("*")
             global_defs.extend(d)
@@ -220,10 +220,10 @@ class _Loader:
                 if target is None:
                     self.labels_incomplete = True
                 else:
-                    enter(target.resolve(), stmt.span)
+                    enter(self.folders.resolved(target), stmt.span)
 
     def _load_def(self, path: Path, at: Span, loaded: dict[Path, ast.DefFile], active: set[Path]) -> list[ast.DefFile]:
-        path = path.resolve()
+        path = self.folders.resolved(path)
         if path in loaded:
             return [loaded[path]]
         if path in active:

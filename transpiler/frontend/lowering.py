@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
 from transpiler.frontend.chain import ChainLowering
@@ -13,6 +15,18 @@ from transpiler.ir import Op, Operand
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.semantics import Semantics
 from transpiler.records import replaced
+
+
+class _PlainLowered(NamedTuple):
+    """How a plain instruction was lowered in one chain state: its op's fields besides span and comments, and the
+    chain state after it."""
+
+    code: str
+    operand: Operand | None
+    rel: str
+    nbits: int
+    chain_open: bool
+    last_acc: str
 
 
 class FileLowering:
@@ -36,6 +50,8 @@ class FileLowering:
         self.pending_jumps: list[tuple[int, str, Span]] = []
         self.operands = OperandResolver(src.path, symbols, self.kfields, semantics, diags)
         self.resolved: dict[tuple[str, ast.OperandSyntax], Operand] = {}     # (mnemonic, operand) -> accepted operand
+        # (mnemonic, operand as written, chain_open, last_acc) -> how a plain instruction of a pure group was lowered
+        self.plain_lowered: dict[tuple[str, ast.OperandSyntax | None, bool, str], _PlainLowered] = {}
         self.structure = StructureMatcher(self.ops, semantics, diags)
         self.chain = ChainLowering(semantics, diags, self.structure, self.pending_jumps, self.pending_calls)
         # state while lowering the statements in order
@@ -70,7 +86,7 @@ class FileLowering:
     def _collect_kfields(self) -> None:
         """KFIELD tables are known to the whole file, before the statements are lowered in order."""
         for stmt in self.src.statements:
-            if isinstance(stmt, ast.KField):
+            if type(stmt) is ast.KField:
                 if stmt.name in self.kfields:
                     self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
                 self.kfields[stmt.name] = stmt.values
@@ -106,8 +122,17 @@ class FileLowering:
         self.chain_open, self.last_acc = False, "NONE"
 
     def _instruction(self, instr: ast.Instr) -> None:
-        index = len(self.ops)
         m = instr.mnemonic
+        if self.case_open is None:
+            # Most lines repeat an instruction lowered before in the same chain state: its op differs only in span
+            # and comments (no diagnostic, no queued jump, no bracket), so it is not checked and lowered again.
+            known = self.plain_lowered.get((m, instr.operand, self.chain_open, self.last_acc))
+            if known is not None:
+                self.ops.append(Op(known.code, m, instr.span, known.operand, instr.comments, rel=known.rel,
+                                   nbits=known.nbits, chain_open=self.chain_open))
+                self.chain_open, self.last_acc = known.chain_open, known.last_acc
+                return
+        index = len(self.ops)
         info = MNEMONICS[m]
         # (_admitted has nothing to say about a plain instruction outside CASE tables and brackets: most of them)
         plain = (not info.extended and m != "=N" and self.case_open is None
@@ -132,9 +157,13 @@ class FileLowering:
                         self.case_open, self.case_faults = (None, instr.span), []
                     return
                 self.resolved[key] = operand
+        before = (m, instr.operand, self.chain_open, self.last_acc)
         op, self.chain_open, self.last_acc = self.chain.lower(instr, operand, index, self.chain_open, self.last_acc)
         if op is None:
             return
+        if plain and self.chain.pure(m):
+            self.plain_lowered[before] = _PlainLowered(op.code, operand, op.rel, op.nbits, self.chain_open,
+                                                       self.last_acc)
         if m == "CASE":
             self.case_open, self.case_faults = (index, instr.span), []
         elif m == "ENDC":

@@ -154,17 +154,17 @@ def _const_value(token: Token, documented: bool = False) -> int:
 def _code_lines(lines: Iterable[Line], pending: list[str]) -> Iterator[tuple[str, Span, tuple[str, ...]]]:
     """(stripped code, span, comments) of every line with code; the comments of comment-only lines go to the next
     line with code, and those after the last one are left in `pending` (a file's trailing comments)."""
-    for line in lines:
-        code = line.code.strip()
+    for code, comment, span in lines:
+        code = code.strip()
         if not code:
-            if line.comment is not None:
-                pending.append(line.comment.strip())
+            if comment is not None:
+                pending.append(comment.strip())
             continue
-        own = (line.comment.strip(),) if line.comment is not None else ()
+        own = (comment.strip(),) if comment is not None else ()
         if pending:
             own = tuple(pending) + own
             pending.clear()
-        yield code, line.span, own
+        yield code, span, own
 
 
 @dataclasses.dataclass
@@ -191,10 +191,14 @@ def _with_name(result: tuple, name: str) -> tuple:
         if isinstance(item, str):
             item = item.replace(_PLACEHOLDER, name)
         elif isinstance(item, ast.OperandSyntax):
-            value = item.value.replace(_PLACEHOLDER, name) if isinstance(item.value, str) else item.value
-            item = ast.OperandSyntax(item.kind, value, item.indexed, item.text.replace(_PLACEHOLDER, name))
+            item = _operand_with_name(item, name)
         out.append(item)
     return tuple(out)
+
+
+def _operand_with_name(operand: ast.OperandSyntax, name: str) -> ast.OperandSyntax:
+    value = operand.value.replace(_PLACEHOLDER, name) if isinstance(operand.value, str) else operand.value
+    return ast.OperandSyntax(operand.kind, value, operand.indexed, operand.text.replace(_PLACEHOLDER, name))
 
 
 class _CachedLineParser:
@@ -264,6 +268,10 @@ class SrcParser(_CachedLineParser):
         # Line text -> (mnemonic, operand) of an instruction line that parsed and passed _instruction's checks
         # without a diagnostic: the same text gives the same instruction, so it is checked once per run.
         self._accepted: dict[str, tuple[str, ast.OperandSyntax]] = {}
+        # Template line -> (mnemonic, operand with the placeholder name) of an accepted instruction line whose
+        # instruction is its template's with the name put in: every line of that shape parses alike and passes the
+        # same checks, so a line with a new name costs neither a parse nor the checks (most lines of a project).
+        self._accepted_shapes: dict[str, tuple[str, ast.OperandSyntax]] = {}
 
     def _name_slot(self, key: str) -> tuple[str, str] | None:
         last = _LAST_NAME.search(key)
@@ -274,6 +282,27 @@ class SrcParser(_CachedLineParser):
     def _renamed(self, shape: tuple, name: str) -> tuple | None:
         return ("ok", _with_name(shape[1], name)) if shape[0] == "ok" else None
 
+    def _accepted_by_shape(self, code: str) -> tuple[str, ast.OperandSyntax] | None:
+        """(mnemonic, operand) of an instruction line of an accepted shape (see `_accepted_shapes`), else None."""
+        slot = self._name_slot(code) if _PLACEHOLDER not in code else None
+        shape = self._accepted_shapes.get(slot[0]) if slot is not None else None
+        if shape is None:
+            return None
+        known = self._accepted[code] = (shape[0], _operand_with_name(shape[1], slot[1]))
+        return known
+
+    def _remember_shape(self, code: str, mnemonic: str, operand: ast.OperandSyntax | None) -> None:
+        """After the line `code` was accepted as (mnemonic, operand): its shape is accepted when that is exactly its
+        template's instruction with the name put in (not when _instruction rewrote the operand otherwise)."""
+        slot = self._name_slot(code) if _PLACEHOLDER not in code and operand is not None else None
+        template = self._cache.get(slot[0]) if slot is not None else None
+        if template is None or template[0] != "ok" or template[1][0] != "instr":
+            return
+        _, template_mnemonic, template_operand = template[1]
+        if template_mnemonic == mnemonic and template_operand is not None \
+                and _operand_with_name(template_operand, slot[1]) == operand:
+            self._accepted_shapes[slot[0]] = (mnemonic, template_operand)
+
     def parse_file(self, display: str, lines: Iterable[Line], line_count: int, diags: Diagnostics) -> ast.SourceFile:
         statements: list[ast.Statement] = []
         trailing_comments: list[str] = []
@@ -282,8 +311,8 @@ class SrcParser(_CachedLineParser):
         accepted = self._accepted
         for code, span, comments in _code_lines(lines, trailing_comments):
             if kfield is None:
-                known = accepted.get(code)
-                if known is not None:       # an instruction line met before, accepted without a diagnostic
+                known = accepted.get(code) or self._accepted_by_shape(code)
+                if known is not None:       # an instruction line (or its shape) met before, accepted without a diagnostic
                     statements.append(ast.Instr(known[0], known[1], span, comments))
                     continue
             status, result = self.parse_line(code)
@@ -331,6 +360,7 @@ class SrcParser(_CachedLineParser):
                     statements.append(instr)
                     if not blank:
                         accepted[code] = (instr.mnemonic, instr.operand)
+                        self._remember_shape(code, instr.mnemonic, instr.operand)
         if kfield is not None:
             diags.report("E-SYNTAX", kfield.span, f"KFIELD {kfield.name} has no ENDK")
         return ast.SourceFile(display, tuple(statements), tuple(trailing_comments), line_count, tuple(broken_labels))

@@ -32,6 +32,10 @@ class Line(NamedTuple):
     span: Span         # line and column of the line start in the original file
 
 
+# Line(code, comment, span) without the named tuple's Python-level __new__ (one Line is made per source line)
+_new_line = tuple.__new__
+
+
 @dataclasses.dataclass(frozen=True)
 class InactiveRegion:
     file: str
@@ -211,27 +215,26 @@ class Preprocessor:
         active = True
         chain = _chain + (display,)        # the files being included, for cycle detection
         pp_line, append = _PP_LINE.match, out.append
-        for index, raw in enumerate(lines):
-            lineno = index + 1
+        for lineno, raw in enumerate(lines, 1):
             # (the dashes looked for are not ASCII, and a directive starts with '#' or 'D': most lines skip both scans)
             text = _normalise_dashes(raw) if not raw.isascii() and _MAY_HOLD_DASH.search(raw) else raw
             stripped = text.lstrip()
-            directive = pp_line(text) if stripped[:1] in _DIRECTIVE_STARTS else None
-            if directive:
-                handled, active = self._directive(display, lineno, text, directive.group(1).lower(), stack, active)
-                if handled:
-                    continue
-            if not active:
+            first = stripped[:1]
+            if first in _DIRECTIVE_STARTS:
+                directive = pp_line(text)
+                if directive:
+                    handled, active = self._directive(display, lineno, text, directive.group(1).lower(), stack,
+                                                      active)
+                    if handled:
+                        continue
+            if not active or not first:
                 continue
             # The common line: code and an optional comment, no '*' comment, no INCLUDE, no string before a ';'
             # (_code_line handles every other line, and this one in the same way).
-            if not stripped:
-                continue
-            first = stripped[0]
             if first != "*" and first not in "Ii#" and '"' not in text:
                 cut = text.find(";")
                 span = Span(display, lineno, len(text) - len(stripped) + 1)
-                append(Line(text, None, span) if cut < 0 else Line(text[:cut], text[cut + 1:], span))
+                append(_new_line(Line, (text, None, span) if cut < 0 else (text[:cut], text[cut + 1:], span)))
                 continue
             self._code_line(display, lineno, text, out, include, star_comments, chain)
         for frame in stack:

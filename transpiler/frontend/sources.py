@@ -26,17 +26,28 @@ class ProjectFolders:
     """The folders files may be read from: the main file's folder and each -I folder."""
 
     def __init__(self, main_dir: Path, include_dirs: list[Path]):
-        self.main_dir = main_dir.resolve()
-        self.roots = [self.main_dir] + [d.resolve() for d in include_dirs]
+        # path -> its real path, for this run: each file is looked up, checked, loaded and named by its real path,
+        # and every resolve() walks the file system again (~3 per file read)
+        self._real: dict[Path, Path] = {}
+        self.main_dir = self.resolved(main_dir)
+        self.roots = [self.main_dir] + [self.resolved(d) for d in include_dirs]
+
+    def resolved(self, path: Path) -> Path:
+        """path.resolve(), worked out once per path in a run."""
+        real = self._real.get(path)
+        if real is None:
+            real = self._real[path] = path.resolve()
+            self._real.setdefault(real, real)      # (a real path resolves to itself)
+        return real
 
     def display(self, path: Path) -> str:
         try:
-            return str(path.resolve().relative_to(self.main_dir))
+            return str(self.resolved(path).relative_to(self.main_dir))
         except ValueError:
             return str(path)
 
     def inside(self, path: Path) -> bool:
-        real = path.resolve()
+        real = self.resolved(path)
         return any(real == root or root in real.parents for root in self.roots)
 
     def find(self, name: str, at: Span, diags: Diagnostics, relative_to: Path | None = None) -> Path | None:

@@ -1,0 +1,69 @@
+"""transpiler.records: quick_init records behave as the frozen dataclasses they are (fields, defaults, equality,
+frozenness, replace, pickling), slotted or not."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import pickle
+
+import pytest
+
+from transpiler.ir import Op, Operand
+from transpiler.diagnostics import Span
+from transpiler.records import quick_init, replaced
+
+
+@quick_init
+@dataclasses.dataclass(frozen=True, slots=True)
+class _Slotted:
+    name: str
+    count: int = 2
+    tags: tuple[str, ...] = ()
+
+
+@quick_init
+@dataclasses.dataclass(frozen=True)
+class _WithDict:
+    name: str
+    count: int = 2
+
+
+@pytest.mark.parametrize("cls", [_Slotted, _WithDict])
+def test_quick_init_fills_fields_and_defaults(cls):
+    record = cls("a")
+    assert (record.name, record.count) == ("a", 2)
+    assert type(record) is cls
+    assert cls("a", count=5) == cls(name="a", count=5) != record
+    assert hash(cls("a")) == hash(record)
+
+
+@pytest.mark.parametrize("cls", [_Slotted, _WithDict])
+def test_quick_init_record_stays_frozen(cls):
+    record = cls("a")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        record.name = "b"
+    assert record.name == "a"
+
+
+def test_slotted_record_has_no_instance_dict():
+    assert not hasattr(_Slotted("a"), "__dict__")
+
+
+@pytest.mark.parametrize("record", [_Slotted("a", 3, ("x",)), _WithDict("a", 3),
+                                    Op("LD", "L", Span("f.src", 4, 1), Operand("M", 12), ("note",), chain_open=True)])
+def test_copies_replace_and_pickle_give_equal_records(record):
+    assert pickle.loads(pickle.dumps(record)) == record
+    assert copy.deepcopy(record) == record and copy.copy(record) == record
+    field = dataclasses.fields(record)[0].name
+    assert dataclasses.replace(record) == record
+    assert replaced(record, **{field: "z"}) == dataclasses.replace(record, **{field: "z"})
+
+
+def test_quick_init_refuses_what_it_cannot_build():
+    @dataclasses.dataclass
+    class Mutable:
+        name: str
+
+    with pytest.raises(TypeError):
+        quick_init(Mutable)
