@@ -483,3 +483,65 @@ def test_a_strobe_is_never_seen_with_its_acknowledgement_unless_the_program_set_
     assert items[("M4093", "O2", 1)].status == "missing"
     items, _ = _status(written, [_run_nc(written, calls)])
     assert items[("M4093", "O2", 1)].status == "shown"
+
+
+def test_a_call_before_the_chain_is_followed_into_the_callee(tmp_path: Path) -> None:
+    # Sub sets M10 = I1 AND I2 (through a forward jump and an early EMT); the chain after `CM Sub` is M10 AND NOT
+    # I1: M10 = 1 only with I1 = 1, so the outcome is always 0 and M10 never decides alone. The reason names the
+    # call. Catches: the region stopping at the call (missing), the callee's writes not followed.
+    sub = "LBL Sub\nL I1\nA I2\n= M10\nL I3\nJPF Skip\nL I4\n= M11\nLBL Skip\nL I5\nEMT\nL I6\n= M12\nEM\n"
+    program = _program(tmp_path, "L I7\n= M10\nCM Sub\nL M10\nAN I1\n= O1\nEM\n" + sub)
+    items, _ = _status(program, [_run(program, [{"I1": 1, "I2": 1}, {"I1": 0}])])
+    m10 = items[("M10", "O1", 0)]
+    assert m10.status == "infeasible", m10
+    assert "main.src:3:1 CM Sub" in m10.reason and "M10 = 1 only with I1 = 1" in m10.reason
+    # nested one call deeper, and called only when I3 = 1 (CMT): on the path without the call, M10 keeps I7's
+    # value and the pair is there (two cycles show it)
+    nested = _program(tmp_path, "L I7\n= M10\nCM Outer\nL M10\nAN I1\n= O1\nEM\nLBL Outer\nCM Sub\nEM\n" + sub)
+    items, _ = _status(nested, [])
+    assert items[("M10", "O1", 0)].status == "infeasible"
+    maybe = _program(tmp_path, "L I7\n= M10\nL I3\nCMT Sub\nL M10\nAN I1\n= O1\nEM\n" + sub)
+    items, _ = _status(maybe, [])
+    assert items[("M10", "O1", 0)].status == "missing"
+    items, _ = _status(maybe, [_run(maybe, [{"I7": 1, "I1": 0, "I3": 0}, {"I7": 0, "I1": 0, "I3": 0}])])
+    assert items[("M10", "O1", 0)].status == "shown"
+
+
+@pytest.mark.parametrize("callee", ["LBL Sub\nLBL Again\nL I1\nA I2\n= M10\nL I3\nJPT Again\nEM\n",
+                                    "LBL Sub\nL I1\nA I2\n= M10\nL I4\n= M20[X]\nEM\n",
+                                    "LBL Sub\nL I1\nA I2\n= M10\nL K0\n= B0\nCASE B0\nCM Other\nENDC\nEM\n"
+                                    "LBL Other\nL I4\n= M10\nEM\n"],
+                         ids=["loop", "indexed_write", "case"])
+def test_a_callee_that_cannot_be_run_so_ends_the_region(tmp_path: Path, callee: str) -> None:
+    # A loop, an indexed marker write or a CASE in the callee: the region stops at the call, and nothing is
+    # claimed (the loop's second pass, the indexed write or the CASE entry may leave M10 at anything).
+    program = _program(tmp_path, "CM Sub\nL M10\nAN I1\n= O1\nEM\n" + callee)
+    items, _ = _status(program, [])
+    assert items[("M10", "O1", 0)].status == "missing"
+
+
+def test_recorded_vectors_behind_calls_are_allowed(tmp_path: Path) -> None:
+    # Soundness of following calls: every vector random inputs make the chains record is among the ones the
+    # analysis allows. Catches: a return path lost (EMT, EMF, a jump past an EM), CMT/CMF taken the wrong way
+    # round, LA or brackets carried wrongly into or out of a callee.
+    text = ("L I1\nCMT A\nL M10\nA I2\n= O1\nL I3\nCMF B\nL M11\nXO M10\n= O2\nCM C\nL M12\nAN M10\nO M11\n= O3\n"
+            "L I4\nCM D\n= M13\nL M13\nA I5\n= O4\nEM\n"
+            "LBL A\nL I2\nAN I6\n= M10\nL I7\nEMT\nLN M10\n= M11\nEM\n"
+            "LBL B\nL I6\nEMF\nL I2\nO I7\nS M11\nR M10\nEM\n"
+            "LBL C\nL I8\nJPT Far\nL M10\n= M12\nEM\nLBL Far\nL M11\n= M12\nCM A\nEM\n"
+            "LBL D\nA I9\nEM\n")
+    program = _program(tmp_path, text)
+    table = decision_table(program)
+    machine = _run(program, [{f"I{i}": random.Random(cycle * 16 + i).randrange(2) for i in range(1, 10)}
+                             for cycle in range(400)])
+    checked = through = 0
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None)
+        if tied is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded <= tied.vectors, decision.text()
+        checked += 1
+        through += any(program.main.ops[w].code in ("CALL", "CALLT", "CALLF") for w in tied.writes)
+    assert checked >= 4 and through >= 3

@@ -490,7 +490,9 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
         if holds(frozenset(absent), [f for f in resting if f is not fact]):
             resting.remove(fact)
     ops = program.files[decision.file].ops
-    needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
+    needed = [f"{ops[w].span} {ops[w].mnemonic} "
+              + (ops[w].call.label if ops[w].operand is None and ops[w].call is not None else ops[w].operand.display())
+              for w in tied.writes if w not in absent]
     # where an NC fact ties three conditions, the pairs alone seldom say it: name a triple that never occurs too
     facts = _ties(decision, number, tied, triples=bool(resting))
     cond = decision.conditions[number].text
