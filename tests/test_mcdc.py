@@ -545,3 +545,75 @@ def test_recorded_vectors_behind_calls_are_allowed(tmp_path: Path) -> None:
         checked += 1
         through += any(program.main.ops[w].code in ("CALL", "CALLT", "CALLF") for w in tied.writes)
     assert checked >= 4 and through >= 3
+
+
+# M2 toggles only while M1 is 1, and both are reset together: M2 = 1 only with M1 = 1 at every point of every cycle
+# (between `R M1` and `R M2` it does not hold, but nothing can read there). The chain reads both before any write of
+# the cycle, so only the relation across cycles ties them.
+_TOGGLE = "L I1\nS M1\nLN I1\nR M1\nR M2\nL M1\nA I2\nJPF Keep\nLN M2\n= M2\nLBL Keep\n"
+
+
+def test_a_relation_every_write_keeps_holds_across_cycles(tmp_path: Path) -> None:
+    # `M2 AND M1` at the start of the cycle: showing M1 needs M2 = 1 with M1 = 0. Infeasible, naming the relation
+    # and the writes it rests on; M2 itself stays to be shown (and a run shows it). Catches: the region alone
+    # claimed to tie them (it cannot: no write before the chain), a relation not checked at the writes.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "EM\n")
+    rows = [{"I1": 1, "I2": 1}, {"I1": 1, "I2": 0}, {"I1": 1, "I2": 1}, {"I1": 1}, {"I1": 0}, {"I1": 0}]
+    items, _ = _status(program, [_run(program, rows)])
+    m1 = items[("M1", "O1", 1)]
+    assert m1.status == "infeasible", m1
+    assert "M2 = 1 only with M1 = 1 at every point of every cycle" in m1.reason
+    assert "(main.src:5:1 S M1, main.src:7:1 R M1, main.src:8:1 R M2, main.src:13:1 = M2)" in m1.reason
+    assert items[("M2", "O1", 0)].status == "shown"
+
+
+@pytest.mark.parametrize("breaking", ["L I3\n= M2\n", "L I3\nS M2\n", "L I3\nR M1\n"])
+def test_a_write_that_breaks_the_relation_leaves_the_condition_missing(tmp_path: Path, breaking: str) -> None:
+    # One more write that can give M2 = 1 with M1 = 0 (M2 set from an input, M1 reset alone): the relation does
+    # not hold, nothing is claimed, and two cycles show M1 deciding alone.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + breaking + "EM\n")
+    items, _ = _status(program, [])
+    assert items[("M1", "O1", 1)].status == "missing"
+    rows = [{"I1": 1, "I3": 1}, {"I1": 1, "I3": 1}, {"I1": 1, "I2": 1, "I3": 1}, {"I1": 1, "I2": 0, "I3": 1},
+            {"I1": 1, "I3": 0}, {"I1": 0, "I3": 1}, {"I1": 0, "I3": 0}]
+    items, _ = _status(program, [_run(program, rows)])
+    assert items[("M1", "O1", 1)].status == "shown"
+
+
+def test_no_relation_over_an_operand_a_scenario_sets_or_an_indexed_write_reaches(tmp_path: Path) -> None:
+    # A scenario setting M2 (or M1) can break the relation between cycles; an indexed write whose index is
+    # unknown may write either. Catches: power-on values or writes outside the program not accounted for.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "EM\n")
+    for driven in ({("M", 2)}, {("M", 1)}):
+        items, _ = _status(program, [], driven=driven)
+        assert items[("M1", "O1", 1)].status == "missing"
+    indexed = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "L W4\n= X\nL I5\n= M0[X]\nEM\n")
+    items, _ = _status(indexed, [])
+    assert items[("M1", "O1", 1)].status == "missing"
+
+
+def test_recorded_vectors_are_allowed_under_the_relations_proved(tmp_path: Path) -> None:
+    # Soundness: with every relation the analysis proves assumed, each vector random inputs make the chains record
+    # is still allowed. Catches: a relation proved that a run breaks.
+    from transpiler.verify.implication import Invariant, inductive_invariants, program_entries
+    text = ("L M2\nA M1\n= O1\nL M3\nAN M4\n= O2\nL M4\nO M5\nA M3\n= O3\n" + _TOGGLE +
+            "L I3\nS M3\nS M4\nL I4\nR M4\nL M4\nA I5\nS M5\nLN M3\nR M3\nR M5\nEM\n")
+    program = _program(tmp_path, text)
+    table = decision_table(program)
+    keys = [("M", n) for n in range(1, 6)]
+    candidates = [Invariant((a, b), (x, y), (f"M{a[1]}", f"M{b[1]}")) for a in keys for b in keys if a < b
+                  for x, y in ((1, 1), (1, 0), (0, 1))]
+    proved = inductive_invariants(program, candidates, lambda kind, addr, file, index: None)
+    assert any(p.operands == (("M", 1), ("M", 2)) and p.values == (0, 1) for p in proved)
+    assert any(p.operands == (("M", 3), ("M", 5)) and p.values == (0, 1) for p in proved)   # M5 only with M3
+    machine = _run(program, [{f"I{i}": random.Random(cycle * 8 + i).randrange(2) for i in range(1, 6)}
+                             for cycle in range(500)])
+    entries = program_entries(program)
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None, entries=entries,
+                            invariants=proved)
+        if tied is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded <= tied.vectors, decision.text()

@@ -31,6 +31,7 @@ from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WOR
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.exec.interp.gen_exprs import int32
 from transpiler.ir import Op, Program
+from transpiler.verify.index_range import index_ranges
 from transpiler.verify.nc_facts import NcFact
 
 MAX_VARS = 18                   # free variables per region (truth tables of 2**18 bits)
@@ -51,6 +52,7 @@ _VAR = tuple(_variable(k) for k in range(MAX_VARS))
 _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
 _CALLS = frozenset({"CALL", "CALLT", "CALLF"})
 _CALL_DEPTH = 4                 # calls followed one inside another, at most
+_INDEXED_SPAN = 4096            # values of X up to which an indexed write counts as a write of each operand it reaches
 _READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 Key = tuple[str, int]
@@ -86,7 +88,7 @@ class _Run:
 
     def __init__(self, program: Program, f: int, start: int, consumer: int, reads: set[int],
                  entry: Callable[[str, int, int, int], int | None], skip: frozenset[int] = frozenset(),
-                 callees: Mapping[tuple[int, int], Callee] | None = None):
+                 callees: Mapping[tuple[int, int], Callee] | None = None, keep: frozenset[Key] = frozenset()):
         self.program = program
         self.f = f
         self.start = start
@@ -100,7 +102,7 @@ class _Run:
         self.reads: dict[int, int] = {}
         self.shared = program.semantics["accumulator_model"] == "shared_bit7"
         self.flag = program.semantics["add_overflow"] == "flag"
-        self.followed, self.needed = _relevant(program, f, start, consumer, reads, self.callees)
+        self.followed, self.needed = _relevant(program, f, start, consumer, reads, self.callees, keep)
 
     def fresh(self) -> int:
         if self.vars == MAX_VARS:
@@ -342,13 +344,14 @@ def _statements(ops: Sequence[Op], start: int, consumer: int) -> list[tuple[int,
 
 
 def _relevant(program: Program, f: int, start: int, consumer: int, reads: set[int],
-              callees: Mapping[tuple[int, int], Callee]) -> tuple[set[tuple[int, int]], set[Key]]:
+              callees: Mapping[tuple[int, int], Callee], keep: frozenset[Key] = frozenset()
+              ) -> tuple[set[tuple[int, int]], set[Key]]:
     """The ops (file, index) of the statements that can matter to the decision's conditions (read at `reads`):
     those that read them, call or end the module, jump back, out or over such a statement (_jump_matters), or
     write an operand a later such statement reads, in the
     region and in the subprograms it calls (a callee's statements judged by what the caller needs after the call);
-    and the operands they read."""
-    needed: set[Key] = set()
+    and the operands they read. `keep`: operands whose values at the consumer matter too."""
+    needed: set[Key] = set(keep)
     followed: set[tuple[int, int]] = set()
     _mark(program, f, start, consumer, reads, callees, followed, needed, 0)
     return followed, needed
@@ -496,12 +499,14 @@ def region_starts(program: Program, f: int, first: int, consumer: int, entries: 
 
 def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
                  skip: frozenset[int] = frozenset(), start: int | None = None,
-                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = ()) -> Tied | None:
+                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = (),
+                 invariants: Sequence[Invariant] = ()) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
     the program fixes it there, else None; `facts`: the NC model's facts that hold in this program (see the module
-    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no
-    region covers all its conditions (or the decision is not reached in it)."""
+    docstring), or a function of the region's start (file, op index) giving the ones that hold there;
+    `invariants`: relations between bit operands that hold at every observed point (inductive_invariants). None
+    where no region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -530,7 +535,7 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
     tables = [run.reads[c.index] for c in decision.conditions]
     found: set[int] = set()
     held = facts(f, s) if callable(facts) else facts
-    _split(tables, 0, path.reach & _facts_allow(run, held), 0, found)
+    _split(tables, 0, path.reach & _facts_allow(run, held) & _invariants_allow(run, invariants, entries), 0, found)
     ops = program.files[f].ops
     writes = tuple(j for g, j in sorted(run.followed) if g == f and s <= j < decision.index and (
         ops[j].code in _WRITES and ops[j].operand is not None and ops[j].operand.is_bit
@@ -752,3 +757,137 @@ def consumed_start_zero(program: Program, driven: set[tuple[str, int]]) -> Calla
             return False
         return not any(order.may_precede(w, (f, index)) for w in writers.get((kind, addr), ()))
     return zero
+
+
+# ---------------------------------------------------------------------------------------- invariants across cycles
+
+@dataclasses.dataclass(frozen=True)
+class Invariant:
+    """Two bit operands never hold `values` (their values, in order) together at any point of any cycle but
+    between two stores of one chain (`observed`): it holds at power-on (both 0, and nothing but the program's named
+    writes ever changes them, see inductive_invariants) and every write of either keeps it, given it held before
+    (`writes`: where those writes are)."""
+
+    operands: tuple[Key, Key]
+    values: tuple[int, int]
+    names: tuple[str, str]
+    writes: tuple[str, ...] = ()
+
+    def forbids(self, a: int, b: int) -> int:
+        """The assignments (truth table) in which the operands with values `a`, `b` break it."""
+        x, y = self.values
+        return (a if x else _ALL ^ a) & (b if y else _ALL ^ b)
+
+    def text(self) -> str:
+        (a, b), (x, y) = self.names, self.values
+        if x and y:
+            return f"never {a} = 1 and {b} = 1 together"
+        return f"{a} = 1 only with {b} = 1" if x else f"{b} = 1 only with {a} = 1"
+
+
+def observed(ops: Sequence[Op], s: int, entries: Entries, f: int) -> bool:
+    """Whether the point before ops[s] is one an invariant holds at: not between two stores of one chain (a store
+    entered from elsewhere starts a new stretch of stores)."""
+    return not (0 < s < len(ops) and ops[s - 1].code in _WRITES and ops[s].code in _WRITES
+                and not entries.jumps[f].get(s) and (f, s) not in entries.called)
+
+
+def _invariants_allow(run: _Run, invariants: Sequence[Invariant], entries: Entries) -> int:
+    """The assignments the invariants allow at the run's start (every one where its start is no observed point):
+    for each invariant both of whose operands the run read at its start."""
+    if not invariants or not observed(run.program.files[run.f].ops, run.start, entries, run.f):
+        return _ALL
+    allowed = _ALL
+    for inv in invariants:
+        a, b = inv.operands
+        if a in run.entries and b in run.entries:
+            allowed &= _ALL ^ inv.forbids(run.entries[a], run.entries[b])
+    return allowed
+
+
+def write_sites(program: Program) -> tuple[dict[Key, list[tuple[int, int]]], set[Key], set[str]]:
+    """Every named, unindexed write of a bit operand (file, op index), by operand; the operands written another way
+    too (implicitly: error markers; through the index register where the values it can hold there are known,
+    index_range); the kinds written through the index register where they are not."""
+    sites: dict[Key, list[tuple[int, int]]] = {}
+    other: set[Key] = set()
+    indexed: set[str] = set()
+    ranges = index_ranges(program)
+    flag = program.semantics["add_overflow"] == "flag"
+    interface = program.semantics.profile.interface
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            other.update(implicit_writes(op, interface, flag))
+            o = op.operand
+            if o is None or not o.is_bit or op.code in _READS:
+                continue
+            if o.indexed:
+                x = ranges.get((f, i))
+                if x is None or x[1] - x[0] > _INDEXED_SPAN:
+                    indexed.add(o.kind)
+                else:
+                    width = op.nbits if op.code == "STBITS" else 1
+                    other.update((o.kind, a) for a in range(o.addr + x[0], o.addr + x[1] + width))
+                continue
+            for key in _bit_writes(op, program, flag):
+                if key not in implicit_writes(op, interface, flag):
+                    sites.setdefault(key, []).append((f, i))
+    return sites, other, indexed
+
+
+def inductive_invariants(program: Program, candidates: Sequence[Invariant],
+                         entry: Callable[[str, int, int, int], int | None], entries: Entries | None = None
+                         ) -> list[Invariant]:
+    """The candidates that hold at every observed point (Invariant), proved together (each may be assumed where
+    another is checked; one that fails is dropped and the rest checked again). A candidate's operands must be
+    ones no scenario, NC, input or service writes, with power-on value 0 (the caller picks them); here they must
+    also have only named writes (no index register, no implicit write), and each stretch of stores with a write
+    of either must keep it: run symbolically from a region start before it, assuming every live candidate there."""
+    entries = entries or program_entries(program)
+    sites, other, indexed = write_sites(program)
+    alive = [c for c in candidates if c.values != (0, 0) and c.operands[0] != c.operands[1]
+             and not any(k in other or k[0] in indexed for k in c.operands)]
+    stretches: dict[Key, set[tuple[int, int, int]]] = {}
+    for key in {k for c in alive for k in c.operands}:
+        for f, i in sites.get(key, ()):
+            ops = program.files[f].ops
+            first, last = i, i
+            while not observed(ops, first, entries, f):
+                first -= 1
+            while not observed(ops, last + 1, entries, f):
+                last += 1
+            stretches.setdefault(key, set()).add((f, first, last))
+    while True:
+        kept = [c for c in alive if all(_keeps_after(program, f, first, last, c, alive, entry, entries)
+                                        for k in c.operands for f, first, last in sorted(stretches.get(k, ())))]
+        if len(kept) == len(alive):
+            break
+        alive = kept
+    def said(f: int, i: int) -> str:
+        op = program.files[f].ops[i]
+        return f"{op.span} {op.mnemonic} {op.operand.display()}"
+    return [dataclasses.replace(c, writes=tuple(said(f, i) for f, i in sorted({
+        site for k in c.operands for site in sites.get(k, ())}))) for c in alive]
+
+
+def _keeps_after(program: Program, f: int, first: int, last: int, candidate: Invariant,
+                 assumed: Sequence[Invariant], entry: Callable[[str, int, int, int], int | None],
+                 entries: Entries) -> bool:
+    """Whether the stretch of stores ops[first..last] leaves `candidate` true where it and `assumed` held at the
+    start of a region before it (the farthest observed start whose run fits MAX_VARS)."""
+    ops = program.files[f].ops
+    starts = [s for s in region_starts(program, f, first, last, entries) if observed(ops, s, entries, f)]
+    a, b = candidate.operands
+    for s in reversed(starts):                  # farthest first: the most code before the stores is seen
+        run = _Run(program, f, s, last + 1, set(), entry, frozenset(), entries.callees, frozenset({a, b}))
+        try:
+            path = run.run()
+            if path is None:
+                return True                     # no path reaches the stores from here
+            start_a, start_b = run.at_start(a), run.at_start(b)
+            end_a, end_b = run.value(path, a), run.value(path, b)
+        except _TooMany:
+            continue
+        allowed = _invariants_allow(run, assumed, entries) & (_ALL ^ candidate.forbids(start_a, start_b))
+        return not path.reach & allowed & candidate.forbids(end_a, end_b)
+    return False
