@@ -157,8 +157,9 @@ class _Run:
             i += 1
         return None
 
-    def call(self, op: Op, path: _Path) -> _Path | None:
-        """A call: the callee run on the paths that call it (`Callee`), joined with those that do not."""
+    def call(self, op: Op, path: _Path, absent: bool) -> _Path | None:
+        """A call: the callee run on the paths that call it (`Callee`), joined with those that do not; `absent`: a
+        call treated as not there (to find what an infeasible claim rests on): what it writes is any value."""
         c = op.code
         if c == "CALL":
             taken = _ALL
@@ -169,7 +170,7 @@ class _Run:
         callee = self.callees[op.call.key]
         called = _Path(taken, dict(path.values), None, [])
         rest = _Path(path.reach & ~taken, path.values, path.la, path.frames)
-        if path.frames or self.depth >= _CALL_DEPTH:
+        if absent or path.frames or self.depth >= _CALL_DEPTH:
             # brackets open across the call, or calls too deep: what it may write is any value
             for key in callee.writes:
                 called.values[key] = None
@@ -230,15 +231,8 @@ class _Run:
             # callee: returns to the caller)
             path.reach &= ~taken
             return path if path.reach else None
-        if c in _CALLS and op.call is not None and op.call.key in self.callees and not (top and i in self.skip):
-            return self.call(op, path)
         if c in _CALLS and op.call is not None and op.call.key in self.callees:
-            # a call treated as absent (to find what an infeasible claim rests on): its writes are any value
-            if c != "CALL":
-                path.la = path.la if path.la is not None else self.fresh()
-            for key in self.callees[op.call.key].writes:
-                path.values[key] = None
-            return path
+            return self.call(op, path, top and i in self.skip)
         for kind, addr in implicit_writes(op, self.program.semantics.profile.interface, self.flag):
             path.values[(kind, addr)] = None
         if c in _READS and o is not None and o.is_bit:

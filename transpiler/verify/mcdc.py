@@ -19,8 +19,10 @@ the values the register can hold there reach), a condition the outcome cannot de
 constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
 chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
 a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
-cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py), and a boundary
-value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
+in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
+every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
+it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
