@@ -12,6 +12,7 @@ import pytest
 from transpiler.cli import main
 from transpiler.exec.interp import Machine, compile_program
 from transpiler.exec.interp.decisions import decision_table
+from transpiler.exec.interp.faults import MachineHalted
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
@@ -617,3 +618,28 @@ def test_recorded_vectors_are_allowed_under_the_relations_proved(tmp_path: Path)
         mask = (1 << len(decision.conditions)) - 1
         recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
         assert recorded <= tied.vectors, decision.text()
+
+
+@pytest.mark.parametrize("project", sorted(p.name for p in (ROOT / "samples" / "constructs").iterdir() if p.is_dir()))
+def test_no_condition_a_run_shows_is_claimed_infeasible_without_runs(project: str) -> None:
+    # Every reason (constants, the code before the chain with its calls, NC facts, relations across cycles) is
+    # worked out with no run at all, then random inputs run: none of the conditions claimed infeasible may be shown.
+    # Catches: an unsound claim of any rule on the construct projects.
+    result = compile_project(ProjectOptions(main=ROOT / "samples" / "constructs" / project / "main.src"),
+                             make_semantics("itnc530", {}))
+    if not result.ok:
+        pytest.skip("the project needs options this test does not give")
+    program = result.program
+    table = decision_table(program)
+    claimed = {(i.decision.key, i.number) for i in decision_coverage(program, [], table=table).conditions
+               if i.status == "infeasible"}
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(11)
+    try:
+        for cycle in range(300):
+            machine.run_cycle(cycle, [("I", rng.randrange(32), rng.randrange(2)) for _ in range(6)])
+    except MachineHalted:           # a fault the inputs provoke: what ran until then counts
+        pass
+    shown = {(i.decision.key, i.number) for i in decision_coverage(program, [machine.coverage], table=table).conditions
+             if i.status == "shown"}
+    assert not claimed & shown
