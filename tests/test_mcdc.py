@@ -12,6 +12,7 @@ import pytest
 from transpiler.cli import main
 from transpiler.exec.interp import Machine, compile_program
 from transpiler.exec.interp.decisions import decision_table
+from transpiler.exec.interp.faults import MachineHalted
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
@@ -483,3 +484,162 @@ def test_a_strobe_is_never_seen_with_its_acknowledgement_unless_the_program_set_
     assert items[("M4093", "O2", 1)].status == "missing"
     items, _ = _status(written, [_run_nc(written, calls)])
     assert items[("M4093", "O2", 1)].status == "shown"
+
+
+def test_a_call_before_the_chain_is_followed_into_the_callee(tmp_path: Path) -> None:
+    # Sub sets M10 = I1 AND I2 (through a forward jump and an early EMT); the chain after `CM Sub` is M10 AND NOT
+    # I1: M10 = 1 only with I1 = 1, so the outcome is always 0 and M10 never decides alone. The reason names the
+    # call. Catches: the region stopping at the call (missing), the callee's writes not followed.
+    sub = "LBL Sub\nL I1\nA I2\n= M10\nL I3\nJPF Skip\nL I4\n= M11\nLBL Skip\nL I5\nEMT\nL I6\n= M12\nEM\n"
+    program = _program(tmp_path, "L I7\n= M10\nCM Sub\nL M10\nAN I1\n= O1\nEM\n" + sub)
+    items, _ = _status(program, [_run(program, [{"I1": 1, "I2": 1}, {"I1": 0}])])
+    m10 = items[("M10", "O1", 0)]
+    assert m10.status == "infeasible", m10
+    assert "main.src:3:1 CM Sub" in m10.reason and "M10 = 1 only with I1 = 1" in m10.reason
+    # nested one call deeper, and called only when I3 = 1 (CMT): on the path without the call, M10 keeps I7's
+    # value and the pair is there (two cycles show it)
+    nested = _program(tmp_path, "L I7\n= M10\nCM Outer\nL M10\nAN I1\n= O1\nEM\nLBL Outer\nCM Sub\nEM\n" + sub)
+    items, _ = _status(nested, [])
+    assert items[("M10", "O1", 0)].status == "infeasible"
+    maybe = _program(tmp_path, "L I7\n= M10\nL I3\nCMT Sub\nL M10\nAN I1\n= O1\nEM\n" + sub)
+    items, _ = _status(maybe, [])
+    assert items[("M10", "O1", 0)].status == "missing"
+    items, _ = _status(maybe, [_run(maybe, [{"I7": 1, "I1": 0, "I3": 0}, {"I7": 0, "I1": 0, "I3": 0}])])
+    assert items[("M10", "O1", 0)].status == "shown"
+
+
+@pytest.mark.parametrize("callee", ["LBL Sub\nLBL Again\nL I1\nA I2\n= M10\nL I3\nJPT Again\nEM\n",
+                                    "LBL Sub\nL I1\nA I2\n= M10\nL I4\n= M20[X]\nEM\n",
+                                    "LBL Sub\nL I1\nA I2\n= M10\nL K0\n= B0\nCASE B0\nCM Other\nENDC\nEM\n"
+                                    "LBL Other\nL I4\n= M10\nEM\n"],
+                         ids=["loop", "indexed_write", "case"])
+def test_a_callee_that_cannot_be_run_so_ends_the_region(tmp_path: Path, callee: str) -> None:
+    # A loop, an indexed marker write or a CASE in the callee: the region stops at the call, and nothing is
+    # claimed (the loop's second pass, the indexed write or the CASE entry may leave M10 at anything).
+    program = _program(tmp_path, "CM Sub\nL M10\nAN I1\n= O1\nEM\n" + callee)
+    items, _ = _status(program, [])
+    assert items[("M10", "O1", 0)].status == "missing"
+
+
+def test_recorded_vectors_behind_calls_are_allowed(tmp_path: Path) -> None:
+    # Soundness of following calls: every vector random inputs make the chains record is among the ones the
+    # analysis allows. Catches: a return path lost (EMT, EMF, a jump past an EM), CMT/CMF taken the wrong way
+    # round, LA or brackets carried wrongly into or out of a callee.
+    text = ("L I1\nCMT A\nL M10\nA I2\n= O1\nL I3\nCMF B\nL M11\nXO M10\n= O2\nCM C\nL M12\nAN M10\nO M11\n= O3\n"
+            "L I4\nCM D\n= M13\nL M13\nA I5\n= O4\nEM\n"
+            "LBL A\nL I2\nAN I6\n= M10\nL I7\nEMT\nLN M10\n= M11\nEM\n"
+            "LBL B\nL I6\nEMF\nL I2\nO I7\nS M11\nR M10\nEM\n"
+            "LBL C\nL I8\nJPT Far\nL M10\n= M12\nEM\nLBL Far\nL M11\n= M12\nCM A\nEM\n"
+            "LBL D\nA I9\nEM\n")
+    program = _program(tmp_path, text)
+    table = decision_table(program)
+    machine = _run(program, [{f"I{i}": random.Random(cycle * 16 + i).randrange(2) for i in range(1, 10)}
+                             for cycle in range(400)])
+    checked = through = 0
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None)
+        if tied is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded <= tied.vectors, decision.text()
+        checked += 1
+        through += any(program.main.ops[w].code in ("CALL", "CALLT", "CALLF") for w in tied.writes)
+    assert checked >= 4 and through >= 3
+
+
+# M2 toggles only while M1 is 1, and both are reset together: M2 = 1 only with M1 = 1 at every point of every cycle
+# (between `R M1` and `R M2` it does not hold, but nothing can read there). The chain reads both before any write of
+# the cycle, so only the relation across cycles ties them.
+_TOGGLE = "L I1\nS M1\nLN I1\nR M1\nR M2\nL M1\nA I2\nJPF Keep\nLN M2\n= M2\nLBL Keep\n"
+
+
+def test_a_relation_every_write_keeps_holds_across_cycles(tmp_path: Path) -> None:
+    # `M2 AND M1` at the start of the cycle: showing M1 needs M2 = 1 with M1 = 0. Infeasible, naming the relation
+    # and the writes it rests on; M2 itself stays to be shown (and a run shows it). Catches: the region alone
+    # claimed to tie them (it cannot: no write before the chain), a relation not checked at the writes.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "EM\n")
+    rows = [{"I1": 1, "I2": 1}, {"I1": 1, "I2": 0}, {"I1": 1, "I2": 1}, {"I1": 1}, {"I1": 0}, {"I1": 0}]
+    items, _ = _status(program, [_run(program, rows)])
+    m1 = items[("M1", "O1", 1)]
+    assert m1.status == "infeasible", m1
+    assert "M2 = 1 only with M1 = 1 at every point of every cycle" in m1.reason
+    assert "(main.src:5:1 S M1, main.src:7:1 R M1, main.src:8:1 R M2, main.src:13:1 = M2)" in m1.reason
+    assert items[("M2", "O1", 0)].status == "shown"
+
+
+@pytest.mark.parametrize("breaking", ["L I3\n= M2\n", "L I3\nS M2\n", "L I3\nR M1\n"])
+def test_a_write_that_breaks_the_relation_leaves_the_condition_missing(tmp_path: Path, breaking: str) -> None:
+    # One more write that can give M2 = 1 with M1 = 0 (M2 set from an input, M1 reset alone): the relation does
+    # not hold, nothing is claimed, and two cycles show M1 deciding alone.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + breaking + "EM\n")
+    items, _ = _status(program, [])
+    assert items[("M1", "O1", 1)].status == "missing"
+    rows = [{"I1": 1, "I3": 1}, {"I1": 1, "I3": 1}, {"I1": 1, "I2": 1, "I3": 1}, {"I1": 1, "I2": 0, "I3": 1},
+            {"I1": 1, "I3": 0}, {"I1": 0, "I3": 1}, {"I1": 0, "I3": 0}]
+    items, _ = _status(program, [_run(program, rows)])
+    assert items[("M1", "O1", 1)].status == "shown"
+
+
+def test_no_relation_over_an_operand_a_scenario_sets_or_an_indexed_write_reaches(tmp_path: Path) -> None:
+    # A scenario setting M2 (or M1) can break the relation between cycles; an indexed write whose index is
+    # unknown may write either. Catches: power-on values or writes outside the program not accounted for.
+    program = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "EM\n")
+    for driven in ({("M", 2)}, {("M", 1)}):
+        items, _ = _status(program, [], driven=driven)
+        assert items[("M1", "O1", 1)].status == "missing"
+    indexed = _program(tmp_path, "L M2\nA M1\n= O1\n" + _TOGGLE + "L W4\n= X\nL I5\n= M0[X]\nEM\n")
+    items, _ = _status(indexed, [])
+    assert items[("M1", "O1", 1)].status == "missing"
+
+
+def test_recorded_vectors_are_allowed_under_the_relations_proved(tmp_path: Path) -> None:
+    # Soundness: with every relation the analysis proves assumed, each vector random inputs make the chains record
+    # is still allowed. Catches: a relation proved that a run breaks.
+    from transpiler.verify.implication import Invariant, inductive_invariants, program_entries
+    text = ("L M2\nA M1\n= O1\nL M3\nAN M4\n= O2\nL M4\nO M5\nA M3\n= O3\n" + _TOGGLE +
+            "L I3\nS M3\nS M4\nL I4\nR M4\nL M4\nA I5\nS M5\nLN M3\nR M3\nR M5\nEM\n")
+    program = _program(tmp_path, text)
+    table = decision_table(program)
+    keys = [("M", n) for n in range(1, 6)]
+    candidates = [Invariant((a, b), (x, y), (f"M{a[1]}", f"M{b[1]}")) for a in keys for b in keys if a < b
+                  for x, y in ((1, 1), (1, 0), (0, 1))]
+    proved = inductive_invariants(program, candidates, lambda kind, addr, file, index: None)
+    assert any(p.operands == (("M", 1), ("M", 2)) and p.values == (0, 1) for p in proved)
+    assert any(p.operands == (("M", 3), ("M", 5)) and p.values == (0, 1) for p in proved)   # M5 only with M3
+    machine = _run(program, [{f"I{i}": random.Random(cycle * 8 + i).randrange(2) for i in range(1, 6)}
+                             for cycle in range(500)])
+    entries = program_entries(program)
+    for decision in table.decisions:
+        tied = tied_vectors(program, decision, lambda kind, addr, file, index: None, entries=entries,
+                            invariants=proved)
+        if tied is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        recorded = {v & mask for v in machine.coverage.vectors.get(decision.key, ())}
+        assert recorded <= tied.vectors, decision.text()
+
+
+@pytest.mark.parametrize("project", sorted(p.name for p in (ROOT / "samples" / "constructs").iterdir() if p.is_dir()))
+def test_no_condition_a_run_shows_is_claimed_infeasible_without_runs(project: str) -> None:
+    # Every reason (constants, the code before the chain with its calls, NC facts, relations across cycles) is
+    # worked out with no run at all, then random inputs run: none of the conditions claimed infeasible may be shown.
+    # Catches: an unsound claim of any rule on the construct projects.
+    result = compile_project(ProjectOptions(main=ROOT / "samples" / "constructs" / project / "main.src"),
+                             make_semantics("itnc530", {}))
+    if not result.ok:
+        pytest.skip("the project needs options this test does not give")
+    program = result.program
+    table = decision_table(program)
+    claimed = {(i.decision.key, i.number) for i in decision_coverage(program, [], table=table).conditions
+               if i.status == "infeasible"}
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(11)
+    try:
+        for cycle in range(300):
+            machine.run_cycle(cycle, [("I", rng.randrange(32), rng.randrange(2)) for _ in range(6)])
+    except MachineHalted:           # a fault the inputs provoke: what ran until then counts
+        pass
+    shown = {(i.decision.key, i.number) for i in decision_coverage(program, [machine.coverage], table=table).conditions
+             if i.status == "shown"}
+    assert not claimed & shown

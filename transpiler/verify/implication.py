@@ -4,8 +4,11 @@ under the same inputs, a marker assigned from the chain's other conditions) can 
 its operand takes both values over a run.
 
 The analysis runs the code of one region symbolically: from a start op to the decision's consumer, within one
-file, reached only from its start (every jump into it comes from inside it and goes forward; no call, CASE or
-indexed bit write inside it). Every bit operand's value at the start is a free variable (or a constant where the
+file, reached only from its start (every jump into it comes from inside it and goes forward; no CASE or indexed bit
+write inside it). A call of a subprogram (CM, CMT, CMF) inside it is followed into the callee where the callee can be
+run the same way (`Callee`: forward jumps only, no CASE, indexed bit write, module call or call of a subprogram that
+cannot, at most _CALL_DEPTH calls deep): its paths up to each EM are run and joined at the return; a call of any
+other subprogram ends the region there. Every bit operand's value at the start is a free variable (or a constant where the
 program's own logic fixes it, see mcdc.constant_bits, or a consumed timer/counter start no earlier write can have
 set in this cycle, see consumed_start_zero), and so is every value the analysis does not follow (a word compare, LA
 after a join). Values are truth tables over those variables (a Python int with one bit per assignment), so a
@@ -22,12 +25,13 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.exec.interp.gen_exprs import int32
 from transpiler.ir import Op, Program
+from transpiler.verify.index_range import index_ranges
 from transpiler.verify.nc_facts import NcFact
 
 MAX_VARS = 18                   # free variables per region (truth tables of 2**18 bits)
@@ -46,6 +50,9 @@ def _variable(k: int) -> int:
 _VAR = tuple(_variable(k) for k in range(MAX_VARS))
 
 _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
+_CALLS = frozenset({"CALL", "CALLT", "CALLF"})
+_CALL_DEPTH = 4                 # calls followed one inside another, at most
+_INDEXED_SPAN = 4096            # values of X up to which an indexed write counts as a write of each operand it reaches
 _READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 Key = tuple[str, int]
@@ -55,7 +62,7 @@ FactsAt = Callable[[int, int], Sequence[NcFact]]     # the NC facts that hold at
 @dataclasses.dataclass(frozen=True)
 class Tied:
     """What the code before a decision allows: the condition `vectors` it can see (bit i = condition i), the op
-    its region starts at, and the region's writes of bit operands it followed (op indices in the file)."""
+    its region starts at, and the region's writes of bit operands and calls it followed (op indices in the file)."""
 
     vectors: frozenset[int]
     start: int
@@ -80,19 +87,22 @@ class _Run:
     followed (`_relevant`): the others read no variables."""
 
     def __init__(self, program: Program, f: int, start: int, consumer: int, reads: set[int],
-                 entry: Callable[[str, int, int, int], int | None], skip: frozenset[int] = frozenset()):
+                 entry: Callable[[str, int, int, int], int | None], skip: frozenset[int] = frozenset(),
+                 callees: Mapping[tuple[int, int], Callee] | None = None, keep: frozenset[Key] = frozenset()):
         self.program = program
         self.f = f
         self.start = start
         self.consumer = consumer
         self.entry = entry
         self.skip = skip
+        self.callees = callees if callees is not None else program_entries(program).callees
+        self.depth = 0                  # calls entered (reads and skipped writes count in the region itself only)
         self.vars = 0
         self.entries: dict[Key, int] = {}
         self.reads: dict[int, int] = {}
         self.shared = program.semantics["accumulator_model"] == "shared_bit7"
         self.flag = program.semantics["add_overflow"] == "flag"
-        self.followed, self.needed = _relevant(program.files[f].ops, start, consumer, reads)
+        self.followed, self.needed = _relevant(program, f, start, consumer, reads, self.callees, keep)
 
     def fresh(self) -> int:
         if self.vars == MAX_VARS:
@@ -117,28 +127,74 @@ class _Run:
         return found
 
     def run(self) -> _Path | None:
-        ops = self.program.files[self.f].ops
+        return self.flow(self.f, self.start, self.consumer, _Path(_ALL, {}, None, []), None)
+
+    def flow(self, f: int, start: int, stop: int | None, path: _Path | None,
+             returned: list[_Path] | None) -> _Path | None:
+        """Runs file f's ops from `start`: up to `stop` (the path there), or, in a callee (`stop` None), until no
+        path is left, each path that ends the subprogram added to `returned`."""
+        ops = self.program.files[f].ops
         pending: dict[int, list[_Path]] = {}
-        path: _Path | None = _Path(_ALL, {}, None, [])
-        for i in range(self.start, self.consumer + 1):
+        i = start
+        while stop is None or i <= stop:
             joining = pending.pop(i, [])
             if joining:
                 path = self.join(([path] if path is not None else []) + joining)
             if path is None or not path.reach:
                 path = None
+                if stop is None and not pending:
+                    return None
+                i += 1
                 continue
-            if i == self.consumer:
+            if i == stop:
                 return path
-            if i in self.followed:
-                path = self.step(i, ops[i], path, pending)
+            if i >= len(ops):
+                raise _TooMany              # ran off the file: Callee rules this out, so never here
+            if (f, i) in self.followed:
+                path = self.step(f, i, ops[i], path, pending, returned)
             else:
                 self.havoc(ops[i], path)
+            i += 1
         return None
+
+    def call(self, op: Op, path: _Path, absent: bool) -> _Path | None:
+        """A call: the callee run on the paths that call it (`Callee`), joined with those that do not; `absent`: a
+        call treated as not there (to find what an infeasible claim rests on): what it writes is any value."""
+        c = op.code
+        if c == "CALL":
+            taken = _ALL
+        else:
+            path.la = path.la if path.la is not None else self.fresh()
+            taken = path.la if c == "CALLT" else _ALL ^ path.la
+        taken &= path.reach
+        callee = self.callees[op.call.key]
+        called = _Path(taken, dict(path.values), None, [])
+        rest = _Path(path.reach & ~taken, path.values, path.la, path.frames)
+        if absent or path.frames or self.depth >= _CALL_DEPTH:
+            # brackets open across the call, or calls too deep: what it may write is any value
+            for key in callee.writes:
+                called.values[key] = None
+            back: _Path | None = called
+        else:
+            returned: list[_Path] = []
+            self.depth += 1
+            try:
+                self.flow(callee.file, callee.entry, None, called, returned)
+            finally:
+                self.depth -= 1
+            back = self.join(returned) if returned else None
+        paths = [p for p in (back, rest) if p is not None and p.reach]
+        if not paths:
+            return None
+        return paths[0] if len(paths) == 1 and paths[0] is back else self.join(paths)
 
     def havoc(self, op: Op, path: _Path) -> None:
         """An op of a statement that cannot matter: what it may write is any value, read lazily."""
         for key in _bit_writes(op, self.program, self.flag):
             path.values[key] = None
+        if op.code in _CALLS and op.call is not None and op.call.key in self.callees:
+            for key in self.callees[op.call.key].writes:
+                path.values[key] = None
         path.la = None
 
     def join(self, paths: list[_Path]) -> _Path:
@@ -157,9 +213,11 @@ class _Run:
             values[key] = v
         return _Path(reach, values, None, [])
 
-    def step(self, i: int, op: Op, path: _Path, pending: dict[int, list[_Path]]) -> _Path | None:
+    def step(self, f: int, i: int, op: Op, path: _Path, pending: dict[int, list[_Path]],
+             returned: list[_Path] | None) -> _Path | None:
         c = op.code
         o = op.operand
+        top = self.depth == 0
         if c in ("JP", "JPT", "JPF", "EM", "EMT", "EMF"):
             la = path.la if path.la is not None or c in ("JP", "EM") else self.fresh()
             path.la = la
@@ -167,9 +225,14 @@ class _Run:
                      "EMF": _ALL ^ (la or 0)}[c] & path.reach
             if c.startswith("JP") and taken and op.target is not None and op.target > i:
                 pending.setdefault(op.target, []).append(_Path(taken, dict(path.values), path.la, []))
-            # a jump back leaves the region (a new pass starts from free values again); EM leaves it too
+            elif c.startswith("EM") and taken and returned is not None:
+                returned.append(_Path(taken, dict(path.values), None, []))
+            # a jump back leaves the region (a new pass starts from free values again); EM leaves it too (in a
+            # callee: returns to the caller)
             path.reach &= ~taken
             return path if path.reach else None
+        if c in _CALLS and op.call is not None and op.call.key in self.callees:
+            return self.call(op, path, top and i in self.skip)
         for kind, addr in implicit_writes(op, self.program.semantics.profile.interface, self.flag):
             path.values[(kind, addr)] = None
         if c in _READS and o is not None and o.is_bit:
@@ -177,7 +240,8 @@ class _Run:
                 path.la = None if self.shared else path.la
                 return path
             read = self.fresh() if o.indexed else self.value(path, (o.kind, o.addr))
-            self.reads[i] = read
+            if top:
+                self.reads[i] = read
             value = _ALL ^ read if c in ("LDN", "ANDN", "ORN", "XORN") else read
             if c in ("LD", "LDN"):
                 path.la = value
@@ -188,7 +252,7 @@ class _Run:
         if c in _WRITES and o is not None and o.is_bit:
             la = path.la if path.la is not None else self.fresh()
             path.la = la
-            if i in self.skip:
+            if top and i in self.skip:
                 return path
             key = (o.kind, o.addr)
             if c in ("ST", "STN"):
@@ -204,7 +268,9 @@ class _Run:
             path.la = None
             return path
         if c in ("CMP", "SCMP", "BT", "PLL"):
-            path.la = self.reads[i] = self.fresh()
+            path.la = self.fresh()
+            if top:
+                self.reads[i] = path.la
         elif c == "NOTL":
             path.la = None if path.la is None else _ALL ^ path.la
         elif c == "BOPEN":
@@ -215,14 +281,14 @@ class _Run:
             else:
                 path.frames.append(None)
         elif c == "BCLOSE":
-            self.close(i, op, path)
+            self.close(i, op, path, top)
         elif c not in KEEPS_LA or (self.shared and c in WORD_WRITERS):
             path.la = None
         if c == "LBL":
             path.frames = []
         return path
 
-    def close(self, i: int, op: Op, path: _Path) -> None:
+    def close(self, i: int, op: Op, path: _Path, top: bool) -> None:
         saved = path.frames.pop() if path.frames else None
         br = op.bracket
         if br.mode == "LOGIC" and br.op in BRACKET_GATES:
@@ -236,7 +302,9 @@ class _Run:
             else:
                 path.la = _combine(BRACKET_GATES[br.op], saved, inner)
         elif op.rel:
-            path.la = self.reads[i] = self.fresh()
+            path.la = self.fresh()
+            if top:
+                self.reads[i] = path.la
         elif self.shared:
             path.la = None
 
@@ -269,25 +337,49 @@ def _statements(ops: Sequence[Op], start: int, consumer: int) -> list[tuple[int,
     return [(a, b) for a, b in zip(cuts, cuts[1:]) if a < b]
 
 
-def _relevant(ops: Sequence[Op], start: int, consumer: int, reads: set[int]) -> tuple[set[int], set[Key]]:
-    """The ops of the statements that can matter to the decision's conditions (read at `reads`): those that read
-    them, jump or end the module, or write an operand a later such statement reads; and the operands they read."""
-    needed: set[Key] = set()
-    followed: set[int] = set()
-    for a, b in reversed(_statements(ops, start, consumer)):
+def _relevant(program: Program, f: int, start: int, consumer: int, reads: set[int],
+              callees: Mapping[tuple[int, int], Callee], keep: frozenset[Key] = frozenset()
+              ) -> tuple[set[tuple[int, int]], set[Key]]:
+    """The ops (file, index) of the statements that can matter to the decision's conditions (read at `reads`):
+    those that read them, call or end the module, jump back, out or over such a statement (_jump_matters), or
+    write an operand a later such statement reads, in the
+    region and in the subprograms it calls (a callee's statements judged by what the caller needs after the call);
+    and the operands they read. `keep`: operands whose values at the consumer matter too."""
+    needed: set[Key] = set(keep)
+    followed: set[tuple[int, int]] = set()
+    _mark(program, f, start, consumer, reads, callees, followed, needed, 0)
+    return followed, needed
+
+
+def _mark(program: Program, f: int, start: int, end: int, reads: set[int], callees: Mapping[tuple[int, int], Callee],
+          followed: set[tuple[int, int]], needed: set[Key], depth: int) -> None:
+    ops = program.files[f].ops
+    for a, b in reversed(_statements(ops, start, end)):
         span = range(a, b)
-        matters = any(i in reads for i in span) or any(
-            ops[i].code in ("JP", "JPT", "JPF", "EM", "EMT", "EMF") for i in span) or any(
+        calls = [ops[i].call for i in span if ops[i].code in _CALLS and ops[i].call is not None
+                 and ops[i].call.key in callees]
+        matters = calls or any(i in reads for i in span) or any(
+            ops[i].code in ("EM", "EMT", "EMF") or ops[i].code in ("JP", "JPT", "JPF") and _jump_matters(
+                f, i, ops[i].target, end, followed) for i in span) or any(
             ops[i].operand is not None and ops[i].operand.is_bit and not ops[i].operand.indexed
             and ops[i].code not in _READS and (ops[i].operand.kind, ops[i].operand.addr) in needed for i in span)
         if not matters:
             continue
-        followed.update(span)
+        if depth < _CALL_DEPTH:
+            for target in reversed(calls):
+                callee = callees[target.key]
+                _mark(program, callee.file, callee.entry, callee.end + 1, set(), callees, followed, needed, depth + 1)
+        followed.update((f, i) for i in span)
         for i in span:
             o = ops[i].operand
             if o is not None and o.is_bit and not o.indexed:
                 needed.add((o.kind, o.addr))
-    return followed, needed
+
+
+def _jump_matters(f: int, i: int, target: int | None, end: int, followed: set[tuple[int, int]]) -> bool:
+    """Whether a jump can change what the followed statements see: it goes back or out of the stretch, or skips
+    one of them (a forward jump over ops that are not followed only spares writes taken as any value anyway)."""
+    return target is None or target <= i or target > end or any((f, j) in followed for j in range(i + 1, target))
 
 
 def _combine(gate: str, a: int, b: int) -> int:
@@ -295,13 +387,26 @@ def _combine(gate: str, a: int, b: int) -> int:
 
 
 @dataclasses.dataclass(frozen=True)
+class Callee:
+    """A subprogram a region can run through (see the module docstring): its file, entry op (its LBL) and last op
+    (the EM no forward jump passes), and the bit operands it or what it calls may write (named and implicit)."""
+
+    file: int
+    entry: int
+    end: int
+    writes: frozenset[Key]
+
+
+@dataclasses.dataclass(frozen=True)
 class Entries:
     """Where control comes to an op other than from the op before it: the ops called or entered through CASE (file,
-    index), and per file the jumps to each op (target -> the ops jumping there). The same for every decision of a
-    program: made once (program_entries) and handed to every region_starts."""
+    index), and per file the jumps to each op (target -> the ops jumping there); and the subprograms a region can
+    run through (`callees`, by entry). The same for every decision of a program: made once (program_entries) and
+    handed to every region_starts."""
 
     called: frozenset[tuple[int, int]]
     jumps: tuple[dict[int, list[int]], ...]
+    callees: Mapping[tuple[int, int], Callee] = dataclasses.field(default_factory=dict)
 
 
 def program_entries(program: Program) -> Entries:
@@ -314,7 +419,51 @@ def program_entries(program: Program) -> Entries:
         jumps.append(sources)
     called = frozenset((t.file, t.index) for code in program.files for op in code.ops
                        for t in (op.call, *op.case_targets) if t is not None and not t.is_module and t.file >= 0)
-    return Entries(called, tuple(jumps))
+    found: dict[tuple[int, int], Callee | None] = {}
+    for code in program.files:
+        for op in code.ops:
+            if op.code in _CALLS and op.call is not None and not op.call.is_module and op.call.file >= 0:
+                _callee(program, op.call.key, found, ())
+    return Entries(called, tuple(jumps), {k: c for k, c in found.items() if c is not None})
+
+
+def _callee(program: Program, key: tuple[int, int], found: dict[tuple[int, int], Callee | None],
+            stack: tuple[tuple[int, int], ...]) -> Callee | None:
+    """The subprogram entered at `key` as a Callee, or None where a region cannot run through it (recursion, a jump
+    back, CASE, a module call, an indexed bit write, an op that is no code, running off the file)."""
+    if key in found:
+        return found[key]
+    if key in stack or len(stack) >= _CALL_DEPTH:
+        return None
+    f, entry = key
+    ops = program.files[f].ops
+    flag = program.semantics["add_overflow"] == "flag"
+    writes: set[Key] = set()
+    furthest = entry
+    result = None
+    for i in range(entry, len(ops)):
+        op = ops[i]
+        o = op.operand
+        if op.code in ("CASE", "SUBM", "KFIELD") or (o is not None and o.is_bit and o.indexed
+                                                     and op.code not in _READS):
+            break
+        if op.code in ("JP", "JPT", "JPF"):
+            if op.target is None or op.target <= i:
+                break
+            furthest = max(furthest, op.target)
+        if op.code in _CALLS:
+            inner = None if op.call is None or op.call.is_module or op.call.file < 0 else \
+                _callee(program, op.call.key, found, stack + (key,))
+            if inner is None:
+                break
+            writes |= inner.writes
+        writes.update(_bit_writes(op, program, flag))
+        if op.code == "EM" and i >= furthest:
+            result = Callee(f, entry, i, frozenset(writes))
+            break
+    if not stack or result is not None:
+        found[key] = result             # a failure inside a call chain may be the chain's depth, not the callee's
+    return result
 
 
 def region_starts(program: Program, f: int, first: int, consumer: int, entries: Entries | None = None) -> list[int]:
@@ -333,8 +482,9 @@ def region_starts(program: Program, f: int, first: int, consumer: int, entries: 
                 break
             lowest_source = min([lowest_source, *sources.get(t, ())])
         op = ops[s]
-        if s < consumer and op.code in _BARRIERS or (op.operand is not None and op.operand.is_bit and op.operand.indexed
-                                    and op.code not in _READS):
+        runs_through = op.code in _CALLS and op.call is not None and op.call.key in entries.callees
+        if s < consumer and op.code in _BARRIERS and not runs_through or (
+                op.operand is not None and op.operand.is_bit and op.operand.indexed and op.code not in _READS):
             break
         if s <= first and lowest_source >= s:
             starts.append(s)
@@ -343,12 +493,14 @@ def region_starts(program: Program, f: int, first: int, consumer: int, entries: 
 
 def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int, int, int], int | None],
                  skip: frozenset[int] = frozenset(), start: int | None = None,
-                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = ()) -> Tied | None:
+                 entries: Entries | None = None, facts: Sequence[NcFact] | FactsAt = (),
+                 invariants: Sequence[Invariant] = ()) -> Tied | None:
     """The condition vectors `decision` can see (see Tied), from the longest region before it whose free values
     fit MAX_VARS; `entry(kind, addr, file, start)`: the operand's value at the region start (file, op index) where
     the program fixes it there, else None; `facts`: the NC model's facts that hold in this program (see the module
-    docstring), or a function of the region's start (file, op index) giving the ones that hold there. None where no
-    region covers all its conditions (or the decision is not reached in it)."""
+    docstring), or a function of the region's start (file, op index) giving the ones that hold there;
+    `invariants`: relations between bit operands that hold at every observed point (inductive_invariants). None
+    where no region covers all its conditions (or the decision is not reached in it)."""
     if program.semantics["chain_model"] != "static":
         return None             # gates whose load/gate role is decided at run time: not followed here
     f = decision.file
@@ -356,13 +508,15 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
         return None
     first = min(c.index for c in decision.conditions)
     reads = {c.index for c in decision.conditions}
+    entries = entries or program_entries(program)
     starts = [start] if start is not None else region_starts(program, f, first, decision.index, entries)
-    best = _attempt(program, f, starts, len(starts) - 1, decision.index, reads, entry, skip)
+    callees = entries.callees
+    best = _attempt(program, f, starts, len(starts) - 1, decision.index, reads, entry, skip, callees)
     if best is None:                        # the farthest start whose region fits MAX_VARS, by bisection
         low, high = 0, len(starts) - 2
         while low <= high:
             mid = (low + high) // 2
-            found = _attempt(program, f, starts, mid, decision.index, reads, entry, skip)
+            found = _attempt(program, f, starts, mid, decision.index, reads, entry, skip, callees)
             if found is None:
                 high = mid - 1
             else:
@@ -375,10 +529,11 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
     tables = [run.reads[c.index] for c in decision.conditions]
     found: set[int] = set()
     held = facts(f, s) if callable(facts) else facts
-    _split(tables, 0, path.reach & _facts_allow(run, held), 0, found)
+    _split(tables, 0, path.reach & _facts_allow(run, held) & _invariants_allow(run, invariants, entries), 0, found)
     ops = program.files[f].ops
-    writes = tuple(j for j in sorted(run.followed) if s <= j < decision.index and ops[j].code in _WRITES
-                   and ops[j].operand is not None and ops[j].operand.is_bit)
+    writes = tuple(j for g, j in sorted(run.followed) if g == f and s <= j < decision.index and (
+        ops[j].code in _WRITES and ops[j].operand is not None and ops[j].operand.is_bit
+        or ops[j].code in _CALLS and ops[j].call is not None and ops[j].call.key in callees))
     return Tied(frozenset(found), s, writes)
 
 
@@ -467,12 +622,12 @@ def _compare_value(sem, kind: str, word: int, rel: str, constant: int) -> int:
 
 
 def _attempt(program: Program, f: int, starts: list[int], k: int, consumer: int, reads: set[int],
-             entry: Callable[[str, int, int, int], int | None],
-             skip: frozenset[int]) -> tuple[int, _Run, _Path | None] | None:
+             entry: Callable[[str, int, int, int], int | None], skip: frozenset[int],
+             callees: Mapping[tuple[int, int], Callee]) -> tuple[int, _Run, _Path | None] | None:
     """The run of the region from starts[k], or None where it needs more than MAX_VARS free values."""
     if k < 0:
         return None
-    run = _Run(program, f, starts[k], consumer, reads, entry, skip)
+    run = _Run(program, f, starts[k], consumer, reads, entry, skip, callees)
     try:
         return starts[k], run, run.run()
     except _TooMany:
@@ -596,3 +751,137 @@ def consumed_start_zero(program: Program, driven: set[tuple[str, int]]) -> Calla
             return False
         return not any(order.may_precede(w, (f, index)) for w in writers.get((kind, addr), ()))
     return zero
+
+
+# ---------------------------------------------------------------------------------------- invariants across cycles
+
+@dataclasses.dataclass(frozen=True)
+class Invariant:
+    """Two bit operands never hold `values` (their values, in order) together at any point of any cycle but
+    between two stores of one chain (`observed`): it holds at power-on (both 0, and nothing but the program's named
+    writes ever changes them, see inductive_invariants) and every write of either keeps it, given it held before
+    (`writes`: where those writes are)."""
+
+    operands: tuple[Key, Key]
+    values: tuple[int, int]
+    names: tuple[str, str]
+    writes: tuple[str, ...] = ()
+
+    def forbids(self, a: int, b: int) -> int:
+        """The assignments (truth table) in which the operands with values `a`, `b` break it."""
+        x, y = self.values
+        return (a if x else _ALL ^ a) & (b if y else _ALL ^ b)
+
+    def text(self) -> str:
+        (a, b), (x, y) = self.names, self.values
+        if x and y:
+            return f"never {a} = 1 and {b} = 1 together"
+        return f"{a} = 1 only with {b} = 1" if x else f"{b} = 1 only with {a} = 1"
+
+
+def observed(ops: Sequence[Op], s: int, entries: Entries, f: int) -> bool:
+    """Whether the point before ops[s] is one an invariant holds at: not between two stores of one chain (a store
+    entered from elsewhere starts a new stretch of stores)."""
+    return not (0 < s < len(ops) and ops[s - 1].code in _WRITES and ops[s].code in _WRITES
+                and not entries.jumps[f].get(s) and (f, s) not in entries.called)
+
+
+def _invariants_allow(run: _Run, invariants: Sequence[Invariant], entries: Entries) -> int:
+    """The assignments the invariants allow at the run's start (every one where its start is no observed point):
+    for each invariant both of whose operands the run read at its start."""
+    if not invariants or not observed(run.program.files[run.f].ops, run.start, entries, run.f):
+        return _ALL
+    allowed = _ALL
+    for inv in invariants:
+        a, b = inv.operands
+        if a in run.entries and b in run.entries:
+            allowed &= _ALL ^ inv.forbids(run.entries[a], run.entries[b])
+    return allowed
+
+
+def write_sites(program: Program) -> tuple[dict[Key, list[tuple[int, int]]], set[Key], set[str]]:
+    """Every named, unindexed write of a bit operand (file, op index), by operand; the operands written another way
+    too (implicitly: error markers; through the index register where the values it can hold there are known,
+    index_range); the kinds written through the index register where they are not."""
+    sites: dict[Key, list[tuple[int, int]]] = {}
+    other: set[Key] = set()
+    indexed: set[str] = set()
+    ranges = index_ranges(program)
+    flag = program.semantics["add_overflow"] == "flag"
+    interface = program.semantics.profile.interface
+    for f, code in enumerate(program.files):
+        for i, op in enumerate(code.ops):
+            other.update(implicit_writes(op, interface, flag))
+            o = op.operand
+            if o is None or not o.is_bit or op.code in _READS:
+                continue
+            if o.indexed:
+                x = ranges.get((f, i))
+                if x is None or x[1] - x[0] > _INDEXED_SPAN:
+                    indexed.add(o.kind)
+                else:
+                    width = op.nbits if op.code == "STBITS" else 1
+                    other.update((o.kind, a) for a in range(o.addr + x[0], o.addr + x[1] + width))
+                continue
+            for key in _bit_writes(op, program, flag):
+                if key not in implicit_writes(op, interface, flag):
+                    sites.setdefault(key, []).append((f, i))
+    return sites, other, indexed
+
+
+def inductive_invariants(program: Program, candidates: Sequence[Invariant],
+                         entry: Callable[[str, int, int, int], int | None], entries: Entries | None = None
+                         ) -> list[Invariant]:
+    """The candidates that hold at every observed point (Invariant), proved together (each may be assumed where
+    another is checked; one that fails is dropped and the rest checked again). A candidate's operands must be
+    ones no scenario, NC, input or service writes, with power-on value 0 (the caller picks them); here they must
+    also have only named writes (no index register, no implicit write), and each stretch of stores with a write
+    of either must keep it: run symbolically from a region start before it, assuming every live candidate there."""
+    entries = entries or program_entries(program)
+    sites, other, indexed = write_sites(program)
+    alive = [c for c in candidates if c.values != (0, 0) and c.operands[0] != c.operands[1]
+             and not any(k in other or k[0] in indexed for k in c.operands)]
+    stretches: dict[Key, set[tuple[int, int, int]]] = {}
+    for key in {k for c in alive for k in c.operands}:
+        for f, i in sites.get(key, ()):
+            ops = program.files[f].ops
+            first, last = i, i
+            while not observed(ops, first, entries, f):
+                first -= 1
+            while not observed(ops, last + 1, entries, f):
+                last += 1
+            stretches.setdefault(key, set()).add((f, first, last))
+    while True:
+        kept = [c for c in alive if all(_keeps_after(program, f, first, last, c, alive, entry, entries)
+                                        for k in c.operands for f, first, last in sorted(stretches.get(k, ())))]
+        if len(kept) == len(alive):
+            break
+        alive = kept
+    def said(f: int, i: int) -> str:
+        op = program.files[f].ops[i]
+        return f"{op.span} {op.mnemonic} {op.operand.display()}"
+    return [dataclasses.replace(c, writes=tuple(said(f, i) for f, i in sorted({
+        site for k in c.operands for site in sites.get(k, ())}))) for c in alive]
+
+
+def _keeps_after(program: Program, f: int, first: int, last: int, candidate: Invariant,
+                 assumed: Sequence[Invariant], entry: Callable[[str, int, int, int], int | None],
+                 entries: Entries) -> bool:
+    """Whether the stretch of stores ops[first..last] leaves `candidate` true where it and `assumed` held at the
+    start of a region before it (the farthest observed start whose run fits MAX_VARS)."""
+    ops = program.files[f].ops
+    starts = [s for s in region_starts(program, f, first, last, entries) if observed(ops, s, entries, f)]
+    a, b = candidate.operands
+    for s in reversed(starts):                  # farthest first: the most code before the stores is seen
+        run = _Run(program, f, s, last + 1, set(), entry, frozenset(), entries.callees, frozenset({a, b}))
+        try:
+            path = run.run()
+            if path is None:
+                return True                     # no path reaches the stores from here
+            start_a, start_b = run.at_start(a), run.at_start(b)
+            end_a, end_b = run.value(path, a), run.value(path, b)
+        except _TooMany:
+            continue
+        allowed = _invariants_allow(run, assumed, entries) & (_ALL ^ candidate.forbids(start_a, start_b))
+        return not path.reach & allowed & candidate.forbids(end_a, end_b)
+    return False

@@ -19,8 +19,10 @@ the values the register can hold there reach), a condition the outcome cannot de
 constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
 chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
 a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
-cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py), and a boundary
-value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
+in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
+every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
+it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -33,8 +35,8 @@ from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, d
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import Program
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
-from transpiler.verify.implication import CycleOrder, Tied, consumed_start_zero, cycle_order, program_entries, \
-    tied_vectors
+from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
+    inductive_invariants, program_entries, tied_vectors
 from transpiler.verify.index_range import index_ranges
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -464,33 +466,75 @@ class _Implications:
             self._first[decision.key] = (tied, frozenset(consumed))
         return self._first[decision.key]
 
+    def invariants(self, missing: Sequence[ConditionItem]) -> list[Invariant]:
+        """The relations across cycles that would explain some of the `missing` conditions (a pair of values of two
+        of its chain's operands that, never occurring, leaves the condition unshowable) and that hold
+        (implication.inductive_invariants). Only markers and outputs with power-on value 0 that no scenario, NC or
+        index write of unknown reach touches are candidates."""
+        candidates: dict[tuple, Invariant] = {}
+        for item in missing:
+            decision = item.decision
+            tied, _ = self.first(decision)
+            if tied is None or not tied.vectors:
+                continue
+            conds = decision.conditions
+            keys = [(c.operand.kind, c.operand.addr) if c.operand is not None and c.operand.is_bit
+                    and not c.operand.indexed else None for c in conds]
+            for i, j in itertools.combinations(range(len(conds)), 2):
+                a, b = keys[i], keys[j]
+                if a is None or b is None or a == b or not all(self._eligible(k) for k in (a, b)):
+                    continue
+                for x, y in ((1, 1), (1, 0), (0, 1)):
+                    rest = frozenset(v for v in tied.vectors if not (v >> i & 1 == x and v >> j & 1 == y))
+                    if rest and not _showable(decision, item.number, item.masking, rest):
+                        candidates.setdefault((a, b, x, y), Invariant((a, b), (x, y), (conds[i].text, conds[j].text)))
+        if not candidates:
+            return []
+        return inductive_invariants(self.program, list(candidates.values()), self.entry(set()), self.entries)
 
-def _tied_reason(analysis: _Implications, decision: Decision, number: int, masking: bool) -> str:
+    def _eligible(self, key: tuple[str, int]) -> bool:
+        return key[0] in ("M", "O") and key[0] not in self.state.free_kinds and self.state.start(*key) == {0}
+
+
+def _tied_reason(analysis: _Implications, decision: Decision, number: int, masking: bool,
+                 invariants: Sequence[Invariant] = ()) -> str:
     """Why the code before the chain in the same cycle keeps condition `number` from being shown (implication.py),
-    naming the writes the claim rests on; "" where it does not."""
+    naming the writes the claim rests on, and the `invariants` (proved across cycles) it needs; "" where it does
+    not."""
     program = analysis.program
-    tied, first_consumed = analysis.first(decision)
+    if invariants:
+        consumed: set[str] = set()
+        tied = tied_vectors(program, decision, analysis.entry(consumed), entries=analysis.entries,
+                            facts=analysis.facts_at, invariants=invariants)
+    else:
+        tied, first_consumed = analysis.first(decision)
+        consumed = set(first_consumed)
     if tied is None or not tied.vectors or _showable(decision, number, masking, tied.vectors):
         return ""
-    consumed = set(first_consumed)
     entry = analysis.entry(consumed)
     # the writes the claim rests on: drop each one the claim holds without
-    def holds(skip: frozenset[int], facts: Sequence[NcFact]) -> bool:
-        trial = tied_vectors(program, decision, entry, skip, tied.start, analysis.entries, facts)
+    def holds(skip: frozenset[int], facts: Sequence[NcFact], assumed: Sequence[Invariant]) -> bool:
+        trial = tied_vectors(program, decision, entry, skip, tied.start, analysis.entries, facts, assumed)
         return trial is not None and bool(trial.vectors) and not _showable(decision, number, masking, trial.vectors)
 
+    held = analysis.facts_at(decision.file, tied.start)
     absent: set[int] = set()
     for w in tied.writes:
-        if holds(frozenset(absent | {w}), analysis.facts_at(decision.file, tied.start)):
+        if holds(frozenset(absent | {w}), held, invariants):
             absent.add(w)
     # the NC model's facts it rests on, likewise (the narrower ones, later in the table, dropped first)
-    held = analysis.facts_at(decision.file, tied.start)
     resting = list(held)
     for fact in reversed(held):
-        if holds(frozenset(absent), [f for f in resting if f is not fact]):
+        if holds(frozenset(absent), [f for f in resting if f is not fact], invariants):
             resting.remove(fact)
+    used = list(invariants)
+    for inv in invariants:
+        if holds(frozenset(absent), resting, [i for i in used if i is not inv]):
+            used.remove(inv)
     ops = program.files[decision.file].ops
-    needed = [f"{ops[w].span} {ops[w].mnemonic} {ops[w].operand.display()}" for w in tied.writes if w not in absent]
+    needed = [f"{ops[w].span} {ops[w].mnemonic} "
+              + (ops[w].call.label if ops[w].operand is None and ops[w].call is not None else ops[w].operand.display())
+              for w in tied.writes if w not in absent]
     # where an NC fact ties three conditions, the pairs alone seldom say it: name a triple that never occurs too
     facts = _ties(decision, number, tied, triples=bool(resting))
     cond = decision.conditions[number].text
@@ -501,6 +545,9 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
         where.append(f"{', '.join(starts)}: a timer or counter start the service clears after every cycle, and no "
                      "write of it runs before this chain in the cycle")
     where += [fact.text for fact in resting]
+    where += [f"{inv.text()} at every point of every cycle: both are 0 at power-on, nothing but the program "
+              f"writes them, and each write keeps it ({', '.join(inv.writes[:6])}"
+              + (", ..." if len(inv.writes) > 6 else "") + ")" for inv in used]
     return (f"{cond} cannot change the outcome on its own here: {'; '.join(facts) or 'its conditions are tied'}"
             + (f" ({'; '.join(where)})" if where else ""))
 
@@ -615,6 +662,15 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             reason = (_infeasible_reason(decision, number, coupled, state)
                       or _tied_reason(implications, decision, number, coupled))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
+    # what is still missing may be explained by a relation that holds across cycles (implication.Invariant)
+    missing = [k for k, item in enumerate(conditions) if item.status == "missing"]
+    if missing and implications is not None:
+        invariants = implications.invariants([conditions[k] for k in missing])
+        for k in missing if invariants else ():
+            item = conditions[k]
+            reason = _tied_reason(implications, item.decision, item.number, item.masking, invariants)
+            if reason:
+                conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
     boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
