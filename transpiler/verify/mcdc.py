@@ -584,7 +584,7 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
                xs: Mapping[tuple[int, int], tuple[int, int]]) -> BoundaryItem:
     """`item` (missing) as infeasible where the values the word can hold at the compare (word_values) or the values
     the index register can hold there (index_range) leave its value out."""
-    if cmp.constant is None or cmp.constant_left and not _fits(program, cmp):
+    if cmp.constant is None:
         return item
     value = cmp.constant + item.offset
     found = held.at(cmp)
@@ -601,13 +601,6 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
                                    reason=f"X holds only {x[0]}..{x[1]} here, not {value}: the index register's "
                                           "loads, steps and compares before this one on every path keep it there")
     return item
-
-
-def _fits(program: Program, cmp: Compare) -> bool:
-    """Whether the constant on the left of a compare keeps its value in the compare's width (`L K5` `< W10` compares
-    the low 16 bits of WA, sign-extended, with W10)."""
-    width = {"B": 8, "W": 16}.get(cmp.op.operand.kind, 32)
-    return width == 32 or -(1 << (width - 1)) <= cmp.constant < 1 << (width - 1)
 
 
 def figures(cov: Mapping[str, Any]) -> str:

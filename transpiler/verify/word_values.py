@@ -711,6 +711,9 @@ def word_values(program: Program, compares: Iterable[Compare], driven: set[tuple
         word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
         if word is None or word.kind not in _BITS or word.indexed:
             continue
+        bits = _BITS[word.kind]
+        if cmp.constant_left and not -(1 << (bits - 1)) <= cmp.constant < 1 << (bits - 1):
+            continue        # `L K256` `== B2` compares the constant's low byte, sign-extended: not c itself
         flow = before.get(cmp.key)
         if flow is None:
             continue
