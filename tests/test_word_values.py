@@ -267,3 +267,13 @@ def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_the_sa
         sets.append(machine.coverage)
     checked = _bounds_inside(program, sets, driven_operands(scenarios, names), power_on_operands(scenarios, names))
     assert checked > 50
+
+
+def test_a_word_masked_with_a_constant_holds_only_the_masks_bits(tmp_path: Path) -> None:
+    # `A K15` after any word leaves 0..15 in WA, so `== K0` never sees -1; a mask with many bits, or a load from an
+    # NC word without a mask, claims nothing. Catches: a claim on WA that ignores the load before the mask.
+    program = _program(tmp_path, "L W1032\nA K15\n== K0\n= O1\nL W1032\nA K$7FFF\n== K0\n= O2\nL K3\n= W20\n"
+                                 "L W1032\n+ K0\n== K0\n= O3\nEM\n")
+    held = _held(program)
+    assert held[(3, "==", 0)] == frozenset(range(16))
+    assert held[(7, "==", 0)] is None and held[(13, "==", 0)] is None

@@ -70,6 +70,20 @@ def _union(a: Values, b: Values) -> Values:
     return out if len(out) <= _MAX_VALUES else None
 
 
+def _masked(wa: frozenset | None, mask: int) -> frozenset | None:
+    """WA after `A K<mask>` (a word AND): each known value masked; from any value, every value made of the mask's
+    bits where they are few."""
+    if wa is not None:
+        return frozenset(v & mask for v in wa)
+    if mask < 0 or bin(mask).count("1") > 6:
+        return None
+    bits = [1 << b for b in range(mask.bit_length()) if mask >> b & 1]
+    values = {0}
+    for bit in bits:
+        values |= {v | bit for v in values}
+    return frozenset(values)
+
+
 def _spans(values: Iterable[int]) -> str:
     """`0..5`, `1, 3, 7..9`: sorted values with runs joined."""
     ordered = sorted(values)
@@ -105,6 +119,9 @@ class Held:
 
     def reason(self, value: int) -> str:
         """Why the word cannot hold `value` at this compare."""
+        if self.word == "WA":
+            return (f"WA holds only {_spans(self.values)} here, not {value}: the word operations before the compare "
+                    "(a mask with a constant, constants and the words they are loaded from) leave no other value")
         shown = ", ".join(self.writes[:3]) + (", ..." if len(self.writes) > 3 else "")
         wrote = (f"the program writes only {_spans(self.stored)} to it ({shown})" if self.writes else
                  "the program never writes it")
@@ -665,6 +682,8 @@ class _Analysis:
             else:
                 return _Flow(cells, None, facts)
             return _Flow(cells, None if wa is None else frozenset(_int32(v + d) for v in wa), facts)
+        if c == "WAND" and o is not None and o.kind == "K":
+            return _Flow(cells, _masked(wa, _int32(o.addr)), facts)
         if c in _KEEP_WA or (c in _LOGIC and not self.shared):
             return _Flow(cells, wa, facts)
         return _Flow(cells, None, facts)
@@ -709,6 +728,12 @@ def word_values(program: Program, compares: Iterable[Compare], driven: set[tuple
             continue
         ops = program.files[cmp.file].ops
         word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
+        if not cmp.constant_left and ops[cmp.index - 1].code != "WLD":
+            # WA computed before the compare (`L W1032` `A K15` `== K0`): the values the flow gives it
+            flow = before.get(cmp.key)
+            if flow is not None and flow.wa is not None and not analysis.shared:
+                held[cmp.key] = Held("WA", flow.wa, flow.wa, (), (), 0)
+            continue
         if word is None or word.kind not in _BITS or word.indexed:
             continue
         bits = _BITS[word.kind]
