@@ -9,8 +9,9 @@ is masked in both (flipping it alone would not). Condition values are the values
 negation (`AN M5` has the condition M5).
 
 Boundaries: for a compare of a word with a constant c, whether the word took c-1, c and c+1 (a value the word
-cannot hold, such as 128 for a byte, is infeasible); for a compare of two words, whether their difference took
--1, 0 and +1.
+cannot hold, such as 128 for a byte, is infeasible, and so is one it cannot hold at that compare under the program's
+own logic, word_values.py, or a value of X outside what index_range.py finds there); for a compare of two words,
+whether their difference took -1, 0 and +1.
 
 Infeasible, and so neither counted as missing nor dropped: a condition whose operand can hold only one value under
 the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface

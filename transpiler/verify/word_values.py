@@ -11,17 +11,22 @@ The analysis works on bit patterns of memory operands (B/W/D named without an in
   that shares one of its bytes (B, W and D overlap), a write through the index register that can reach one of its
   bytes (index_range gives X there; unknown: all memory), a PLC module that takes a memory address or is not in
   the module table (all memory), the NC model's words and the NC interface bytes, the module error-code word, a
-  data-table row, and every operand a scenario sets (from any cycle on). Power-on memory is 0 otherwise.
+  data-table row, and every operand a scenario sets after power-on.
+- The power-on value: 0, or any value for an operand a scenario sets before cycle 0 (`initial`); none at all where
+  the first cycle stores the operand before anything reads it (first_cycle: the main program followed with every
+  call inlined and the first-cycle marker 1), since no read can see it then.
 - What a compare sees: a forward dataflow over each file's ops from every entry (the file's start, a subprogram, a
   CASE entry, a submitted job), where an operand holds, on entry, what the program can store anywhere plus its
   power-on value; a store replaces its values; a call adds what the routines it reaches can store to the operands
-  they write; and a conditional jump or module end right after a single compare of the operand with a constant
-  (`L B10`, `<> K3`, `JPT`) keeps, on each of its two ways, only the values that go that way. Paths join at every
-  op with more than one way in.
+  they write. A conditional jump or module end keeps, on each of its two ways, the values that go that way where
+  LA there is a compare of the operand with a constant (`L B10`, `<> K3`, `JPT`), or an AND (an OR) of such
+  compares and of markers assigned from one (`L B10`, `< K5`, `= M1`, ... `L M1`, `A I1`, `IFT`; a write of the
+  marker or of the word forgets that). Paths join at every op with more than one way in. WA itself is followed too:
+  a compare of WA computed before it (`L W1032`, `A K15`, `== K0`) sees the values the word operations leave.
 
-The two are one fixpoint (a copy stores what its source holds there). Sound, not complete: every way memory can
-change is "any" unless the analysis knows the value, so a value it leaves out no run can give the operand at that
-compare; a compare the analysis finds no path to gets no claim."""
+The stores and the dataflow are one fixpoint (a copy stores what its source holds there). Sound, not complete: every
+way memory can change is "any" unless the analysis knows the value, so a value it leaves out no run can give the
+operand at that compare; a compare the analysis finds no path to gets no claim."""
 
 from __future__ import annotations
 
@@ -720,6 +725,8 @@ def word_values(program: Program, compares: Iterable[Compare], driven: set[tuple
                 power_on: set[tuple[str, int]] = frozenset()) -> WordValues:
     """What each compare of a named word with a constant in `compares` can see (see the module docstring); `driven`:
     the operands scenarios set, `power_on`: those of them set only before cycle 0."""
+    if program.semantics["compare_signedness"] == "unsigned":
+        return WordValues({})       # the compare sees bit patterns, not the values followed here
     analysis = _Analysis(program, set(driven), set(power_on) & set(driven))
     before, stored, writes, entry = analysis.run()
     held: dict[tuple[int, int], Held] = {}
