@@ -18,7 +18,7 @@ from transpiler.ir import Program
 from transpiler.exec.interp.machine import Coverage
 from transpiler.verify.rundata import UNREPRESENTABLE
 from transpiler.verify.cosim import CosimResult, StSide, builtin_side_factory, comparison_for, cosimulate
-from transpiler.verify.mcdc import DecisionCoverage, decision_coverage, driven_operands
+from transpiler.verify.mcdc import DecisionCoverage, decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.simulate import program_operands
 from transpiler.verify.source_coverage import TWO_WAY, OpCoverage, SourceCoverage, op_coverage, source_coverage
 from transpiler.verify.scenario import Event, NameTable, RandomStimulus, Scenario, bind
@@ -209,6 +209,7 @@ class EquivalenceResult:
     source: SourceCoverage | None = None                # the same coverage per source file and line
     decisions: DecisionCoverage | None = None           # MC/DC and boundary values (verify/mcdc.py)
     driven: frozenset[tuple[str, int]] = frozenset()    # operands the runs' scenarios set (never constant)
+    power_on: frozenset[tuple[str, int]] = frozenset()  # those of them set only before cycle 0 (`initial`)
     run_ids: tuple[int, ...] = ()                       # each outcome's number in the plan (1, 2, ... when empty)
 
     @property
@@ -319,18 +320,19 @@ def run_equivalence(program: Program, make_side: Callable[[], StSide], iomap: Io
         if vcd_dir:
             write_vcd(vcd_dir, scenario, res, traces, program, names, iomap)
     driven = driven_operands(scenarios, names)
-    summary, source, decisions = coverage_of(program, coverage_sets, driven, explain_missing)
+    power_on = power_on_operands(scenarios, names)
+    summary, source, decisions = coverage_of(program, coverage_sets, driven, explain_missing, power_on)
     return EquivalenceResult(outcomes, backend, summary, tuple(untranslated), source, decisions,
-                             driven=frozenset(driven))
+                             driven=frozenset(driven), power_on=frozenset(power_on))
 
 
-def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]], explain_missing: bool = True
-                ) -> tuple[dict[str, Any], SourceCoverage, DecisionCoverage]:
+def coverage_of(program: Program, sets: list, driven: set[tuple[str, int]], explain_missing: bool = True,
+                power_on: set[tuple[str, int]] = frozenset()) -> tuple[dict[str, Any], SourceCoverage, DecisionCoverage]:
     """The coverage summary, the per-file coverage and MC/DC with boundary values over the runs' coverage sets
-    (`driven`: the operands the runs' scenarios set, never constant): one process's runs, or the runs of every
-    shard (merge_reports), computed alike."""
+    (`driven`: the operands the runs' scenarios set, never constant; `power_on`: those set only before cycle 0): one
+    process's runs, or the runs of every shard (merge_reports), computed alike."""
     ops = op_coverage(program, sets)
-    decisions = decision_coverage(program, sets, driven, explain_missing=explain_missing)
+    decisions = decision_coverage(program, sets, driven, explain_missing=explain_missing, power_on=power_on)
     return ({**summarize_coverage(ops), **decisions.summary()}, source_coverage(program, ops, len(sets)),
             decisions)
 
@@ -387,6 +389,7 @@ def report_data(result: EquivalenceResult, reproduce: Callable[[int], str] | Non
     if shard is not None:
         # each run's sets as one compact JSON text: thousands of items per run, one line each in the indented report
         data["shard"] = {**shard, "driven": sorted([kind, addr] for kind, addr in result.driven),
+                         "power_on": sorted([kind, addr] for kind, addr in result.power_on),
                          "coverage": [[run_id, json.dumps(encode_coverage(o.result.coverage), separators=(",", ":"))]
                                       for run_id, o in zip(ids, result.outcomes) if o.result.coverage is not None]}
     return data
@@ -492,7 +495,11 @@ def merge_reports(shards: list[Mapping[str, Any]], program: Program) -> dict[str
             for _, encoded in sorted((item for data in shards for item in data["shard"]["coverage"]),
                                      key=lambda item: item[0])]
     driven = {(kind, addr) for data in shards for kind, addr in data["shard"].get("driven", ())}
-    summary, source, _ = coverage_of(program, sets, driven)
+    # set only before cycle 0 in every shard that sets it at all
+    later = {(kind, addr) for data in shards for kind, addr in data["shard"].get("driven", ())
+             if [kind, addr] not in data["shard"].get("power_on", ())}
+    power_on = {(kind, addr) for data in shards for kind, addr in data["shard"].get("power_on", ())} - later
+    summary, source, _ = coverage_of(program, sets, driven, power_on=power_on)
     backends = sorted({data["backend"] for data in shards})
     return _report("+".join(backends), runs, shards[0]["not_translated"], summary, source)
 

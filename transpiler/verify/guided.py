@@ -209,10 +209,12 @@ def mutate(parent: Scenario, rng: random.Random, corners: Corners, names: NameTa
                                           names.resolve(word).kind)
             continue
         if corners.compare_pairs and rng.random() < 0.15:
-            # a word the program compares with a constant, put next to it: at power-on or at a random cycle
+            # a word the program compares with a constant, put next to it: at power-on or, where the machine supplies
+            # it (an interface word), at a random cycle; memory the program keeps changes after power-on only by the
+            # program's own stores, so a later write of it would be a state no machine reaches
             name, kind, constant = rng.choice(corners.compare_pairs)
             value = corners.clamp(constant + rng.choice((-1, 0, 1)), kind)
-            if rng.random() < 0.5:
+            if rng.random() < 0.5 or all(name != word for word, _ in corners.foreign_words):
                 initial[name] = value
             else:
                 events.append(Event(cycle=at, set={name: value}))

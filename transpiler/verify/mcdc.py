@@ -9,8 +9,9 @@ is masked in both (flipping it alone would not). Condition values are the values
 negation (`AN M5` has the condition M5).
 
 Boundaries: for a compare of a word with a constant c, whether the word took c-1, c and c+1 (a value the word
-cannot hold, such as 128 for a byte, is infeasible); for a compare of two words, whether their difference took
--1, 0 and +1.
+cannot hold, such as 128 for a byte, is infeasible, and so is one it cannot hold at that compare under the program's
+own logic, word_values.py, or a value of X outside what index_range.py finds there); for a compare of two words,
+whether their difference took -1, 0 and +1.
 
 Infeasible, and so neither counted as missing nor dropped: a condition whose operand can hold only one value under
 the program's own logic (nothing writes it but constant values, and it is no input, timer, counter, NC-interface
@@ -38,6 +39,7 @@ from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
 from transpiler.verify.index_range import index_ranges
+from transpiler.verify.word_values import WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
 _ENUMERATE = 14             # free conditions up to which unique-cause feasibility is decided by enumeration
@@ -168,6 +170,25 @@ def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
                 continue
             driven.add((ref.kind, ref.addr))
     return driven
+
+
+def power_on_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
+    """(kind, address) of every operand `scenarios` set before cycle 0 (`initial`) and never later (events, random
+    inputs): a power-on value the program may overwrite before anything reads it."""
+    def resolved(written) -> set[tuple[str, int]]:
+        found = set()
+        for name in written:
+            try:
+                ref = names.resolve(name)
+            except ValueError:
+                continue
+            found.add((ref.kind, ref.addr))
+        return found
+    first = resolved(name for scenario in scenarios for name in scenario.initial)
+    later = resolved([name for scenario in scenarios for event in scenario.events for name in event.set]
+                     + [name for scenario in scenarios if scenario.random is not None
+                        for name in scenario.random.inputs])
+    return first - later
 
 
 @dataclasses.dataclass
@@ -628,8 +649,10 @@ def _never_together(decision: Decision, number: int, tied: Tied) -> list[str]:
 # ----------------------------------------------------------------------------------------------------- figures
 
 def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, int]] = frozenset(),
-                      table: DecisionTable | None = None, explain_missing: bool = True) -> DecisionCoverage:
-    """MC/DC and boundaries over the runs' coverage sets (machine.Coverage); `driven`: operands the scenarios set.
+                      table: DecisionTable | None = None, explain_missing: bool = True,
+                      power_on: set[tuple[str, int]] = frozenset()) -> DecisionCoverage:
+    """MC/DC and boundaries over the runs' coverage sets (machine.Coverage); `driven`: operands the scenarios set,
+    `power_on`: those of them set only before cycle 0 (a boundary value they hold may never be read).
     Without `explain_missing`, a condition no run showed is missing without the search for why it cannot be."""
     table = table or decision_table(program)
     vectors: dict[tuple[int, int], set[int]] = {}
@@ -671,7 +694,17 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             reason = _tied_reason(implications, item.decision, item.number, item.masking, invariants)
             if reason:
                 conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
-    boundaries = [item for cmp in table.compares for item in _boundary_items(cmp, bounds.get(cmp.key, set()))]
+    boundaries: list[BoundaryItem] = []
+    held: WordValues | None = None
+    xs: dict[tuple[int, int], tuple[int, int]] | None = None
+    for cmp in table.compares:
+        items = _boundary_items(cmp, bounds.get(cmp.key, set()))
+        if explain_missing and any(i.status == "missing" for i in items):
+            if held is None:
+                held = word_values(program, table.compares, set(driven), set(power_on))
+                xs = index_ranges(program)
+            items = [_explained(program, cmp, item, held, xs) if item.status == "missing" else item for item in items]
+        boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
 
@@ -695,6 +728,29 @@ def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
         else:
             items.append(BoundaryItem(cmp, offset, "missing"))
     return items
+
+
+def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordValues,
+               xs: Mapping[tuple[int, int], tuple[int, int]]) -> BoundaryItem:
+    """`item` (missing) as infeasible where the values the word can hold at the compare (word_values) or the values
+    the index register can hold there (index_range) leave its value out."""
+    if cmp.constant is None:
+        return item
+    value = cmp.constant + item.offset
+    found = held.at(cmp)
+    if found is not None and value not in found.values:
+        return dataclasses.replace(item, status="infeasible", reason=found.reason(value))
+    x = xs.get(cmp.key)
+    ops = program.files[cmp.file].ops
+    word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
+    if x is None or word is None or word.kind != "X" or x[0] < 0 or program.semantics["compare_signedness"] == \
+            "unsigned":
+        return item
+    if not x[0] <= value <= x[1]:
+        return dataclasses.replace(item, status="infeasible",
+                                   reason=f"X holds only {x[0]}..{x[1]} here, not {value}: the index register's "
+                                          "loads, steps and compares before this one on every path keep it there")
+    return item
 
 
 def figures(cov: Mapping[str, Any]) -> str:

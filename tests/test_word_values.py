@@ -1,0 +1,286 @@
+"""The values a word can hold at each compare (verify/word_values.py) and the boundary values claimed infeasible from
+them: claimed where the program stores only constants and a dispatch has jumped away on the others, never where
+anything else can change the word (a store of another width over its bytes, an indexed store that can reach it,
+arithmetic, INC, a pull, a call that stores an unknown value, a scenario), and never for a value a run reached."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+
+from transpiler import api
+from transpiler.diagnostics import Diagnostics
+from transpiler.exec.interp import Machine, compile_program
+from transpiler.exec.interp.decisions import decision_table
+from transpiler.frontend.load import ProjectOptions
+from transpiler.frontend.pipeline import compile_project
+from transpiler.language.semantics import make_semantics
+from transpiler.verify.guided import generate
+from transpiler.verify.index_range import index_ranges
+from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
+from transpiler.verify.scenario import load_scenario
+from transpiler.verify.simulate import build_machine, project_names
+from transpiler.verify.stimulus import build_stimulus
+from transpiler.verify.word_values import word_values
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE = ROOT / "samples" / "basic_program"
+
+# B10 is a step byte: 0 idle, 1 and 2 busy; each step is left by a constant store. The dispatch at the top jumps
+# away on 0, then on 1: the compare with K1 never sees 0, the one with K2 sees only 2.
+STEPS = """L     B10
+<>    K0
+JPT   Step1
+L     I1
+IFT
+L     K1
+=     B10
+ENDI
+JP    Done
+LBL Step1
+L     B10
+<>    K1
+JPT   Step2
+L     K2
+=     B10
+JP    Done
+LBL Step2
+L     B10
+==    K2
+=     O1
+L     K0
+=     B10
+LBL Done
+{extra}EM
+{routines}"""
+
+
+def _program(folder: Path, text: str, **semantics):
+    (folder / "main.src").write_text(text)
+    result = compile_project(ProjectOptions(main=folder / "main.src"), make_semantics("itnc530", semantics))
+    assert result.ok, [str(d) for d in result.diagnostics]
+    return result.program
+
+
+def _held(program, driven=frozenset(), power_on=frozenset()) -> dict[tuple[int, str, int], frozenset[int] | None]:
+    """(source line, relation, constant) -> the values the analysis lets the compare's word hold (None: any)."""
+    table = decision_table(program)
+    values = word_values(program, table.compares, set(driven), set(power_on))
+    out = {}
+    for cmp in table.compares:
+        found = values.at(cmp)
+        out[(cmp.op.span.line, cmp.op.rel, cmp.constant)] = None if found is None else found.values
+    return out
+
+
+def _steps(folder: Path, extra: str = "", routines: str = "", **semantics):
+    return _program(folder, STEPS.format(extra=extra, routines=routines), **semantics)
+
+
+def test_a_step_byte_holds_only_its_constants_and_what_the_dispatch_leaves(tmp_path: Path) -> None:
+    # Catches: a claim without the dispatch (0 at the compare with K1), a dispatch edge taken the wrong way round
+    # (1 at the compare with K2), the power-on value 0 forgotten at the first compare.
+    held = _held(_steps(tmp_path))
+    assert held[(2, "<>", 0)] == {0, 1, 2}
+    assert held[(12, "<>", 1)] == {1, 2}
+    assert held[(19, "==", 2)] == {2}
+
+
+def test_the_infeasible_boundary_values_have_their_reason(tmp_path: Path) -> None:
+    program = _steps(tmp_path)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, i1 in enumerate([0, 1, 0, 0, 0]):
+        machine.run_cycle(cycle, [("I", 1, i1)])
+    cov = decision_coverage(program, [machine.coverage])
+    found = {item.what(): item for item in cov.boundaries}
+    low = found["boundary B10 <> K0: B10 = c-1 (-1)"]
+    assert low.status == "infeasible"
+    assert low.reason.startswith("B10 holds only 0..2 here, not -1: the program writes only 0..2 to it (main.src:")
+    assert "it starts at 0" in low.reason
+    before = found["boundary B10 <> K1: B10 = c-1 (0)"]
+    assert before.status == "infeasible" and "main.src:3:1" in before.reason, before.reason
+    assert found["boundary B10 <> K1: B10 = c+1 (2)"].status == "reached"
+    assert found["boundary B10 == K2: B10 = c-1 (1)"].status == "infeasible"
+    assert found["boundary B10 == K2: B10 = c+1 (3)"].status == "infeasible"
+    assert found["boundary B10 <> K0: B10 = c+1 (1)"].status == "reached"
+
+
+@pytest.mark.parametrize("extra, why", [
+    ("L     K7\n=     W10\n", "a word store over the byte (W10 holds B10 and B11)"),
+    ("L     K-1\n=     D8\n", "a double word store over the byte (D8 holds B8..B11)"),
+    ("L     K7\n=     X\nL     K-1\n=     B3[X]\n", "a store through the index register that reaches B10"),
+    ("L     B10\n+     K1\n=     B10\n", "an arithmetic store (a count)"),
+    ("L     B10\nx     K3\n=     B10\n", "a product"),
+    ("INC   B10\n", "INC"),
+    ("PS    K3\nPL    B10\n", "a pull from the data stack"),
+    ("L     W272\n=     B10\n", "a copy of a word the NC writes"),
+    ("CM    Sub\n", "a call of a routine that stores an unknown value"),
+])
+def test_anything_else_that_changes_the_byte_leaves_it_any(tmp_path: Path, extra: str, why: str) -> None:
+    # Catches: a write the analysis does not see (every one of these can give B10 any value).
+    routines = "LBL Sub\nL     K1\n=     X\nL     B20[X]\n=     B10\nEM\n"
+    held = _held(_steps(tmp_path, extra, routines))
+    assert held[(2, "<>", 0)] is None, why
+    assert held[(12, "<>", 1)] is None, why
+
+
+def test_stores_that_cannot_reach_the_byte_leave_the_claim(tmp_path: Path) -> None:
+    # B11 alone, an indexed store that reaches B3..B5 only, a call of a routine that stores constants into B10:
+    # none can give B10 a value outside 0..3 (the routine's 3 joins the values). Catches: every store of memory
+    # taken as a store of every word (no claim would ever be made).
+    extra = "L     K-1\n=     B11\nL     K0\n=     X\nL     K-1\n=     B3[X]\nL     I3\nCMT   Sub\n"
+    routines = "LBL Sub\nL     K3\n=     B10\nEM\n"
+    held = _held(_steps(tmp_path, extra, routines))
+    assert held[(2, "<>", 0)] == {0, 1, 2, 3}
+    assert held[(12, "<>", 1)] == {1, 2, 3}
+
+
+def test_a_call_in_the_middle_of_a_dispatch_adds_what_the_routine_stores(tmp_path: Path) -> None:
+    # After `CM Sub` at the top of step 1 the byte can hold Sub's 5 as well as the 1 and 2 the dispatch left; a call
+    # of a routine that does not store it keeps what was known. Catches: a call that keeps the state of a byte its
+    # routine writes.
+    program = _program(tmp_path, "L B10\n<> K0\nJPT One\nL K1\n= B10\nEM\nLBL One\nCM Sub\nCM Other\nL B10\n== K1\n"
+                                 "= O1\nEM\nLBL Sub\nL I1\nIFT\nL K5\n= B10\nENDI\nEM\nLBL Other\nL K9\n= W20\nEM\n")
+    assert _held(program)[(11, "==", 1)] == {1, 5}
+
+
+def test_a_marker_assigned_from_a_compare_narrows_the_word_where_it_is_tested(tmp_path: Path) -> None:
+    # B10 counts up only while it is below 3 (the marker M1 holds the compare): it holds 0..3. A write of M1 between
+    # the compare and the test forgets what M1 says. Catches: a marker fact kept over a write of the marker.
+    text = "L B10\n< K3\n= M1\n{between}L M1\nA I1\nIFT\nL B10\n+ K1\n= B10\nENDI\nL B10\n== K3\n= O1\nEM\n"
+    held = _held(_program(tmp_path, text.format(between="")))
+    assert held[(12, "==", 3)] == {0, 1, 2, 3}
+    held = _held(_program(tmp_path, text.format(between="L I2\nS M1\n")))
+    assert held[(14, "==", 3)] is None
+
+
+def test_a_word_a_scenario_sets_is_any_unless_the_first_cycle_overwrites_it_unread(tmp_path: Path) -> None:
+    # Set by a scenario at any cycle: any value. Set only at power-on: any value where the first cycle can read it
+    # before a store; where the first-cycle marker's routine stores it first, its power-on value is never seen.
+    # Catches: a scenario's operand taken as the program's own, a first-cycle store assumed without the marker.
+    program = _steps(tmp_path)
+    b10 = {("B", 10)}
+    assert _held(program, driven=b10)[(2, "<>", 0)] is None
+    assert _held(program, driven=b10, power_on=b10)[(2, "<>", 0)] is None
+    init = "L     M4172\nCMT   Init\n"
+    program = _program(tmp_path, init + STEPS.format(extra="", routines="LBL Init\nL K0\n= B10\nEM\n"))
+    assert _held(program, driven=b10, power_on=b10)[(4, "<>", 0)] == {0, 1, 2}
+    assert _held(program, driven=b10)[(4, "<>", 0)] is None
+    # the init routine called on another marker: the first cycle may skip it and read the power-on value
+    program = _program(tmp_path, "L     M100\nCMT   Init\n" + STEPS.format(extra="", routines="LBL Init\nL K0\n"
+                                                                                          "= B10\nEM\n"))
+    assert _held(program, driven=b10, power_on=b10)[(4, "<>", 0)] is None
+
+
+def test_power_on_operands_are_those_set_only_before_cycle_0(tmp_path: Path) -> None:
+    program = _steps(tmp_path)
+    (tmp_path / "a.yaml").write_text("cycles: 3\ninitial: {B10: 4, W20: 1}\nevents:\n  - cycle: 1\n    set: {W20: 2}\n")
+    (tmp_path / "b.yaml").write_text("cycles: 3\ninitial: {B12: 4}\nrandom: {seed: 1, inputs: [I1]}\n")
+    names = project_names(program)
+    scenarios = [load_scenario(tmp_path / name, names) for name in ("a.yaml", "b.yaml")]
+    assert driven_operands(scenarios, names) == {("B", 10), ("W", 20), ("B", 12), ("I", 1)}
+    assert power_on_operands(scenarios, names) == {("B", 10), ("B", 12)}
+
+
+# ----------------------------------------------------------------------------------------------------- safety
+
+def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozenset()) -> int:
+    """Assert every boundary value a run reached lies inside what the analyses let the word hold there; returns
+    how many reached values were checked against a claim."""
+    table = decision_table(program)
+    values = word_values(program, table.compares, set(driven), set(power_on))
+    xs = index_ranges(program)
+    checked = 0
+    for cmp in table.compares:
+        if cmp.constant is None:
+            continue
+        reached = set()
+        for cov in coverage_sets:
+            reached |= set(cov.bounds.get(cmp.key, ()))
+        held = values.at(cmp)
+        ops = program.files[cmp.file].ops
+        word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
+        for difference in reached:
+            value = cmp.constant + (-difference if cmp.constant_left else difference)
+            if held is not None:
+                assert value in held.values, (str(cmp.op.span), value, sorted(held.values))
+                checked += 1
+            if word is not None and word.kind == "X" and cmp.key in xs:
+                lo, hi = xs[cmp.key]
+                assert lo <= value <= hi or lo < 0, (str(cmp.op.span), value, (lo, hi))
+    return checked
+
+
+CONSTRUCTS = sorted(p.name for p in (ROOT / "samples" / "constructs").iterdir() if (p / "main.src").exists())
+
+
+@pytest.mark.parametrize("project", CONSTRUCTS)
+def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_a_construct(project: str) -> None:
+    # The construct's own scenario and random inputs. Catches: any unsound claim (a store, overlap, call, jump or
+    # first-cycle effect followed wrongly) on the constructs' compares.
+    folder = ROOT / "samples" / "constructs" / project
+    loaded = api.load_project(api.project_options(folder / "main.src"))
+    program = loaded.program
+    names = project_names(program)
+    compiled = compile_program(program, coverage=True)
+    sets = []
+    scenarios = [load_scenario(folder / "scenario.yaml", names)] if (folder / "scenario.yaml").exists() else []
+    scenarios += generate(program, names, 400, seed=2, seeds=scenarios)
+    for scenario in scenarios:
+        stimulus = build_stimulus(scenario, names)
+        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for cycle in range(stimulus.cycles):
+            if machine.halted:
+                break
+            machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+        sets.append(machine.coverage)
+    _bounds_inside(program, sets, driven_operands(scenarios, names), power_on_operands(scenarios, names))
+    rng = random.Random(5)
+    machine = Machine(program, compiled=compiled, coverage=True)
+    for cycle in range(300):
+        if machine.halted:
+            break
+        machine.run_cycle(cycle, [("I", rng.randrange(16), rng.randrange(2)) for _ in range(4)])
+    _bounds_inside(program, [machine.coverage])
+
+
+def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_the_sample() -> None:
+    # Every scenario of the sample and a generated search, power-on values and all. Catches: an unsound claim on a
+    # real program (the step chains of the tool changer are where the claims are).
+    loaded = api.load_project(api.project_options(SAMPLE / "Main_PGM.src"))
+    program = loaded.program
+    names = project_names(program)
+    compiled = compile_program(program, coverage=True)
+    scenarios = [load_scenario(p, names) for p in sorted((SAMPLE / "scenarios").glob("*.yaml"))]
+    scenarios += generate(program, names, 1500, seed=4, seeds=scenarios,
+                          machine_parameters=SAMPLE / "MP_data.mp")
+    sets = []
+    for scenario in scenarios:
+        stimulus = build_stimulus(scenario, names)
+        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for cycle in range(stimulus.cycles):
+            if machine.halted:
+                break
+            machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
+        sets.append(machine.coverage)
+    checked = _bounds_inside(program, sets, driven_operands(scenarios, names), power_on_operands(scenarios, names))
+    assert checked > 50
+
+
+def test_a_word_masked_with_a_constant_holds_only_the_masks_bits(tmp_path: Path) -> None:
+    # `A K15` after any word leaves 0..15 in WA, so `== K0` never sees -1; a mask with many bits, or a load from an
+    # NC word without a mask, claims nothing. Catches: a claim on WA that ignores the load before the mask.
+    program = _program(tmp_path, "L W1032\nA K15\n== K0\n= O1\nL W1032\nA K$7FFF\n== K0\n= O2\nL K3\n= W20\n"
+                                 "L W1032\n+ K0\n== K0\n= O3\nEM\n")
+    held = _held(program)
+    assert held[(3, "==", 0)] == frozenset(range(16))
+    assert held[(7, "==", 0)] is None and held[(13, "==", 0)] is None
+
+
+def test_unsigned_compares_get_no_claim(tmp_path: Path) -> None:
+    # With A-13 unsigned compares a byte's -1 is compared as 4294967295: the signed values followed here say
+    # nothing about it. Catches: a claim made on the wrong reading of the word.
+    held = _held(_steps(tmp_path, compare_signedness="unsigned"))
+    assert set(held.values()) == {None}
