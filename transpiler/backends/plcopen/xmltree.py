@@ -41,13 +41,19 @@ class Element:
     """One element: its tag (with prefix), its attributes as printed, and either children or text (None: no
     text). The attributes are printed when they are given: an element is printed once, and built in one go."""
 
-    __slots__ = ("tag", "attributes", "children", "text")
+    __slots__ = ("tag", "attributes", "children", "text", "printed")
 
     def __init__(self, tag: str, attributes: str = "") -> None:
         self.tag = tag
         self.attributes = attributes
         self.children: list[Element] = []
         self.text: str | None = None
+        self.printed: dict[str, str] | None = None      # a shared element's text by indent
+
+    def share(self) -> None:
+        """Let the element stand under several parents (or several times under one): it is printed once for each
+        indent it stands at, and its other places repeat that text (so it must not change once printed)."""
+        self.printed = {}
 
     def set(self, key: str, value: str) -> None:
         """Add an attribute (as lxml's `set` of a new name)."""
@@ -69,6 +75,18 @@ def to_bytes(root: Element) -> bytes:
 
 def _write(element: Element, pad: str, append: Callable[[str], None]) -> None:
     # (recursive: the trees are a dozen levels deep at most)
+    if element.printed is not None:
+        text = element.printed.get(pad)
+        if text is None:
+            printed: list[str] = []
+            _write_element(element, pad, printed.append)
+            text = element.printed[pad] = "".join(printed)
+        append(text)
+    else:
+        _write_element(element, pad, append)
+
+
+def _write_element(element: Element, pad: str, append: Callable[[str], None]) -> None:
     if element.children:
         append(f"{pad}<{element.tag}{element.attributes}>\n")
         inner = pad + "  "
