@@ -90,7 +90,7 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
     written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
     if chosen.task_by_hand:
         files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")
-    files["report.md"] = (render_report(program, result, diags, mp_name, st_text) + target_section(laid_out)
+    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)
                           + how_to_load(laid_out, written, native)).encode("utf-8")
     files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
     return Transpiled(result, st_text, files)
