@@ -48,9 +48,10 @@ def declaration(var: IecVar) -> str:
 
 
 def var_sections(sections: Iterable[VarSection], indent: str) -> str:
-    """The variable sections, each as located_blocks splits it: its header line with the section's comment, one
-    declaration line per variable, END_VAR; every line ends with a line break. (A filter, not template loops:
-    tens of thousands of declarations print several times faster so.)"""
+    """The variable sections (of a POU, the configuration or a global variable list), each as located_blocks splits
+    it: its header line with the section's comment, one declaration line per variable, END_VAR; every line ends
+    with a line break. (A filter, not template loops: tens of thousands of declarations print several times faster
+    so.)"""
     lines = []
     for section in sections:
         for block in located_blocks(section):
@@ -69,6 +70,9 @@ def section_header(section: VarSection) -> str:
 
 def located_blocks(section: VarSection) -> list[VarSection]:
     """Split a section into runs of located and of plain variables: matiec rejects a block that mixes them."""
+    located = [var.address is not None for var in section.vars]
+    if all(located) or not any(located):
+        return [section]        # (nearly every section: one block, the section itself)
     blocks: list[VarSection] = []
     run: list[IecVar] = []
     for var in section.vars:
