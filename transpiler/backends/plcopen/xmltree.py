@@ -18,7 +18,6 @@ from typing import Callable, Iterable
 
 _TEXT_SPECIAL = re.compile("[&<>\r]")
 _ATTRIBUTE_SPECIAL = re.compile('[&<>"\t\n\r]')
-_TEXT_ESCAPES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "\r": "&#13;"}
 _ATTRIBUTE_ESCAPES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "\t": "&#9;", "\n": "&#10;",
                       "\r": "&#13;"}
 
@@ -74,33 +73,29 @@ def to_bytes(root: Element) -> bytes:
 
 
 def _write(element: Element, pad: str, append: Callable[[str], None]) -> None:
-    # (recursive: the trees are a dozen levels deep at most)
-    if element.printed is not None:
-        text = element.printed.get(pad)
-        if text is None:
-            printed: list[str] = []
-            _write_element(element, pad, printed.append)
-            text = element.printed[pad] = "".join(printed)
-        append(text)
-    else:
-        _write_element(element, pad, append)
-
-
-def _write_element(element: Element, pad: str, append: Callable[[str], None]) -> None:
+    # (recursive: the trees are a dozen levels deep at most; the root is never shared)
     if element.children:
         append(f"{pad}<{element.tag}{element.attributes}>\n")
         inner = pad + "  "
         for child in element.children:
-            _write(child, inner, append)
+            if child.printed is None:
+                _write(child, inner, append)
+            else:       # (a printed element is never empty text)
+                append(child.printed.get(inner) or _print_shared(child, inner))
         append(f"{pad}</{element.tag}>\n")
     elif element.text is not None:
         text = element.text
         if _TEXT_SPECIAL.search(text):
-            text = _TEXT_SPECIAL.sub(_text_escape, text)
+            # (replace, '&' first, is three times as fast as a substitution per match on the long ST bodies)
+            text = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("\r", "&#13;")
         append(f"{pad}<{element.tag}{element.attributes}>{text}</{element.tag}>\n")
     else:
         append(f"{pad}<{element.tag}{element.attributes}/>\n")
 
 
-def _text_escape(match: re.Match) -> str:
-    return _TEXT_ESCAPES[match.group(0)]
+def _print_shared(element: Element, pad: str) -> str:
+    """A shared element's text at `pad`, printed the first time it stands there."""
+    printed: list[str] = []
+    _write(element, pad, printed.append)
+    text = element.printed[pad] = "".join(printed)       # type: ignore[index]
+    return text
