@@ -21,7 +21,7 @@ from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LI
 from transpiler.backends.plcopen.project_folder import project_folder
 from transpiler.backends.report.loading import how_to_load
 from transpiler.backends.readme import README_FILE, render_readme
-from transpiler.backends.report.report import io_map_of, render_io_map, render_report
+from transpiler.backends.report.report import io_map_of, render_report
 from transpiler.backends.report.screens import mask_files
 from transpiler.backends.twincat.layout import plan_project
 from transpiler.backends.twincat.writer import render_project
@@ -86,11 +86,13 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
     if native is not None:
         files.update(render_project(native))
     # The screen masks as data for an HMI, bound to the variables of this translation.
-    files.update(mask_files(program, io_map_of(result)))
+    # (the screens find their variables by operand: the machine-parameter and configuration rows change none)
+    iomap = io_map_of(result, mp_name, program)
+    files.update(mask_files(program, iomap))
     written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
     if chosen.task_by_hand:
         files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")
-    files["report.md"] = (render_report(program, result, diags, mp_name) + target_section(laid_out)
+    files["report.md"] = (render_report(program, result, diags, iomap, mp_name) + target_section(laid_out)
                           + how_to_load(laid_out, written, native)).encode("utf-8")
-    files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
+    files["io_map.csv"] = iomap.to_csv().encode("utf-8")
     return Transpiled(result, st_text, files)

@@ -58,10 +58,6 @@ def io_map_of(result: StResult, mp_file: str | None = None, program: Program | N
     return IoMap(rows)
 
 
-def render_io_map(result: StResult, mp_file: str | None = None, program: Program | None = None) -> str:
-    return io_map_of(result, mp_file, program).to_csv()
-
-
 def user_pous(result: StResult) -> list[Pou]:
     """The POUs translated from the program's routines (not the library, service or accessor POUs), in project order."""
     names = set(result.pou_of_routine.values())
@@ -121,7 +117,9 @@ def _not_translated(result: StResult) -> list[str]:
     return [f"- {span}: {text}" for span, text in result.untranslated]
 
 
-def render_report(program: Program, result: StResult, diags: Diagnostics, mp_file: str | None = None) -> str:
+def render_report(program: Program, result: StResult, diags: Diagnostics, iomap: IoMap, mp_file: str | None = None
+                  ) -> str:
+    """report.md; `iomap` is io_map_of the translation (the screens section names the variables it holds)."""
     user = user_pous(result)
     fallback_names = {f.pou for f in result.fallbacks}
     structured = len([p for p in user if p.name not in fallback_names])
@@ -178,7 +176,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
-    lines += screens_section(program, io_map_of(result))
+    lines += screens_section(program, iomap)
     lines += ["", "## What the target must provide", ""] + target_must_provide(program, result) + _library_files(result)
     lines += ["", "## Timers and counters", ""]
     lines += [f"- `{name}` = {cycles} cycles" for name, cycles in sorted(result.presets.items())] or ["none"]
