@@ -162,7 +162,7 @@ class ObjectPrinter:
 
     def pou_head(self, pou: Pou) -> str:
         """A POU's declaration part: comments, header and variable sections, no body."""
-        return self._render("pou_head.st.j2", pou=pou)
+        return self._env.get_template("pou.st.j2").module.head(pou).rstrip("\n") + "\n"
 
     def gvl(self, gvl: Gvl) -> str:
         """A global variable list's declaration under the list's name (attribute, VAR_GLOBAL)."""
