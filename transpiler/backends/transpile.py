@@ -23,8 +23,6 @@ from transpiler.backends.report.loading import how_to_load
 from transpiler.backends.readme import README_FILE, render_readme
 from transpiler.backends.report.report import io_map_of, render_report
 from transpiler.backends.report.screens import mask_files
-from transpiler.backends.twincat.layout import plan_project
-from transpiler.backends.twincat.writer import render_project
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,8 +80,11 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
     # A native project folder of the target (one file per object), beside project.st and from the same text.
-    native = plan_project(laid_out) if chosen.project_folder == "twincat" and "st" in formats else None
-    if native is not None:
+    native = None
+    if chosen.project_folder == "twincat" and "st" in formats:
+        from transpiler.backends.twincat.layout import plan_project
+        from transpiler.backends.twincat.writer import render_project
+        native = plan_project(laid_out)
         files.update(render_project(native))
     # The screen masks as data for an HMI, bound to the variables of this translation.
     # (the screens find their variables by operand: the machine-parameter and configuration rows change none)
