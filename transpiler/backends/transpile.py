@@ -44,12 +44,13 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
 def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
                formats: set[str], mp_file: Path | None, target: str) -> Transpiled:
     from transpiler.backends.plcopen.writer import render_target_xml, render_xml
-    from transpiler.backends.st.writer import render_st, render_target_st
+    from transpiler.backends.st.writer import StPrinter
     mp_name = mp_file.name if mp_file is not None else None
     result = StBackend(program, diags, mp, mp_file=mp_name).build()
     project = result.project
     files: dict[str, bytes] = {}
-    st_text = render_st(project)
+    printer = StPrinter()     # (one for the project and the libraries: the templates are compiled once)
+    st_text = printer.project(project)
     chosen = dialect(target)
     built = project
     if not chosen.builds_like(TARGETS[DEFAULT_TARGET]):
@@ -57,9 +58,9 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
         built = StBackend(program, Diagnostics(), mp, mp_file=mp_name, dialect=chosen).build().project
     laid_out = for_target(built, target)
     if "st" in formats:
-        # The matiec layout of the matiec translation is st_text itself (render_target_st would print it again).
+        # The matiec layout of the matiec translation is st_text itself (printing the target's layout would print it again).
         same_text = laid_out.project is project and laid_out.dialect.st_template == TARGETS[DEFAULT_TARGET].st_template
-        files["project.st"] = (st_text if same_text else render_target_st(laid_out)).encode("utf-8")
+        files["project.st"] = (st_text if same_text else printer.target(laid_out)).encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_target_xml(laid_out)
         if chosen.xml_globals == "configuration":
@@ -69,14 +70,14 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
     library = library_project(project)
     if library is not None:
         if "st" in formats:
-            files[LIB_ST] = render_library_st(library).encode("utf-8")
+            files[LIB_ST] = render_library_st(library, printer).encode("utf-8")
         if "xml" in formats:
             files[LIB_XML] = render_xml(library)
     # HH_Lib: every helper and the timer/counter blocks as a library of their own (hh_lib.py); project.st keeps
     # the ones it uses and stays self-contained.
     helpers = hh_lib.library_project(program.semantics, project.name)
     if "st" in formats:
-        files[hh_lib.ST_FILE] = render_library_st(helpers).encode("utf-8")
+        files[hh_lib.ST_FILE] = render_library_st(helpers, printer).encode("utf-8")
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
     # A native project folder of the target (one file per object), beside project.st and from the same text.
