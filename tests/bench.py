@@ -224,8 +224,7 @@ def bench_readability() -> list[dict]:
     out = []
     for main in mains:
         project = api.load_project(api.project_options(main))
-        st = api.transpile(project, formats=("st",)).st_text
-        figure = measure(st, project.program.instruction_count())
+        figure = measure(api.transpile(project, formats=("st",)).result.project, project.program.instruction_count())
         label = "sample" if main == SAMPLE else main.parent.name
         print(f"readability, {label}: {figure.line()}")
         out.append({"project": label, **figure.__dict__})

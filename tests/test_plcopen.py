@@ -125,6 +125,24 @@ def test_malformed_xml_is_reported_not_raised(schema: etree.XMLSchema) -> None:
     assert len(errors) == 1 and errors[0].startswith("project.xml:3: not well-formed")
 
 
+def test_transpile_validates_every_xml_file_and_writes_nothing_invalid(schema: etree.XMLSchema,
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    from transpiler import api
+    from transpiler.backends.plcopen import writer
+    from transpiler.diagnostics import CompileFailed
+    project = api.load_project(api.project_options(Path(__file__).parent.parent / "samples/basic_program/Main_PGM.src"))
+    assert api.transpile(project, formats=("xml",)).xml_validated
+    # A project.xml that breaks the schema (the task without its priority) is a bug: no result, one E-XSD naming it.
+    bad = writer.render_target_xml
+    monkeypatch.setattr(writer, "render_target_xml",
+                        lambda target: bad(target).replace(b' priority="0"', b"", 1))
+    with pytest.raises(CompileFailed) as failed:
+        api.transpile(project, formats=("xml",))
+    [diagnostic] = [d for d in failed.value.diagnostics if d.code == "E-XSD"]
+    assert diagnostic.message.startswith("project.xml does not validate")
+    assert len(diagnostic.notes) == 1 and diagnostic.notes[0].startswith("project.xml:") and "priority" in diagnostic.notes[0]
+
+
 # --- one translation, two containers --------------------------------------------------------
 
 

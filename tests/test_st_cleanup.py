@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from transpiler import api
-from transpiler.backends.iec_model import IecVar, Pou, VarSection
+from transpiler.backends.iec_model import Configuration, IecProject, IecVar, Pou, VarSection
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st import stmt as S
 from transpiler.backends.st.passes import propagate_temporaries
@@ -93,19 +93,24 @@ def test_sample_has_no_unfolded_constant_comparison_and_no_stack_lines():
     project = api.load_project(api.project_options(SAMPLE))
     out = api.transpile(project, formats=("st",))
     assert "1 <= 24" not in out.st_text
-    figure = measure(out.st_text, project.program.instruction_count())
+    figure = measure(out.result.project, project.program.instruction_count())
     assert figure.stack_lines == 0 and figure.statements > 0
     assert figure.per_instruction <= 1.2
     assert "### Readability" in out.files["report.md"].decode()
 
 
+def _readability_project(externals_title: str | None = None) -> IecProject:
+    externals = VarSection("VAR_EXTERNAL", (IecVar("HH_SP", "INT"), IecVar("A", "BOOL")), comment=externals_title)
+    body = "(* comment *)\nHH_SP := HH_SP - 1;\ntmp1 := HH_BIT(A, 3);\n\nA := tmp1;"
+    user = Pou("F", "FUNCTION_BLOCK", (externals,), body)
+    helper = Pou("HH_BIT", "FUNCTION", (), "HH_BIT := tmp1 AND HH_SP(1);", return_type="BOOL")    # (not counted)
+    return IecProject("P", (), (helper, user), Configuration("C", "R", (), (), ()))
+
+
 def test_readability_counts_what_it_says():
-    st = ("FUNCTION_BLOCK F\nVAR_EXTERNAL\n    HH_SP : INT;\n    A : BOOL;\nEND_VAR\n"
-          "    (* comment *)\n    HH_SP := HH_SP - 1;\n    tmp1 := HH_BIT(A, 3);\n    A := tmp1;\nEND_FUNCTION_BLOCK\n")
-    figure = measure(st, 4)
+    figure = measure(_readability_project(), 4)
     assert (figure.statements, figure.stack_lines, figure.temp_lines, figure.helper_calls, figure.var_external_lines) \
         == (3, 1, 2, 1, 2)
     assert figure.per_instruction == 0.75
     # a titled block (matiec's lists are grouped by area) counts the same
-    titled = st.replace("VAR_EXTERNAL\n", "VAR_EXTERNAL (* Markers *)\n")
-    assert measure(titled, 4).var_external_lines == 2
+    assert measure(_readability_project("Markers"), 4).var_external_lines == 2

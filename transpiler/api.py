@@ -261,12 +261,13 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
             raise CompileFailed(list(diags.items) + problems)
     validated = False
     if "xml" in formats and validate_xml:
-        from transpiler.backends.plcopen.xsd import schema_path, validate_xml as validate
+        from transpiler.backends.plcopen.xsd import load_schema, schema_path, validate_xml as validate
         if schema_path() is not None:
+            schema = load_schema()      # (read once for all the files)
             # The project and its libraries; the files in subfolders are no TC6 XML of their own (the editor
             # project's plc.xml is project.xml byte for byte).
             for name in sorted(n for n in out.files if n.endswith(".xml") and "/" not in n):
-                problems = validate(out.files[name], name)
+                problems = validate(out.files[name], name, schema)
                 if problems:
                     raise CompileFailed(list(diags.items) + [Diagnostic.of(
                         "E-XSD", NO_SPAN, f"{name} does not validate against the TC6 schema (a bug in hh2iec; "

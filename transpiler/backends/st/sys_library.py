@@ -8,8 +8,13 @@ Pure modules are not part of it: their blocks are complete portable ST and stay 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from transpiler.backends.iec_model import Configuration, IecProject
 from transpiler.backends.st.hh_sys import fb_names
+
+if TYPE_CHECKING:
+    from transpiler.backends.st.writer import StPrinter
 
 ST_FILE, XML_FILE = "hh_sys.st", "hh_sys.xml"
 LIBRARY_NAME = "HH_Sys"
@@ -28,9 +33,10 @@ def library_project(project: IecProject) -> IecProject | None:
     return IecProject(LIBRARY_NAME, (), pous, config, header_comment=header)
 
 
-def render_library_st(library: IecProject) -> str:
-    """The library as ST: the header and the FUNCTION_BLOCKs, without a CONFIGURATION (it is no program)."""
-    from transpiler.backends.st.writer import render_st
-    text = render_st(library)
+def render_library_st(library: IecProject, printer: StPrinter | None = None) -> str:
+    """The library as ST: the header and the FUNCTION_BLOCKs, without a CONFIGURATION (it is no program); `printer`
+    is the translation's, if it has one."""
+    from transpiler.backends.st.writer import StPrinter
+    text = (printer or StPrinter()).project(library)
     cut = text.find("\nCONFIGURATION ")
     return (text[:cut].rstrip("\n") if cut >= 0 else text.rstrip("\n")) + "\n"

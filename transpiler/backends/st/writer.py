@@ -48,9 +48,10 @@ def declaration(var: IecVar) -> str:
 
 
 def var_sections(sections: Iterable[VarSection], indent: str) -> str:
-    """The variable sections, each as located_blocks splits it: its header line with the section's comment, one
-    declaration line per variable, END_VAR; every line ends with a line break. (A filter, not template loops:
-    tens of thousands of declarations print several times faster so.)"""
+    """The variable sections (of a POU, the configuration or a global variable list), each as located_blocks splits
+    it: its header line with the section's comment, one declaration line per variable, END_VAR; every line ends
+    with a line break. (A filter, not template loops: tens of thousands of declarations print several times faster
+    so.)"""
     lines = []
     for section in sections:
         for block in located_blocks(section):
@@ -69,6 +70,9 @@ def section_header(section: VarSection) -> str:
 
 def located_blocks(section: VarSection) -> list[VarSection]:
     """Split a section into runs of located and of plain variables: matiec rejects a block that mixes them."""
+    located = [var.address is not None for var in section.vars]
+    if all(located) or not any(located):
+        return [section]        # (nearly every section: one block, the section itself)
     blocks: list[VarSection] = []
     run: list[IecVar] = []
     for var in section.vars:
@@ -115,19 +119,12 @@ def render_st(project: IecProject) -> str:
 
     Raises ValueError for model shapes that cannot be written (see check_formattable).
     """
-    check_formattable(project)
-    text = _environment().get_template("project.st.j2").render(project=project)
-    return text.rstrip("\n") + "\n"
+    return StPrinter().project(project)
 
 
 def render_target_st(target: TargetProject) -> str:
     """The project as `target.dialect` lays it out (the matiec layout is exactly render_st's)."""
-    if target.dialect.st_template == "project.st.j2":
-        return render_st(target.project)
-    check_formattable(target.project)
-    text = _environment().get_template(target.dialect.st_template).render(
-        project=target.project, gvls=target_gvls(target), dialect=target.dialect, task_lines=task_lines(target))
-    return text.rstrip("\n") + "\n"
+    return StPrinter().target(target)
 
 
 def target_gvls(target: TargetProject) -> tuple[Gvl, ...]:
@@ -144,11 +141,10 @@ def target_gvls(target: TargetProject) -> tuple[Gvl, ...]:
         _inline_array(v, arrays) for v in s.vars)) for s in g.sections)) for g in target.gvls)
 
 
-# --- one object at a time: the pieces of project.st that a per-object project (TwinCAT) stores in files of their own
-
-
-class ObjectPrinter:
-    """Prints one object at a time as project.st prints it, from one template environment for all of them."""
+class StPrinter:
+    """Prints projects, and one object at a time the pieces of project.st that a per-object project (TwinCAT) stores
+    in files of their own, from one template environment for all of them (a translation prints its project and its
+    libraries: compiling the templates again for each costs as much as printing a library)."""
 
     def __init__(self) -> None:
         self._env = _environment()
@@ -156,9 +152,22 @@ class ObjectPrinter:
     def _render(self, template: str, **context: object) -> str:
         return self._env.get_template(template).render(**context).rstrip("\n") + "\n"
 
+    def project(self, project: IecProject) -> str:
+        """As render_st."""
+        check_formattable(project)
+        return self._render("project.st.j2", project=project)
+
+    def target(self, target: TargetProject) -> str:
+        """As render_target_st."""
+        if target.dialect.st_template == "project.st.j2":
+            return self.project(target.project)
+        check_formattable(target.project)
+        return self._render(target.dialect.st_template, project=target.project, gvls=target_gvls(target),
+                            dialect=target.dialect, task_lines=task_lines(target))
+
     def pou_head(self, pou: Pou) -> str:
         """A POU's declaration part: comments, header and variable sections, no body."""
-        return self._render("pou_head.st.j2", pou=pou)
+        return self._env.get_template("pou.st.j2").module.head(pou).rstrip("\n") + "\n"
 
     def gvl(self, gvl: Gvl) -> str:
         """A global variable list's declaration under the list's name (attribute, VAR_GLOBAL)."""

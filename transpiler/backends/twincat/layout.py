@@ -17,7 +17,7 @@ from typing import Literal
 
 from transpiler.backends.st.dialect import TargetProject
 from transpiler.backends.st.task_setup import task_setups
-from transpiler.backends.st.writer import ObjectPrinter, target_gvls
+from transpiler.backends.st.writer import StPrinter, target_gvls
 
 # Fixed, so that GUIDs depend only on the project and object names.
 GUID_NAMESPACE = uuid.UUID("6f1e2d3c-4b5a-5968-8776-a5b4c3d2e1f0")
@@ -119,7 +119,7 @@ def plan_project(target: TargetProject) -> TcProject:
     """The TwinCAT project of `target` (laid out for TwinCAT): types, lists and POUs in project.st's order."""
     project = target.project
     name = project_name(project.name)
-    printer = ObjectPrinter()
+    printer = StPrinter()
     objects = [_object(name, "DUT", t.name, printer.data_type(t), None) for t in project.types]
     objects += [_object(name, "GVL", g.name, printer.gvl(g), None) for g in target_gvls(target)]
     objects += [_object(name, "POU", p.name, printer.pou_head(p), p.body) for p in project.pous]
