@@ -643,3 +643,35 @@ def test_no_condition_a_run_shows_is_claimed_infeasible_without_runs(project: st
     shown = {(i.decision.key, i.number) for i in decision_coverage(program, [machine.coverage], table=table).conditions
              if i.status == "shown"}
     assert not claimed & shown
+
+
+@pytest.mark.parametrize("semantics", [{}, {"load_extension": "zero"}])
+def test_a_word_only_the_nc_writes_holds_only_what_an_nc_action_carries(tmp_path: Path, semantics: dict) -> None:
+    # The mode word W272 and the pocket W262 hold what the scenario format lets an NC action carry (0..32767 and
+    # -1..32767): a boundary below that is infeasible, named after the NC model; one inside it stays to be
+    # reached, and a run of NC jobs at the edges reaches each value left. Catches: a claim of a value the NC can
+    # write (the pocket -1), a claim read through the wrong extension (zero-extended, -1 is 65535).
+    low = 65535 if semantics else -1
+    program = _program(tmp_path, f"L W272\n== K0\n= O1\nL W262\n== K{low}\n= O2\nEM\n", **semantics)
+    cov = decision_coverage(program, [])
+    status = {(b.compare.left, b.offset): b for b in cov.boundaries}
+    # (zero-extended, W272 = -1 is outside what the compare can read at all, and W262 = 65536 too)
+    assert status[("W272", -1)].status == "infeasible"
+    assert ("0..32767 to W272" in status[("W272", -1)].reason) == (not semantics)
+    assert status[("W262", -1)].status == "infeasible" and "-1..32767 to W262" in status[("W262", -1)].reason
+    assert {k for k, b in status.items() if b.status == "missing"} == {("W272", 0), ("W272", 1), ("W262", 0),
+                                                                        *([] if semantics else [("W262", 1)])}
+    machines = _tool_calls(program, [(7, -1), (7, 0)]) + [_run_nc(program, [({}, [{"mode": m}]) for m in (0, 1)])]
+    reached = decision_coverage(program, [m.coverage for m in machines])
+    assert all(b.status != "missing" for b in reached.boundaries)
+
+
+@pytest.mark.parametrize("other", ["L K-5\n= W272\n", "L K-5\n= B273\n", "L K3\n= X\nL K-5\n= B270[X]\n"])
+def test_no_range_of_an_nc_word_where_something_else_writes_it(tmp_path: Path, other: str) -> None:
+    # The program writes the mode word itself (by name, a byte of it, through the index register), or a scenario
+    # sets it: no claim, and the value below 0 is one a run can give it.
+    program = _program(tmp_path, f"{other}L W272\n== K0\n= O1\nEM\n")
+    below = next(b for b in decision_coverage(program, []).boundaries if b.offset == -1)
+    assert below.status == "missing"
+    clean = _program(tmp_path, "L W272\n== K0\n= O1\nEM\n")
+    assert next(b for b in decision_coverage(clean, [], {("W", 272)}).boundaries if b.offset == -1).status == "missing"

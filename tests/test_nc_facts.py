@@ -18,7 +18,7 @@ from transpiler.verify.implication import _compare_value
 from transpiler.verify.nc_facts import NC_FACTS, NC_MODEL_OWNED, TOOL_CALL_STROBE, applicable_facts
 
 _ACKS = (4090, 4091, 4092, 4093, 4094, 4095)
-_POCKETS = (-32768, -2, -1, 0, 1, 2, 24, 32767)
+_POCKETS = (-1, 0, 1, 2, 24, 32767)     # the scenario format's pockets (NC_VALUE_RANGES)
 _TOOLS = (0, 0, 1, 7, 32767)
 
 
@@ -110,16 +110,23 @@ def test_a_fact_does_not_apply_where_its_operands_can_be_written_otherwise(tmp_p
         return {f.operands[:2] for f in applicable_facts(program, set(driven))}
 
     flags, strobe_fact, tool_ack = (("M", 4521), ("M", 4522)), (("M", 4073), ("M", 4521)), (("M", 4073), ("M", 4093))
+    pocket, m_code, tool = (("W", 262),), (("W", 260),), (("W", 264),)      # the range facts of single words
     every = facts("L M4521\n= O1\nEM\n")
-    assert len(every) == len(NC_FACTS) and {flags, strobe_fact, tool_ack} <= every
+    assert len(every) == len(NC_FACTS) and {flags, strobe_fact, tool_ack, pocket, m_code, tool} <= every
     assert facts("L I1\nS M4522\nEM\n") == every - {flags, strobe_fact}
-    assert facts("L K1\n= W262\nEM\n") == every - {strobe_fact}
-    assert facts("L K1\n= D260\nEM\n") == every - {strobe_fact}
-    assert facts("L D260\n= D0\nEM\n") == every - {strobe_fact}
+    assert facts("L K1\n= W262\nEM\n") == every - {strobe_fact, pocket}
+    assert facts("L K1\n= D260\nEM\n") == every - {strobe_fact, pocket, m_code}
+    assert facts("L D260\n= D0\nEM\n") == every - {strobe_fact, pocket, m_code}
     assert facts("L M4521\n= O1\nEM\n", {("M", 4073)}) == every - {strobe_fact, tool_ack}
-    assert facts("L M4521\n= O1\nEM\n", {("W", 264)}) == every - {strobe_fact}
+    assert facts("L M4521\n= O1\nEM\n", {("W", 264)}) == every - {strobe_fact, tool}
+    # a PLC module that writes to an address it is given (9040: axis coordinates into 5 double words) may write
+    # any of them: no fact applies
+    assert facts("PS K400\nPS K0\nCM 9040\nEM\n") == set()
     assert facts("L I1\n= M4093\nEM\n", {("M", 4093)}) == every
-    assert not facts("L W100\n= X\nL I1\n= M10[X]\nEM\n")
+    # a marker written through an index that may reach anywhere: the facts on markers go, the words' ranges stay
+    words_only = {f.operands[:2] for f in NC_FACTS if all(k[0] in "BWD" for k in f.operands)}
+    assert facts("L W100\n= X\nL I1\n= M10[X]\nEM\n") == words_only == {pocket, m_code, tool, (("W", 256),),
+                                                                      (("W", 272),), (("D", 356),)}
 
 
 @pytest.mark.parametrize("semantics", [{}, {"load_extension": "zero"}, {"compare_signedness": "unsigned"},

@@ -34,7 +34,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.ir import Program
+from transpiler.ir import BYTES, Program, sext
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
@@ -697,13 +697,16 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
     xs: dict[tuple[int, int], tuple[int, int]] | None = None
+    ranges: dict[tuple[str, int], NcFact] = {}
     for cmp in table.compares:
         items = _boundary_items(cmp, bounds.get(cmp.key, set()))
         if explain_missing and any(i.status == "missing" for i in items):
             if held is None:
                 held = word_values(program, table.compares, set(driven), set(power_on))
                 xs = index_ranges(program)
-            items = [_explained(program, cmp, item, held, xs) if item.status == "missing" else item for item in items]
+                ranges = {f.operands[0]: f for f in applicable_facts(program, set(driven)) if len(f.operands) == 1}
+            items = [_explained(program, cmp, item, held, xs, ranges) if item.status == "missing" else item
+                     for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
@@ -731,9 +734,11 @@ def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
 
 
 def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordValues,
-               xs: Mapping[tuple[int, int], tuple[int, int]]) -> BoundaryItem:
-    """`item` (missing) as infeasible where the values the word can hold at the compare (word_values) or the values
-    the index register can hold there (index_range) leave its value out."""
+               xs: Mapping[tuple[int, int], tuple[int, int]], ranges: Mapping[tuple[str, int], NcFact]
+               ) -> BoundaryItem:
+    """`item` (missing) as infeasible where the values the word can hold at the compare (word_values), the values
+    the index register can hold there (index_range) or the values the NC model writes to a word only it writes
+    (`ranges`: single-word facts of nc_facts that apply) leave its value out."""
     if cmp.constant is None:
         return item
     value = cmp.constant + item.offset
@@ -743,6 +748,10 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
     x = xs.get(cmp.key)
     ops = program.files[cmp.file].ops
     word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
+    fact = ranges.get((word.kind, word.addr)) if word is not None and not word.indexed else None
+    # (the fact is about the word's signed content; a compare that reads it zero-extended sees 65535 for -1)
+    if fact is not None and not fact.holds({fact.operands[0]: sext(value, 8 * BYTES[word.kind])}):
+        return dataclasses.replace(item, status="infeasible", reason=f"{cmp.right if cmp.constant_left else cmp.left} never holds {value}: {fact.text}")
     if x is None or word is None or word.kind != "X" or x[0] < 0 or program.semantics["compare_signedness"] == \
             "unsigned":
         return item

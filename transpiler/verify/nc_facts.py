@@ -14,7 +14,9 @@ import dataclasses
 from typing import Callable, Mapping
 
 from transpiler.ir import Program
+from transpiler.language.module_table import MODULE_TABLE
 from transpiler.verify.index_range import index_ranges
+from transpiler.verify.scenario import NC_VALUE_RANGES
 from transpiler.verify.simulate import indexed_operands, operand_writers, program_operands
 
 Key = tuple[str, int]
@@ -91,6 +93,25 @@ def _handshake(strobe: int, ack: int) -> NcFact:
 _HANDSHAKES = ((4070, 4090), (4071, 4091), (4072, 4092), (4073, 4093), (4520, 4093), (4074, 4094), (4075, 4095),
                (2045, 2482))
 
+def _word_range(word: Key, field: str, what: str) -> NcFact:
+    """A word only the NC writes holds what the scenario format lets an NC action carry (NC_VALUE_RANGES: the NC
+    model writes the action's value as given) or its power-on value 0 (W272: the mode, 1 until a scenario sets
+    one)."""
+    low, high = NC_VALUE_RANGES[field]
+    assert low <= 0 <= high and low <= 1 <= high      # the power-on value and the default mode lie inside
+    return NcFact((word,), lambda v: low <= v[word] <= high, (low, high),
+                  f"the NC writes only {low}..{high} to {word[0]}{word[1]} ({what}) and nothing else writes it (NC "
+                  "model)")
+
+
+# The interface words each NC action writes (hh_nc.c write_codes; W272 also in every phase, from the last mode).
+_WORD_RANGES = (
+    (("W", 256), "gear", "the gear range of the spindle job"), (("W", 260), "m_function", "the M code"),
+    (TOOL_POCKET, "pocket", "the pocket of TOOL CALL and TOOL DEF"),
+    (TOOL_NUMBER, "tool", "the tool of TOOL CALL and TOOL DEF"), (("W", 272), "mode", "the operating mode"),
+    (("D", 356), "spindle_speed", "the spindle speed"),
+)
+
 NC_FACTS: tuple[NcFact, ...] = (
     NcFact(_FLAGS, _one_flag_at_most, (),
            "M4521, M4522 and M4523 are never 1 two at a time: the NC sets exactly one of them with each TOOL CALL "
@@ -100,6 +121,7 @@ NC_FACTS: tuple[NcFact, ...] = (
            "(W262 <= 0) is 1, the one that fits W264 and W262: the NC writes all of them with the strobe and writes "
            "none of them again (no TOOL DEF either) before that handshake ends (NC model)"),
     *(_handshake(strobe, ack) for strobe, ack in _HANDSHAKES),
+    *(_word_range(word, field, what) for word, field, what in _WORD_RANGES),
 )
 
 
@@ -119,7 +141,10 @@ def applicable_facts(program: Program, driven: set[tuple[str, int]]) -> tuple[Nc
     program (by name, through the index register where it can reach them, by a data table), set by a scenario
     (`driven`), or overlapped by another byte, word or double word the program names (which the generated
     stimulus may set). A fact's `plc_owned` operands may be written by name and by a scenario (see NcFact); not
-    through the index register or by a data table (which loads after the NC phase)."""
+    through the index register or by a data table (which loads after the NC phase). A PLC module that writes to
+    an address it is given, or one the module table does not know, may write anywhere: then no fact applies."""
+    if any(_writes_anywhere(op) for code in program.files for op in code.ops):
+        return ()
     _, written, _ = program_operands(program)
     named_cells = [_span(r.kind, r.addr) for r in written] + [_span(k, a) for k, a in driven]
     written_cells = [_span(r.kind, r.addr) for r in program.data_rows]
@@ -153,3 +178,10 @@ def applicable_facts(program: Program, driven: set[tuple[str, int]]) -> tuple[Nc
             continue
         found.append(fact)
     return tuple(found)
+
+
+def _writes_anywhere(op) -> bool:
+    if op.call is None or not op.call.is_module:
+        return False
+    row = MODULE_TABLE.get(op.call.module)
+    return row is None or any("address" in p.name for p in row.params)

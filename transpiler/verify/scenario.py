@@ -187,24 +187,39 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
-_Word = Annotated[int, Field(ge=0, le=VALUE_RANGES["W"][1])]
+# The values an NC action may carry: what the control sends (numbers, a pocket -1 for "none"), positive in the
+# signed range of the interface word, so that the program reads them as given. The NC model writes them to its
+# interface words unchanged, so these bounds are also the values those words can hold (nc_facts.py claims no other
+# value there, and a TOOL CALL's pocket >= 1 is one the program reads as >= 1).
+_SIGNED_MAX = {"W": (1 << 15) - 1, "D": (1 << 31) - 1}
+NC_VALUE_RANGES: Mapping[str, tuple[int, int]] = MappingProxyType({
+    "m_function": (0, _SIGNED_MAX["W"]), "gear": (0, _SIGNED_MAX["W"]), "mode": (0, _SIGNED_MAX["W"]),
+    "tool": (0, _SIGNED_MAX["W"]), "pocket": (-1, _SIGNED_MAX["W"]),
+    "spindle_speed": (0, _SIGNED_MAX["D"]), "fn19": VALUE_RANGES["D"]})
+
+
+def _nc_value(field: str):
+    low, high = NC_VALUE_RANGES[field]
+    return Annotated[int, Field(ge=low, le=high)]
+
+
 _DWord = Annotated[int, Field(ge=VALUE_RANGES["D"][0], le=VALUE_RANGES["D"][1])]
 
 
 class ToolCall(_Model):
-    tool: _Word
-    pocket: Annotated[int, Field(ge=-1, le=VALUE_RANGES["W"][1])]
+    tool: _nc_value("tool")
+    pocket: _nc_value("pocket")
     second_strobe: bool = False
 
 
 class ToolDef(_Model):
-    tool: _Word
-    pocket: Annotated[int, Field(ge=-1, le=VALUE_RANGES["W"][1])]
+    tool: _nc_value("tool")
+    pocket: _nc_value("pocket")
 
 
 class Fn19(_Model):
-    value1: _DWord
-    value2: _DWord
+    value1: _nc_value("fn19")
+    value2: _nc_value("fn19")
 
 
 NC_KINDS = ("m_function", "spindle_speed", "gear", "tool_call", "tool_def", "fn19", "mode", "restart")
@@ -213,13 +228,13 @@ NC_KINDS = ("m_function", "spindle_speed", "gear", "tool_call", "tool_def", "fn1
 class NcAction(_Model):
     """One NC-model action (scenario format); exactly one field is set."""
 
-    m_function: _Word | None = None
-    spindle_speed: Annotated[int, Field(ge=0, le=VALUE_RANGES["D"][1])] | None = None
-    gear: _Word | None = None
+    m_function: _nc_value("m_function") | None = None
+    spindle_speed: _nc_value("spindle_speed") | None = None
+    gear: _nc_value("gear") | None = None
     tool_call: ToolCall | None = None
     tool_def: ToolDef | None = None
     fn19: Fn19 | None = None
-    mode: _Word | None = None
+    mode: _nc_value("mode") | None = None
     restart: Literal["program", "machine_parameters"] | None = None
 
     @model_validator(mode="after")
