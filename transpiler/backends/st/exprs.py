@@ -69,7 +69,11 @@ def names_of(e: Expr) -> frozenset[str]:
     if found is not None:
         return found
     if e.parts is not None:
-        found = frozenset().union(*(_word_names(p) if isinstance(p, str) else names_of(p) for p in e.parts))
+        found = _NONE
+        for p in e.parts:
+            names = _word_names(p) if type(p) is str else names_of(p)
+            if names:       # (a part's own set serves while it is the only one with names: most operands)
+                found = found | names if found else names
     elif e.var is not None and e.var == e.text:
         found = text_names(e.text)
     else:
@@ -106,12 +110,19 @@ def _ident(text: str) -> bool:
 
 def _word_names(word: str) -> frozenset[str]:
     """names_in of a function name or operator joined into an expression's text (`HH_BIT`, `AND`; `+`: none)."""
+    known = _OPERATOR_NAMES.get(word)
+    if known is not None:
+        return known
     if _ident(word):
         return frozenset((word.upper(),))
     return text_names(word) if any(ch.isalnum() or ch == "_" for ch in word) else _NONE
 
 
 _NONE: frozenset[str] = frozenset()
+# The operators binop and b_not join into expressions (most words): their names, worked out once.
+_OPERATOR_NAMES = MappingProxyType({
+    **{op: _NONE for op in ("+", "-", "*", "/", "=", "<>", "<", "<=", ">", ">=")},
+    **{op: frozenset((op,)) for op in ("AND", "OR", "XOR", "NOT", "MOD")}})
 
 
 def base_name(text: str) -> str:
@@ -129,6 +140,8 @@ _PATH = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za
 
 def unqualified(text: str) -> str:
     """`text` without the list qualifier of a global reference (`GVL_IO.I5` -> `I5`)."""
+    if "." not in text:     # (most texts: no qualifier to look for)
+        return text
     match = _QUALIFIED.match(text)
     return text[match.end():] if match else text
 
