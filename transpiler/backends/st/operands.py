@@ -121,7 +121,8 @@ class OperandMixin(ExecutorPart):
     def _store_value(self, o: Operand, value: Callable[[], Expr]) -> None:
         """Store a DINT value into a B/W/D operand (one assignment, or one per byte in the byte array)."""
         layout = self.ctx.layout
-        first = layout.write_value(o, self._xi(o), value())
+        written = value()
+        first = layout.write_value(o, self._xi(o), written)
         count = len(first)
         if count > 1:
             self.pin_index(o)
@@ -135,8 +136,16 @@ class OperandMixin(ExecutorPart):
             else:
                 # (the places written of an operand without index are fixed: neither the value nor X moves them)
                 lv = lambda place=E.var(first[k][0], "BYTE"): place
-            rv = lambda k=k: layout.write_value(o, self._xi(o), value())[k][1]
-            self.store(lv, rv, frozenset(["WA", "X", "LA", "SA"]))
+            self.store(lv, lambda k=k: self._written(o, value, written, first, k), frozenset(["WA", "X", "LA", "SA"]))
+
+    def _written(self, o: Operand, value: Callable[[], Expr], written: Expr, first: list[tuple[str, Expr]],
+                 k: int) -> Expr:
+        """The value of place k of `o`, worked out again when saving values in flight changed the value or the
+        index (`first`: the places for the value `written` before)."""
+        v = value()
+        if v is written and not o.indexed:
+            return first[k][1]
+        return self.ctx.layout.write_value(o, self._xi(o), v)[k][1]
 
 
 def _access_key(index: Expr, x: Expr | None, base: int) -> tuple[int, str]:

@@ -13,6 +13,8 @@ from transpiler.backends.st.routine import Unsupported, tag
 from transpiler.backends.st.symbolic import Executor
 
 JUMPS = ("JP", "JPT", "JPF")
+# The op codes region treats apart from the executor's straight-line code.
+_CONTROL = frozenset({"LBL", *JUMPS, "EM", "EMT", "EMF", "CALL", "CALLT", "CALLF", "CASE"})
 
 
 class NotStructured(Exception):
@@ -117,12 +119,18 @@ class Structurer:
 
     def region(self, lo: int, hi: int) -> None:
         i = lo
+        body, ops, jumps_to, other_entries = self.body, self.ops, self.jumps_to, self.info.other_entries
         while i < hi:
-            if i not in self.body:
+            if i not in body:
                 i += 1
                 continue
-            op = self.ops[i]
-            if i != self.info.entry.index and i in self.info.other_entries:
+            op = ops[i]
+            if op.code not in _CONTROL and i not in jumps_to and i not in other_entries:
+                # (most ops: straight-line code for the executor)
+                self.ex.run(op, i)
+                i += 1
+                continue
+            if i != self.info.entry.index and i in other_entries:
                 # Falling through into another subprogram's label: call it and return (same effect, readable).
                 other = self.info.other_entries[i]
                 self.ex.flush(self._live(i))
