@@ -669,25 +669,43 @@ def _names_used(pou: Pou) -> set[str]:
         return {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
     found: set[str] = set()
     targets: set[str] = set()       # lvalue, callee and input texts, each looked at once
-    for s in S.walk(pou.statements):
+    _statement_names(pou.statements, found, targets)
+    for text in targets:
+        if text.isidentifier() and text.isascii():      # (most: a plain variable, its own name)
+            found.add(text.upper())
+        else:
+            found |= E.text_names(text)
+    return found
+
+
+def _statement_names(block, found: set[str], targets: set[str]) -> None:
+    """The names of `block`'s expressions into `found`, its lvalue, callee and input texts into `targets` (nested
+    blocks included; a plain recursion: a POU's statements are thousands of trees of a few levels)."""
+    names_of = E.names_of
+    for s in block:
         kind = type(s)
         if kind is S.Assign:
             targets.add(s.target)
-            found |= E.names_of(s.value)
+            found |= names_of(s.value)
         elif kind is S.Call:
             targets.add(s.callee)
             for name, value in s.args:
                 targets.add(name)
-                found |= E.names_of(value)
-        elif kind is S.If or kind is S.While:
-            found |= E.names_of(s.cond)
+                found |= names_of(value)
+        elif kind is S.If:
+            found |= names_of(s.cond)
+            _statement_names(s.then, found, targets)
+            _statement_names(s.orelse, found, targets)
         elif kind is S.Case:
-            found |= E.names_of(s.selector)
+            found |= names_of(s.selector)
+            for inner in S.blocks(s):
+                _statement_names(inner, found, targets)
+        elif kind is S.While:
+            found |= names_of(s.cond)
+            _statement_names(s.body, found, targets)
         elif kind is S.Repeat:
-            found |= E.names_of(s.until)
-    for text in targets:
-        found |= E.text_names(text)
-    return found
+            found |= names_of(s.until)
+            _statement_names(s.body, found, targets)
 
 
 def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],

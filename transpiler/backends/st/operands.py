@@ -62,7 +62,7 @@ class OperandMixin(ExecutorPart):
             live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
             inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live),
                                          self.ctx.out.access_rank(o.kind, key))
-            self.drop([kind_key[1] for kind_key in list(self._dependents(inst.upper())) if kind_key[0] == "reg"])
+            self.drop([kind_key[1] for kind_key in self._dependents(inst.upper()) if kind_key[0] == "reg"])
             self.ctx.out.add_access(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(False)))),
                                     o.kind, key, index.deps, write=False)
         held.add(inst)

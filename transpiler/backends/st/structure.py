@@ -50,6 +50,7 @@ class Structurer:
         self.ops = info.file.ops
         self.out = ex.ctx.out
         self.body = set(info.body)
+        self.last = max(info.body, default=-1)     # the routine's last op
         self.jumps_to: dict[int, list[int]] = {}
         for i in info.body:
             op = self.ops[i]
@@ -173,7 +174,7 @@ class Structurer:
         live_exit = self.info.exit_live
         if op.code == "EM":
             self.ex.flush(live_exit)
-            last = self.depth == 0 and not any(j > i for j in self.body)
+            last = self.depth == 0 and i >= self.last
             if not last:
                 self.out.add(S.Return())
             self.ex.forget()
