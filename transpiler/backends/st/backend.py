@@ -23,7 +23,7 @@ from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes, printer, simplify
 from transpiler.backends.st import stmt as S
 from transpiler.backends.st.names import POU_KEY_PREFIX, RESERVED, TEMP_PREFIX, NameTable, legalise
-from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
+from transpiler.backends.st.structure import JUMPS, NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported, tag
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
@@ -127,6 +127,7 @@ class StBackend:
         pous: dict[tuple[int, int], Pou] = {}
         routine_keys = [(0, 0)] + [r.key for r in self.program.routines]
         self.calls: dict[tuple[int, int], set[tuple[int, int]]] = {}
+        self.file_jumps: dict[int, list[int]] = {}
         for key in routine_keys:
             pous[key] = self._routine(key, entries_by_file.get(key[0], {}))
         presets = self._presets(layout)
@@ -362,7 +363,8 @@ class StBackend:
         in_body = set(body)
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in in_body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
-                           self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
+                           self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call,
+                           self._file_jumps(key[0]))
         self.current_key = key
         structured = True
         try:
@@ -430,6 +432,15 @@ class StBackend:
         overwritten |= frozenset(n for n in markers if n is not None)
         statements = simplify.simplify(statements, overwritten)
         return passes.propagate_temporaries(printer.with_statements(pou, statements))
+
+    def _file_jumps(self, index: int) -> list[int]:
+        """The indices of the jumps with a target in file `index`, in order (worked out once per file: every
+        routine of the file structures its own)."""
+        jumps = self.file_jumps.get(index)
+        if jumps is None:
+            jumps = self.file_jumps[index] = [i for i, op in enumerate(self.program.files[index].ops)
+                                              if op.code in JUMPS and op.target is not None]
+        return jumps
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""

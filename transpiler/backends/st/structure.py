@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
-from typing import Callable
+from typing import Callable, Sequence
 
 from transpiler.ir import CallTarget, FileCode, Op
 from transpiler.backends.st import exprs as E
@@ -39,6 +40,8 @@ class RoutineInfo:
     live_in: Callable[[int], frozenset[str]]
     # CM of a routine with a stack interface (see interfaces.py): emits the call and returns True, else False.
     interface_call: Callable[[Op, int, frozenset[str]], bool] | None = None
+    # The indices of the file's jumps with a target, in order, where the caller has them (else read from `body`).
+    file_jumps: Sequence[int] | None = None
 
 
 class Structurer:
@@ -52,10 +55,17 @@ class Structurer:
         self.body = set(info.body)
         self.last = max(info.body, default=-1)     # the routine's last op
         self.jumps_to: dict[int, list[int]] = {}
-        for i in info.body:
-            op = self.ops[i]
-            if op.code in JUMPS and op.target is not None:
-                self.jumps_to.setdefault(op.target, []).append(i)
+        if info.file_jumps is None:
+            jumps = [i for i in info.body if self.ops[i].code in JUMPS and self.ops[i].target is not None]
+        elif info.body:
+            # (the file's jumps within the body's span, of the body: a few, where the body has dozens of ops)
+            lo = bisect.bisect_left(info.file_jumps, info.body[0])
+            hi = bisect.bisect_right(info.file_jumps, info.body[-1])
+            jumps = [i for i in info.file_jumps[lo:hi] if i in self.body]
+        else:
+            jumps = []
+        for i in jumps:
+            self.jumps_to.setdefault(self.ops[i].target, []).append(i)
         self.loop_exits: list[int] = []    # exit index of each enclosing loop
         self.depth = 0                     # nesting of emitted IF/loop constructs
         self.loop_heads: set[int] = set()  # heads of the loops being emitted (their back edge is the loop itself)
