@@ -23,6 +23,9 @@ GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "O
                 "data": "PLC data tables (MP_Data.tab, MP_Config.tab)"})
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
+# The op codes implicit_writes may answer for (arithmetic, a closing bracket, a call: a PLC module); any other op
+# writes nothing it does not name, and most ops are others.
+_MAY_WRITE_IMPLICITLY = frozenset({"MUL", "DIV", "MOD", "ADD", "SUB", "BCLOSE", "CALL", "CALLT", "CALLF"})
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
 STRING_ARRAY_TYPE = "T_HH_STRINGS"
 
@@ -105,6 +108,13 @@ class Layout:
         prof = self.profile
         for f in self.program.files:
             for op in f.ops:
+                if op.code in _MAY_WRITE_IMPLICITLY:
+                    # The error markers (and the module error-code word) the original writes are held and written too.
+                    for kind, addr in implicit_writes(op, prof.interface):
+                        if kind == "M":
+                            bits["M"].add(addr)
+                        else:
+                            mem.add((kind, addr))
                 o = op.operand
                 if o is None:
                     continue
@@ -133,13 +143,6 @@ class Layout:
                     if o.indexed:
                         string_indexed = True
                     strings.add(o.addr)
-            for op in f.ops:
-                # The error markers (and the module error-code word) the original writes are held and written too.
-                for kind, addr in implicit_writes(op, prof.interface):
-                    if kind == "M":
-                        bits["M"].add(addr)
-                    else:
-                        mem.add((kind, addr))
         # The operands of the PLC data tables are held (the tables load them) and so is the MP-restart marker,
         # which makes the program load them again.
         for row in self.program.data_rows:

@@ -33,11 +33,16 @@ def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]
 
 
 def _block(block: Block, registers: frozenset[str]) -> Block:
+    """`block` simplified; `block` itself when nothing in it changes."""
     out: list[S.Stmt] = []
-    for stmt in _without_dead_stores(block, registers):
+    kept = _without_dead_stores(block, registers)
+    changed = kept is not block
+    for stmt in kept:
         inner_blocks = S.blocks(stmt)
         if inner_blocks:
-            stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in inner_blocks])
+            new = [_block(inner, registers) for inner in inner_blocks]
+            if any(n is not inner for n, inner in zip(new, inner_blocks)):
+                stmt = S.with_blocks(stmt, new)
         if isinstance(stmt, S.If):
             if not S.has_code(stmt.then) and not S.has_code(stmt.orelse):
                 out.extend(stmt.then + stmt.orelse)
@@ -47,6 +52,8 @@ def _block(block: Block, registers: frozenset[str]) -> Block:
                 out[-1] = _joined(out[-1], stmt)
                 continue
         out.append(stmt)
+    if not changed and len(out) == len(kept) and all(a is b for a, b in zip(out, kept)):
+        return block
     return tuple(out)
 
 
