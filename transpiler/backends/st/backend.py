@@ -152,7 +152,8 @@ class StBackend:
         # (and a FUNCTION may not declare VAR_EXTERNAL).
         globals_by_upper = {v.name.upper(): (v, s.comment) for s in config.globals for v in s.vars}
         area_order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
-        program_pous = [_with_externals(p, globals_by_upper, area_order)
+        declarations: dict[str, IecVar] = {}       # (one VAR_EXTERNAL record per global serves every POU)
+        program_pous = [_with_externals(p, globals_by_upper, area_order, declarations)
                         for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
@@ -720,16 +721,20 @@ def _statement_names(block, found: set[str], targets: set[str]) -> None:
 
 
 def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],
-                    area_order: Mapping[str | None, int]) -> Pou:
+                    area_order: Mapping[str | None, int], declarations: dict[str, IecVar]) -> Pou:
     """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
     one block per area of the configuration's globals (`area_order`: their order), titled like it: matiec needs
-    these declarations (a POU sees no global without one), the blocks make the long lists readable."""
+    these declarations (a POU sees no global without one), the blocks make the long lists readable.
+    `declarations` keeps the declaration of each global made so far, for the next POU that names it."""
     used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
     for u in sorted(u for u in used - local if u in globals_by_upper):    # (the same order; fewer names to sort)
         var, area = globals_by_upper[u]
-        by_area.setdefault(area, []).append(IecVar(var.name, var.type))
+        declaration = declarations.get(u)
+        if declaration is None:
+            declaration = declarations[u] = IecVar(var.name, var.type)
+        by_area.setdefault(area, []).append(declaration)
     if not by_area:
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)

@@ -11,6 +11,10 @@ from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.routine import ExecutorPart, Unsupported
 
 
+# (what a word store keeps in flight while it is emitted: every register)
+_ALL_REGISTERS = frozenset(["WA", "X", "LA", "SA"])
+
+
 class OperandMixin(ExecutorPart):
     """Reads and writes operands: named variables, the byte array, indexed bits through their accessor FB."""
 
@@ -136,7 +140,7 @@ class OperandMixin(ExecutorPart):
             else:
                 # (the places written of an operand without index are fixed: neither the value nor X moves them)
                 lv = lambda place=E.var(first[k][0], "BYTE"): place
-            self.store(lv, lambda k=k: self._written(o, value, written, first, k), frozenset(["WA", "X", "LA", "SA"]))
+            self.store(lv, lambda k=k: self._written(o, value, written, first, k), _ALL_REGISTERS)
 
     def _written(self, o: Operand, value: Callable[[], Expr], written: Expr, first: list[tuple[str, Expr]],
                  k: int) -> Expr:

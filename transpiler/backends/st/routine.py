@@ -63,8 +63,10 @@ class Emitter:
             self.pending_comments = []
 
     def add(self, stmt: S.Stmt) -> None:
-        self._forget_changed(stmt)
-        self.flush_comments()
+        if self.access_values:
+            self._forget_changed(stmt)
+        if self.pending_comments:
+            self.flush_comments()
         self.block.append(stmt)
 
     def add_access(self, call: S.Call, kind: str, key: AccessKey, reads: frozenset[str], write: bool) -> None:
