@@ -84,6 +84,9 @@ class Liveness:
         self._use_def: dict[object, tuple[frozenset[str], frozenset[str]]] = {}
         self._forward: set[tuple[int, int]] = set()     # routines without a backward jump (see _routine)
         self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
+        # The ops of each routine that call routines, in order, with their callees (a few of its steps).
+        self.calls = {key: [(i, callees) for i, _, _, _, callees, _ in reversed(steps) if callees]
+                      for key, steps in self.steps.items()}
         self._solve()
 
     def _steps(self, key: tuple[int, int], body: list[int]) -> list[tuple]:
@@ -120,9 +123,14 @@ class Liveness:
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
         """For each routine, the routines whose entry label its body reaches without a call (falling through or
         jumping there): the structured translation calls them."""
-        entries = {r.key for r in self.program.routines}
-        return {r.key: [(r.file, i) for i in self.bodies[r.key] if i != r.index and (r.file, i) in entries]
-                for r in roots}
+        starts: dict[int, set[int]] = {}        # file -> op indices of its routine entries
+        for r in self.program.routines:
+            starts.setdefault(r.file, set()).add(r.index)
+        found: dict[tuple[int, int], list[tuple[int, int]]] = {}
+        for r in roots:
+            here = starts.get(r.file, set())
+            found[r.key] = [(r.file, i) for i in self.bodies[r.key] if i in here and i != r.index]
+        return found
 
     def _solve(self) -> None:
         # The sets only grow from round to round, so every round that changes something adds one register to one
@@ -138,7 +146,7 @@ class Liveness:
                     self.entry_use[key] = entry
                     changed = True
                 n_ops = len(self.program.files[key[0]].ops)
-                for i, _, _, _, callees, _ in reversed(self.steps[key]):
+                for i, callees in self.calls[key]:
                     for callee in callees:
                         after = live.get(i + 1, frozenset()) if i + 1 < n_ops else frozenset()
                         if callee in new_exit:
