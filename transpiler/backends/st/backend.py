@@ -729,7 +729,7 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
     used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
-    for u in sorted(u for u in used - local if u in globals_by_upper):    # (the same order; fewer names to sort)
+    for u in sorted(globals_by_upper.keys() & (used - local)):    # (the same order; fewer names to sort)
         var, area = globals_by_upper[u]
         declaration = declarations.get(u)
         if declaration is None:

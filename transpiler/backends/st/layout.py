@@ -72,6 +72,7 @@ class Layout:
         self._mem_var: dict[tuple[str, int], str] = {}
         self._bit_exprs: dict[tuple[str, int], E.Expr] = {}     # bit_lvalue's and read_value's expressions
         self._mem_exprs: dict[tuple[str, int], E.Expr] = {}
+        self._constants: dict[int, E.Expr] = {}        # constant's expressions (see constant)
         self.bit_arrays: dict[str, str] = {}          # kind -> array of the addresses that have no name of their own
         self.bit_access: dict[str, str] = {}          # kind -> accessor FB type for indexed access
         self.mem_array: str | None = None
@@ -382,6 +383,13 @@ class Layout:
             name = self._declare_bit(*key)
             text = self.ref(name)
             known = self._bit_exprs[key] = E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
+        return known
+
+    def constant(self, value: int) -> E.Expr:
+        """A constant operand (K) as its DINT literal: one expression per value serves every read of it."""
+        known = self._constants.get(value)
+        if known is None:
+            known = self._constants[value] = E.int_const(value)
         return known
 
     def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:

@@ -104,7 +104,7 @@ class OperandMixin(ExecutorPart):
     def value(self, o: Operand) -> Expr:
         """A value operand as DINT-compatible typed expression (SINT/INT/DINT)."""
         if o.kind == "K":
-            return E.int_const(o.addr)
+            return self.ctx.layout.constant(o.addr)
         if o.kind == "X":
             return self.s.reg("X")
         if o.kind == "KF":
