@@ -52,20 +52,23 @@ class Structurer:
         self.ex = ex
         self.ops = info.file.ops
         self.out = ex.ctx.out
-        self.body = set(info.body)
-        self.last = max(info.body, default=-1)     # the routine's last op
+        ordered = sorted(info.body)
+        self.body = set(ordered)
+        self.last = ordered[-1] if ordered else -1     # the routine's last op
         self.jumps_to: dict[int, list[int]] = {}
         if info.file_jumps is None:
-            jumps = [i for i in info.body if self.ops[i].code in JUMPS and self.ops[i].target is not None]
-        elif info.body:
+            jumps = [i for i in ordered if self.ops[i].code in JUMPS and self.ops[i].target is not None]
+        elif ordered:
             # (the file's jumps within the body's span, of the body: a few, where the body has dozens of ops)
-            lo = bisect.bisect_left(info.file_jumps, info.body[0])
-            hi = bisect.bisect_right(info.file_jumps, info.body[-1])
+            lo = bisect.bisect_left(info.file_jumps, ordered[0])
+            hi = bisect.bisect_right(info.file_jumps, ordered[-1])
             jumps = [i for i in info.file_jumps[lo:hi] if i in self.body]
         else:
             jumps = []
         for i in jumps:
             self.jumps_to.setdefault(self.ops[i].target, []).append(i)
+        self.jumps = jumps                          # the body's jumps with a target, in order
+        self.entries = sorted(info.other_entries)   # the body's entries of other routines, in order
         self.loop_exits: list[int] = []    # exit index of each enclosing loop
         self.depth = 0                     # nesting of emitted IF/loop constructs
         self.loop_heads: set[int] = set()  # heads of the loops being emitted (their back edge is the loop itself)
@@ -107,15 +110,13 @@ class Structurer:
         for t, sources in self.jumps_to.items():
             if lo < t < hi and any(not lo <= s < hi for s in sources):
                 return False
-        for i in range(lo, hi):
-            if i not in self.body:
-                continue
-            op = self.ops[i]
-            if op.code in JUMPS and op.target is not None:
-                t = op.target
-                if not (lo <= t < hi or t in exit_ok or t in self._equiv(hi) or self._is_return_at(t)):
-                    return False
-            if i != lo and i in self.info.other_entries:
+        # (the body's jumps and entries in [lo, hi), found by bisection: regions are entered for every IF)
+        if bisect.bisect_right(self.entries, lo) < bisect.bisect_left(self.entries, hi):
+            return False        # an entry of another routine inside
+        jumps = self.jumps
+        for i in jumps[bisect.bisect_left(jumps, lo):bisect.bisect_left(jumps, hi)]:
+            t = self.ops[i].target
+            if not (lo <= t < hi or t in exit_ok or t in self._equiv(hi) or self._is_return_at(t)):
                 return False
         return True
 
