@@ -132,10 +132,13 @@ def _word_names(word: str) -> frozenset[str]:
 
 
 _NONE: frozenset[str] = frozenset()
-# The operators binop and b_not join into expressions (most words): their names, worked out once.
+# The operators binop and b_not join into expressions and the type conversions (most words): their names, worked
+# out once.
 _OPERATOR_NAMES = MappingProxyType({
     **{op: _NONE for op in ("+", "-", "*", "/", "=", "<>", "<", "<=", ">", ">=")},
-    **{op: frozenset((op,)) for op in ("AND", "OR", "XOR", "NOT", "MOD")}})
+    **{op: frozenset((op,)) for op in ("AND", "OR", "XOR", "NOT", "MOD")},
+    **{f"{a}_TO_{b}": frozenset((f"{a}_TO_{b}",)) for a in ("BOOL", "SINT", "INT", "DINT", "BYTE")
+       for b in ("BOOL", "SINT", "INT", "DINT", "BYTE") if a != b}})
 
 
 def base_name(text: str) -> str:

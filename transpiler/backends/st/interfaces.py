@@ -116,6 +116,7 @@ class StackAnalysis:
         for r in program.routines:
             self._by_file.setdefault(r.file, {})[r.index] = r
         self.interfaces: dict[tuple[int, int], StackInterface] = {}
+        self._stack_ops: dict[int, list[int]] = {}     # file -> indices of its ops in _STACK_CODES, in order
         self._run()
 
     # ---- driver
@@ -219,7 +220,12 @@ class StackAnalysis:
         # Kept whole (~60 lines): one worklist over the ops; each op's stack effect is a few lines of the same loop.
         walk = _Walk({}, {})
         self._walks[key] = walk
-        body = set(self.bodies(entry))
+        ordered = self.bodies(entry)
+        body = set(ordered)
+        if self._leaves_stack_alone(key, entry, ordered, body):
+            # (most routines: the walk would reach every op of the body with the empty stack and change nothing)
+            walk.states.update(dict.fromkeys(ordered, (0, ())))
+            return Effect((), (), 0)
         others = {i for i in self._by_file.get(entry.file, {}) if i != entry.index} if key != MAIN else set()
         exits: list[tuple[int, tuple]] = []
         ops, states = file.ops, walk.states
@@ -265,6 +271,26 @@ class StackAnalysis:
         results = tuple(self._kind(walk, x) for x in (shapes.pop() if shapes else ()))
         params = tuple(walk.params.get(k, VAL) for k in range(u))
         return Effect(params, results, walk.max_words)
+
+    def _leaves_stack_alone(self, key: tuple[int, int], entry: CallTarget, ordered: tuple[int, ...],
+                            body: set[int]) -> bool:
+        """No op of the body (`ordered`, sorted; `body`, the same as a set) touches the data stack, and outside the
+        main program none is another routine's entry (where the walk calls that routine and stops)."""
+        if not ordered:
+            return True
+        if key == MAIN:
+            entries: list[int] = []
+        else:
+            entries = [i for i in self._by_file.get(entry.file, {}) if i != entry.index]
+        lo, hi = ordered[0], ordered[-1]
+        if any(lo <= i <= hi and i in body for i in entries):
+            return False
+        stack_ops = self._stack_ops.get(entry.file)
+        if stack_ops is None:
+            ops = self.program.files[entry.file].ops
+            stack_ops = self._stack_ops[entry.file] = [i for i, op in enumerate(ops) if op.code in _STACK_CODES]
+        found = stack_ops[bisect.bisect_left(stack_ops, lo):bisect.bisect_right(stack_ops, hi)]
+        return not any(i in body for i in found)
 
     def _step(self, walk: _Walk, state: tuple[int, tuple], op: Op) -> tuple[int, tuple]:
         code = op.code

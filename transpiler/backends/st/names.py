@@ -109,6 +109,9 @@ class NameTable:
 
 def legalise(name: str) -> tuple[str, str]:
     """A legal ST identifier close to `name` and the reason for any change ('' when unchanged)."""
+    if name.isascii() and name.isidentifier() and name[0] != "_" and name[-1] != "_" and "__" not in name \
+            and len(name) <= MAX_LEN:
+        return name, ""         # (most names: legal as they are, the rules below would change nothing)
     reasons = []
     text = _ILLEGAL.sub("_", name)
     if text != name:
