@@ -117,6 +117,7 @@ class StackAnalysis:
             self._by_file.setdefault(r.file, {})[r.index] = r
         self.interfaces: dict[tuple[int, int], StackInterface] = {}
         self._stack_ops: dict[int, list[int]] = {}     # file -> indices of its ops in _STACK_CODES, in order
+        self._starts: dict[int, list[int]] = {}        # file -> indices of its routine entries, in order
         self._run()
 
     # ---- driver
@@ -278,19 +279,20 @@ class StackAnalysis:
         main program none is another routine's entry (where the walk calls that routine and stops)."""
         if not ordered:
             return True
-        if key == MAIN:
-            entries: list[int] = []
-        else:
-            entries = [i for i in self._by_file.get(entry.file, {}) if i != entry.index]
         lo, hi = ordered[0], ordered[-1]
-        if any(lo <= i <= hi and i in body for i in entries):
-            return False
         stack_ops = self._stack_ops.get(entry.file)
         if stack_ops is None:
             ops = self.program.files[entry.file].ops
             stack_ops = self._stack_ops[entry.file] = [i for i, op in enumerate(ops) if op.code in _STACK_CODES]
-        found = stack_ops[bisect.bisect_left(stack_ops, lo):bisect.bisect_right(stack_ops, hi)]
-        return not any(i in body for i in found)
+        if any(i in body for i in stack_ops[bisect.bisect_left(stack_ops, lo):bisect.bisect_right(stack_ops, hi)]):
+            return False
+        if key == MAIN:
+            return True
+        starts = self._starts.get(entry.file)
+        if starts is None:
+            starts = self._starts[entry.file] = sorted(self._by_file.get(entry.file, {}))
+        return not any(i in body and i != entry.index
+                       for i in starts[bisect.bisect_left(starts, lo):bisect.bisect_right(starts, hi)])
 
     def _step(self, walk: _Walk, state: tuple[int, tuple], op: Op) -> tuple[int, tuple]:
         code = op.code
