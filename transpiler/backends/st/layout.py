@@ -73,6 +73,7 @@ class Layout:
         self._bit_exprs: dict[tuple[str, int], E.Expr] = {}     # bit_lvalue's and read_value's expressions
         self._mem_exprs: dict[tuple[str, int], E.Expr] = {}
         self._constants: dict[int, E.Expr] = {}        # constant's expressions (see constant)
+        self._places: dict[str, E.Expr] = {}           # lvalue texts of write_value as expressions (see place)
         self.bit_arrays: dict[str, str] = {}          # kind -> array of the addresses that have no name of their own
         self.bit_access: dict[str, str] = {}          # kind -> accessor FB type for indexed access
         self.mem_array: str | None = None
@@ -414,6 +415,14 @@ class Layout:
         known = self._mem_exprs.get(key)
         if known is None:
             known = self._mem_exprs[key] = E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
+        return known
+
+    def place(self, lvalue: str) -> E.Expr:
+        """An lvalue text of write_value as the expression a store assigns to (one per text: a place without
+        index is written again and again)."""
+        known = self._places.get(lvalue)
+        if known is None:
+            known = self._places[lvalue] = E.var(lvalue, "BYTE")
         return known
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:

@@ -139,7 +139,7 @@ class OperandMixin(ExecutorPart):
                 lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
             else:
                 # (the places written of an operand without index are fixed: neither the value nor X moves them)
-                lv = lambda place=E.var(first[k][0], "BYTE"): place
+                lv = lambda place=layout.place(first[k][0]): place
             self.store(lv, lambda k=k: self._written(o, value, written, first, k), _ALL_REGISTERS)
 
     def _written(self, o: Operand, value: Callable[[], Expr], written: Expr, first: list[tuple[str, Expr]],
