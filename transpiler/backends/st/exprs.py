@@ -84,7 +84,12 @@ def names_of(e: Expr) -> frozenset[str]:
     if e.parts is not None:
         found = _NONE
         for p in e.parts:
-            names = _word_names(p) if type(p) is str else p.names if p.names is not None else names_of(p)
+            if type(p) is str:
+                names = _OPERATOR_NAMES.get(p)      # (most words: no call)
+                if names is None:
+                    names = _word_names(p)
+            else:
+                names = p.names if p.names is not None else names_of(p)
             if names:       # (a part's own set serves while it is the only one with names: most operands)
                 found = found | names if found else names
     elif e.var is not None and e.var == e.text:
