@@ -68,7 +68,7 @@ class Structurer:
         for i in jumps:
             self.jumps_to.setdefault(self.ops[i].target, []).append(i)
         self.jumps = jumps                          # the body's jumps with a target, in order
-        self.entries = sorted(info.other_entries)   # the body's entries of other routines, in order
+        self.entries = sorted(i for i in info.other_entries if i in self.body)   # other routines' entries, in order
         self.loop_exits: list[int] = []    # exit index of each enclosing loop
         self.depth = 0                     # nesting of emitted IF/loop constructs
         self.loop_heads: set[int] = set()  # heads of the loops being emitted (their back edge is the loop itself)
