@@ -6,6 +6,8 @@ import dataclasses
 from types import MappingProxyType
 from typing import Literal
 
+from transpiler.records import quick_init
+
 PouKind = Literal["PROGRAM", "FUNCTION_BLOCK", "FUNCTION"]
 SectionKind = Literal["VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR_TEMP"]
 
@@ -24,6 +26,7 @@ class SourceRange:
         return f"{self.file}:{self.first_line}-{self.last_line}"
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class IecVar:
     """One variable declaration. `type` is an elementary type name or the name of a declared DataType/FB."""
@@ -35,6 +38,7 @@ class IecVar:
     comment: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class VarSection:
     kind: SectionKind
@@ -62,6 +66,7 @@ class DataType:
     comment: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Pou:
     """A POU. `body` is the complete ST statement text of the body, unindented, lines joined with '\\n'.

@@ -23,7 +23,7 @@ from transpiler.backends.st.interfaces import Dynamic, Effect, StackAnalysis
 from transpiler.backends.st import passes, printer, simplify
 from transpiler.backends.st import stmt as S
 from transpiler.backends.st.names import POU_KEY_PREFIX, RESERVED, TEMP_PREFIX, NameTable, legalise
-from transpiler.backends.st.structure import NotStructured, RoutineInfo, Structurer, state_machine
+from transpiler.backends.st.structure import JUMPS, NotStructured, RoutineInfo, Structurer, state_machine
 from transpiler.backends.st.routine import REG_TYPES, AccessorPool, Emitter, RoutineContext, Unsupported, tag
 from transpiler.backends.st.stackops import SLOT_TYPES, StaticStack
 from transpiler.backends.st.symbolic import Executor
@@ -127,6 +127,7 @@ class StBackend:
         pous: dict[tuple[int, int], Pou] = {}
         routine_keys = [(0, 0)] + [r.key for r in self.program.routines]
         self.calls: dict[tuple[int, int], set[tuple[int, int]]] = {}
+        self.file_jumps: dict[int, list[int]] = {}
         for key in routine_keys:
             pous[key] = self._routine(key, entries_by_file.get(key[0], {}))
         presets = self._presets(layout)
@@ -151,7 +152,8 @@ class StBackend:
         # (and a FUNCTION may not declare VAR_EXTERNAL).
         globals_by_upper = {v.name.upper(): (v, s.comment) for s in config.globals for v in s.vars}
         area_order = {area: n for n, area in enumerate(dict.fromkeys(a for _, a in globals_by_upper.values()))}
-        program_pous = [_with_externals(p, globals_by_upper, area_order)
+        declarations: dict[str, IecVar] = {}       # (one VAR_EXTERNAL record per global serves every POU)
+        program_pous = [_with_externals(p, globals_by_upper, area_order, declarations)
                         for p in user_pous + [main] + ([job_program] if job_program is not None else [])]
         project = IecProject(self.main_pou, types, tuple(lib + fbs + program_pous), config,
                              header_comment=self._header())
@@ -362,7 +364,8 @@ class StBackend:
         in_body = set(body)
         other_entries = {i: t for i, t in file_entries.items() if i != entry.index and i in in_body}
         info = RoutineInfo(key, entry, file, body, is_main, call_name, other_entries,
-                           self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call)
+                           self.liveness.exit(key), lambda i: self.liveness.at(key, i), interface_call,
+                           self._file_jumps(key[0]))
         self.current_key = key
         structured = True
         try:
@@ -430,6 +433,15 @@ class StBackend:
         overwritten |= frozenset(n for n in markers if n is not None)
         statements = simplify.simplify(statements, overwritten)
         return passes.propagate_temporaries(printer.with_statements(pou, statements))
+
+    def _file_jumps(self, index: int) -> list[int]:
+        """The indices of the jumps with a target in file `index`, in order (worked out once per file: every
+        routine of the file structures its own)."""
+        jumps = self.file_jumps.get(index)
+        if jumps is None:
+            jumps = self.file_jumps[index] = [i for i, op in enumerate(self.program.files[index].ops)
+                                              if op.code in JUMPS and op.target is not None]
+        return jumps
 
     def _bit_accessor_pou(self, kind: str) -> Pou:
         """Indexed access to a bit space: a CASE over the named operands, the rest in one array (base + X)."""
@@ -669,38 +681,60 @@ def _names_used(pou: Pou) -> set[str]:
         return {m.group(0).upper() for m in _IDENT.finditer(_COMMENT.sub("", pou.body))}
     found: set[str] = set()
     targets: set[str] = set()       # lvalue, callee and input texts, each looked at once
-    for s in S.walk(pou.statements):
+    _statement_names(pou.statements, found, targets)
+    for text in targets:
+        if text.isidentifier() and text.isascii():      # (most: a plain variable, its own name)
+            found.add(text.upper())
+        else:
+            found |= E.text_names(text)
+    return found
+
+
+def _statement_names(block, found: set[str], targets: set[str]) -> None:
+    """The names of `block`'s expressions into `found`, its lvalue, callee and input texts into `targets` (nested
+    blocks included; a plain recursion: a POU's statements are thousands of trees of a few levels)."""
+    names_of = E.names_of
+    for s in block:
         kind = type(s)
         if kind is S.Assign:
             targets.add(s.target)
-            found |= E.names_of(s.value)
+            found |= names_of(s.value)
         elif kind is S.Call:
             targets.add(s.callee)
             for name, value in s.args:
                 targets.add(name)
-                found |= E.names_of(value)
-        elif kind is S.If or kind is S.While:
-            found |= E.names_of(s.cond)
+                found |= names_of(value)
+        elif kind is S.If:
+            found |= names_of(s.cond)
+            _statement_names(s.then, found, targets)
+            _statement_names(s.orelse, found, targets)
         elif kind is S.Case:
-            found |= E.names_of(s.selector)
+            found |= names_of(s.selector)
+            for inner in S.blocks(s):
+                _statement_names(inner, found, targets)
+        elif kind is S.While:
+            found |= names_of(s.cond)
+            _statement_names(s.body, found, targets)
         elif kind is S.Repeat:
-            found |= E.names_of(s.until)
-    for text in targets:
-        found |= E.text_names(text)
-    return found
+            found |= names_of(s.until)
+            _statement_names(s.body, found, targets)
 
 
 def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str | None]],
-                    area_order: Mapping[str | None, int]) -> Pou:
+                    area_order: Mapping[str | None, int], declarations: dict[str, IecVar]) -> Pou:
     """`pou` with a VAR_EXTERNAL declaration of every global its body names (names in comments do not count),
     one block per area of the configuration's globals (`area_order`: their order), titled like it: matiec needs
-    these declarations (a POU sees no global without one), the blocks make the long lists readable."""
+    these declarations (a POU sees no global without one), the blocks make the long lists readable.
+    `declarations` keeps the declaration of each global made so far, for the next POU that names it."""
     used = _names_used(pou)
     local = {v.name.upper() for s in pou.sections for v in s.vars}
     by_area: dict[str | None, list[IecVar]] = {}
-    for u in sorted(u for u in used - local if u in globals_by_upper):    # (the same order; fewer names to sort)
+    for u in sorted(globals_by_upper.keys() & (used - local)):    # (the same order; fewer names to sort)
         var, area = globals_by_upper[u]
-        by_area.setdefault(area, []).append(IecVar(var.name, var.type))
+        declaration = declarations.get(u)
+        if declaration is None:
+            declaration = declarations[u] = IecVar(var.name, var.type)
+        by_area.setdefault(area, []).append(declaration)
     if not by_area:
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)

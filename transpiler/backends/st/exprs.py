@@ -7,7 +7,6 @@ import re
 from types import MappingProxyType
 
 from transpiler.backends.st.dialect import GVL_NAMES
-from transpiler.records import quick_init
 
 INT32 = (-(2 ** 31), 2 ** 31 - 1)
 RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": INT32, "BOOL": (0, 1)})
@@ -16,8 +15,7 @@ RANGES = MappingProxyType({"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": 
 PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_EQ, PREC_AND, PREC_XOR, PREC_OR = 10, 9, 8, 7, 6, 5, 4, 3, 2
 
 
-@quick_init
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, init=False)
 class Expr:
     """ST text of a value, its IEC type, the variables it reads, and (for integers) its value range.
 
@@ -30,7 +28,7 @@ class Expr:
     text: str
     typ: str
     deps: frozenset[str] = frozenset()
-    lo: int = None  # type: ignore[assignment]  # None: the whole range of `typ` (set in __post_init__)
+    lo: int = None  # type: ignore[assignment]  # None: the whole range of `typ` (set in __init__)
     hi: int = None  # type: ignore[assignment]
     prec: int = PREC_ATOM
     var: str | None = None          # set when the expression is exactly one variable (an lvalue)
@@ -39,15 +37,30 @@ class Expr:
     parts: tuple[str | Expr, ...] | None = dataclasses.field(default=None, compare=False, repr=False)
     names: frozenset[str] | None = dataclasses.field(default=None, compare=False, repr=False)
 
-    def __post_init__(self) -> None:
+    def __init__(self, text: str, typ: str, deps: frozenset[str] = frozenset(), lo: int | None = None,
+                 hi: int | None = None, prec: int = PREC_ATOM, var: str | None = None, const: int | None = None,
+                 bool_const: bool | None = None, parts: tuple[str | Expr, ...] | None = None,
+                 names: frozenset[str] | None = None) -> None:
+        # Written out (the back end builds tens of thousands of expressions): the fields go into the instance dict
+        # as records.quick_init stores them, the range defaults with them.
         # An integer expression built without a range may hold any value of its type: assuming less would let
         # range-based simplifications (overflow checks left out) go wrong.
-        if self.lo is None or self.hi is None:
-            full = RANGES.get(self.typ, (0, 0))
-            if self.lo is None:
-                object.__setattr__(self, "lo", full[0])
-            if self.hi is None:
-                object.__setattr__(self, "hi", full[1])
+        if lo is None or hi is None:
+            full = RANGES.get(typ, (0, 0))
+            lo = full[0] if lo is None else lo
+            hi = full[1] if hi is None else hi
+        fields = self.__dict__
+        fields["text"] = text
+        fields["typ"] = typ
+        fields["deps"] = deps
+        fields["lo"] = lo
+        fields["hi"] = hi
+        fields["prec"] = prec
+        fields["var"] = var
+        fields["const"] = const
+        fields["bool_const"] = bool_const
+        fields["parts"] = parts
+        fields["names"] = names
 
     def wrap(self, prec: int) -> str:
         return self.text if self.prec >= prec else f"({self.text})"
@@ -69,7 +82,16 @@ def names_of(e: Expr) -> frozenset[str]:
     if found is not None:
         return found
     if e.parts is not None:
-        found = frozenset().union(*(_word_names(p) if isinstance(p, str) else names_of(p) for p in e.parts))
+        found = _NONE
+        for p in e.parts:
+            if type(p) is str:
+                names = _OPERATOR_NAMES.get(p)      # (most words: no call)
+                if names is None:
+                    names = _word_names(p)
+            else:
+                names = p.names if p.names is not None else names_of(p)
+            if names:       # (a part's own set serves while it is the only one with names: most operands)
+                found = found | names if found else names
     elif e.var is not None and e.var == e.text:
         found = text_names(e.text)
     else:
@@ -106,12 +128,22 @@ def _ident(text: str) -> bool:
 
 def _word_names(word: str) -> frozenset[str]:
     """names_in of a function name or operator joined into an expression's text (`HH_BIT`, `AND`; `+`: none)."""
+    known = _OPERATOR_NAMES.get(word)
+    if known is not None:
+        return known
     if _ident(word):
         return frozenset((word.upper(),))
     return text_names(word) if any(ch.isalnum() or ch == "_" for ch in word) else _NONE
 
 
 _NONE: frozenset[str] = frozenset()
+# The operators binop and b_not join into expressions and the type conversions (most words): their names, worked
+# out once.
+_OPERATOR_NAMES = MappingProxyType({
+    **{op: _NONE for op in ("+", "-", "*", "/", "=", "<>", "<", "<=", ">", ">=")},
+    **{op: frozenset((op,)) for op in ("AND", "OR", "XOR", "NOT", "MOD")},
+    **{f"{a}_TO_{b}": frozenset((f"{a}_TO_{b}",)) for a in ("BOOL", "SINT", "INT", "DINT", "BYTE")
+       for b in ("BOOL", "SINT", "INT", "DINT", "BYTE") if a != b}})
 
 
 def base_name(text: str) -> str:
@@ -129,6 +161,8 @@ _PATH = re.compile(r"(?<![A-Za-z0-9_.])[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za
 
 def unqualified(text: str) -> str:
     """`text` without the list qualifier of a global reference (`GVL_IO.I5` -> `I5`)."""
+    if "." not in text:     # (most texts: no qualifier to look for)
+        return text
     match = _QUALIFIED.match(text)
     return text[match.end():] if match else text
 

@@ -14,16 +14,15 @@ from transpiler.backends.st.routine import ExecutorPart
 class InFlightMixin(ExecutorPart):
     """Saves values that read a variable before it is written; flushes registers and the data stack at boundaries."""
 
-    def _dependents(self, base: str):
-        for name, value in self.s.regs.items():
-            if value is not None and base in value.deps:
-                yield ("reg", name)
-        for k, (_, value) in enumerate(self.s.stack):
-            if base in value.deps:
-                yield ("stack", k)
-        for k, frame in enumerate(self.s.frames):
-            if base in frame.saved.deps:
-                yield ("frame", k)
+    def _dependents(self, base: str) -> list[tuple[str, str | int]]:
+        """The in-flight values that read `base`: registers, stack entries, bracket frames."""
+        found: list[tuple[str, str | int]] = [
+            ("reg", name) for name, value in self.s.regs.items() if value is not None and base in value.deps]
+        if self.s.stack:
+            found += [("stack", k) for k, (_, value) in enumerate(self.s.stack) if base in value.deps]
+        if self.s.frames:
+            found += [("frame", k) for k, frame in enumerate(self.s.frames) if base in frame.saved.deps]
+        return found
 
     def prepare_write(self, base: str, keep: frozenset[str] = frozenset()) -> list[str]:
         """Before `base` is assigned: save every in-flight value that reads it.
@@ -31,9 +30,12 @@ class InFlightMixin(ExecutorPart):
         Registers still live after this op go to their variables; registers in `keep` (read by the
         pending statement itself) stay symbolic and are returned, to be dropped once it is emitted.
         """
+        dependents = self._dependents(base)
+        if not dependents:
+            return []
         live = self.ctx.live_after(self.index)
         deferred: list[str] = []
-        for kind, key in list(self._dependents(base)):
+        for kind, key in dependents:
             if kind == "reg":
                 if key in live or self.s.frames or self.s.stack:
                     self.materialize(key)
@@ -56,7 +58,7 @@ class InFlightMixin(ExecutorPart):
     def saves_nothing(self, base: str, live: frozenset[str]) -> bool:
         """Assigning `base` needs no value in flight saved: each value that reads it is a register not in `live`
         (prepare_write drops or defers such a register; nothing is saved while the stack or a bracket is open)."""
-        dependents = list(self._dependents(base))
+        dependents = self._dependents(base)
         return not dependents or not self.s.frames and not self.s.stack and all(
             kind == "reg" and key not in live for kind, key in dependents)
 

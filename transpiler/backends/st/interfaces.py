@@ -14,6 +14,7 @@ module can join by giving `module_effect` its parameters and results.
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import re
 from types import MappingProxyType
@@ -32,6 +33,9 @@ _JOBS = ("SUBM", "RPLY", "CAN")
 MAIN = (0, 0)
 # The op codes _step looks at; every other op leaves the stack state as it is.
 _STACK_CODES = frozenset({"PUSH", "POP", "CASE", *_PUSH, *_PULL, *_CALLS})
+_ENDS = frozenset({"EM", "EMT", "EMF"})
+# The ops _irregular_call_sites looks at (besides the entries of other routines).
+_ENTERING = frozenset({"CALLT", "CALLF", "CASE", *_JOBS})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,6 +116,8 @@ class StackAnalysis:
         for r in program.routines:
             self._by_file.setdefault(r.file, {})[r.index] = r
         self.interfaces: dict[tuple[int, int], StackInterface] = {}
+        self._stack_ops: dict[int, list[int]] = {}     # file -> indices of its ops in _STACK_CODES, in order
+        self._starts: dict[int, list[int]] = {}        # file -> indices of its routine entries, in order
         self._run()
 
     # ---- driver
@@ -134,13 +140,9 @@ class StackAnalysis:
         for key, effect in self.effects.items():
             walk = self._walks[key]
             u = len(effect.params)
-            kinds: dict[tuple[int, tuple], tuple[str, ...]] = {}     # (most ops of a routine share one state)
-            stack_at = {}
-            for i, s in walk.states.items():
-                known = kinds.get(s)
-                if known is None:
-                    known = kinds[s] = tuple(self._kind(walk, x) for x in _lift(s, u))
-                stack_at[i] = known
+            # (most ops of a routine share one state: each distinct one is worked out once)
+            kinds = {s: tuple(self._kind(walk, x) for x in _lift(s, u)) for s in set(walk.states.values())}
+            stack_at = dict(zip(walk.states, map(kinds.__getitem__, walk.states.values())))
             self.interfaces[key] = StackInterface(
                 tuple(zip(self._param_names(key, u), reversed(effect.params))),
                 tuple(zip(self._result_names(key, effect), effect.results)), MappingProxyType(stack_at))
@@ -160,9 +162,22 @@ class StackAnalysis:
                 bad[target.key] = Dynamic(f"{how} at {op.span.file}:{op.span.line}, so its operands stay on the "
                                           "data stack", op.span)
 
+        # Per file, the ops that may enter a routine other than by CM, in order: each routine looks only at those
+        # of its body (the bodies cover every op; most ops are none of these).
+        entering: dict[int, list[int]] = {}
         for key, entry in self._entries.items():
             file = self.program.files[entry.file]
-            for i in self.bodies(entry):
+            if entry.file not in entering:
+                starts = self._by_file.get(entry.file, {})
+                entering[entry.file] = [i for i, op in enumerate(file.ops) if op.code in _ENTERING or i in starts]
+            body = self.bodies(entry)
+            if not body:
+                continue
+            candidates = entering[entry.file]
+            inside = set(body)
+            for i in candidates[bisect.bisect_left(candidates, body[0]):bisect.bisect_right(candidates, body[-1])]:
+                if i not in inside:
+                    continue
                 op = file.ops[i]
                 if op.code in ("CALLT", "CALLF"):
                     mark(op.call, "called conditionally", op)
@@ -206,39 +221,49 @@ class StackAnalysis:
         # Kept whole (~60 lines): one worklist over the ops; each op's stack effect is a few lines of the same loop.
         walk = _Walk({}, {})
         self._walks[key] = walk
-        body = set(self.bodies(entry))
+        ordered = self.bodies(entry)
+        body = set(ordered)
+        if self._leaves_stack_alone(key, entry, ordered, body):
+            # (most routines: the walk would reach every op of the body with the empty stack and change nothing)
+            walk.states.update(dict.fromkeys(ordered, (0, ())))
+            return Effect((), (), 0)
         others = {i for i in self._by_file.get(entry.file, {}) if i != entry.index} if key != MAIN else set()
         exits: list[tuple[int, tuple]] = []
+        ops, states = file.ops, walk.states
+        n = len(ops)
         todo = [(entry.index, (0, ()))]
         while todo:
             i, state = todo.pop()
-            if i >= len(file.ops) or i not in body:
-                continue
-            if i in walk.states:
-                u = max(walk.states[i][0], state[0])
-                if _lift(walk.states[i], u) != _lift(state, u):
-                    raise _NotStatic(f"the data stack holds different entries at line {file.ops[i].span.line} "
-                                     "depending on the path", file.ops[i].span)
-                continue
-            walk.states[i] = state
-            op = file.ops[i]
-            if i in others:
-                # Falling through into another routine: its code runs, then this routine ends.
-                state = self._call(walk, state, self._by_file[entry.file][i], op, conditional=False)
-                exits.append((i, state))
-                continue
-            if op.code in _STACK_CODES:
-                state = self._step(walk, state, op)
-            if op.code in ("EM", "EMT", "EMF"):
-                exits.append((i, state))
-                if op.code == "EM":
+            # One path at a time: the next op or a JP's target directly, a conditional jump's target waits in
+            # `todo` (the order in which a stack of (op, state) pairs would take them: the newest first).
+            while i < n and i in body:
+                known = states.get(i)
+                if known is not None:
+                    u = max(known[0], state[0])
+                    if _lift(known, u) != _lift(state, u):
+                        raise _NotStatic(f"the data stack holds different entries at line {ops[i].span.line} "
+                                         "depending on the path", ops[i].span)
+                    break
+                states[i] = state
+                op = ops[i]
+                code = op.code
+                if i in others:
+                    # Falling through into another routine: its code runs, then this routine ends.
+                    state = self._call(walk, state, self._by_file[entry.file][i], op, conditional=False)
+                    exits.append((i, state))
+                    break
+                if code in _STACK_CODES:
+                    state = self._step(walk, state, op)
+                if code in _ENDS:
+                    exits.append((i, state))
+                    if code == "EM":
+                        break
+                if code == "JP":
+                    i = op.target
                     continue
-            if op.code == "JP":
-                todo.append((op.target, state))
-                continue
-            if op.code in ("JPT", "JPF") and op.target is not None:
-                todo.append((op.target, state))
-            todo.append((i + 1, state))
+                if (code == "JPT" or code == "JPF") and op.target is not None:
+                    todo.append((op.target, state))
+                i += 1
         u = walk.max_u
         shapes = {_lift(s, u) for _, s in exits}
         if len(shapes) > 1:
@@ -247,6 +272,27 @@ class StackAnalysis:
         results = tuple(self._kind(walk, x) for x in (shapes.pop() if shapes else ()))
         params = tuple(walk.params.get(k, VAL) for k in range(u))
         return Effect(params, results, walk.max_words)
+
+    def _leaves_stack_alone(self, key: tuple[int, int], entry: CallTarget, ordered: tuple[int, ...],
+                            body: set[int]) -> bool:
+        """No op of the body (`ordered`, sorted; `body`, the same as a set) touches the data stack, and outside the
+        main program none is another routine's entry (where the walk calls that routine and stops)."""
+        if not ordered:
+            return True
+        lo, hi = ordered[0], ordered[-1]
+        stack_ops = self._stack_ops.get(entry.file)
+        if stack_ops is None:
+            ops = self.program.files[entry.file].ops
+            stack_ops = self._stack_ops[entry.file] = [i for i, op in enumerate(ops) if op.code in _STACK_CODES]
+        if any(i in body for i in stack_ops[bisect.bisect_left(stack_ops, lo):bisect.bisect_right(stack_ops, hi)]):
+            return False
+        if key == MAIN:
+            return True
+        starts = self._starts.get(entry.file)
+        if starts is None:
+            starts = self._starts[entry.file] = sorted(self._by_file.get(entry.file, {}))
+        return not any(i in body and i != entry.index
+                       for i in starts[bisect.bisect_left(starts, lo):bisect.bisect_right(starts, hi)])
 
     def _step(self, walk: _Walk, state: tuple[int, tuple], op: Op) -> tuple[int, tuple]:
         code = op.code
@@ -319,14 +365,18 @@ class StackAnalysis:
 
     def _param_names(self, key: tuple[int, int], u: int) -> list[str]:
         """Parameter names (caller's push order) after the operands the routine pulls them into."""
+        if not u:
+            return []
         pulled = self._operand_names(key, ("POP", "PLW", "PLL", "PLX"))[:u]
         pulled += [None] * (u - len(pulled))
         names = _unique(_strip_common(pulled), "in")
         return list(reversed(names))
 
     def _result_names(self, key: tuple[int, int], effect: Effect) -> list[str]:
-        pushed = self._operand_names(key, ("PUSH", "PSW", "PSL", "PSX"))
         m = len(effect.results)
+        if not m:
+            return []
+        pushed = self._operand_names(key, ("PUSH", "PSW", "PSL", "PSX"))
         tail = pushed[-m:] if m and len(pushed) >= m else [None] * m
         return _unique(_strip_common(tail), "out")
 

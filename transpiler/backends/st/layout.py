@@ -23,6 +23,9 @@ GROUP_TITLES = MappingProxyType({"io_in": "Inputs (process image)", "io_out": "O
                 "data": "PLC data tables (MP_Data.tab, MP_Config.tab)"})
 MEM_TYPE = MappingProxyType({"B": "SINT", "W": "INT", "D": "DINT"})
 BYTE_ARRAY_TYPE = "T_HH_MEM"
+# The op codes implicit_writes may answer for (arithmetic, a closing bracket, a call: a PLC module); any other op
+# writes nothing it does not name, and most ops are others.
+_MAY_WRITE_IMPLICITLY = frozenset({"MUL", "DIV", "MOD", "ADD", "SUB", "BCLOSE", "CALL", "CALLT", "CALLF"})
 BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
 STRING_ARRAY_TYPE = "T_HH_STRINGS"
 
@@ -69,6 +72,8 @@ class Layout:
         self._mem_var: dict[tuple[str, int], str] = {}
         self._bit_exprs: dict[tuple[str, int], E.Expr] = {}     # bit_lvalue's and read_value's expressions
         self._mem_exprs: dict[tuple[str, int], E.Expr] = {}
+        self._constants: dict[int, E.Expr] = {}        # constant's expressions (see constant)
+        self._places: dict[str, E.Expr] = {}           # lvalue texts of write_value as expressions (see place)
         self.bit_arrays: dict[str, str] = {}          # kind -> array of the addresses that have no name of their own
         self.bit_access: dict[str, str] = {}          # kind -> accessor FB type for indexed access
         self.mem_array: str | None = None
@@ -105,6 +110,13 @@ class Layout:
         prof = self.profile
         for f in self.program.files:
             for op in f.ops:
+                if op.code in _MAY_WRITE_IMPLICITLY:
+                    # The error markers (and the module error-code word) the original writes are held and written too.
+                    for kind, addr in implicit_writes(op, prof.interface):
+                        if kind == "M":
+                            bits["M"].add(addr)
+                        else:
+                            mem.add((kind, addr))
                 o = op.operand
                 if o is None:
                     continue
@@ -133,13 +145,6 @@ class Layout:
                     if o.indexed:
                         string_indexed = True
                     strings.add(o.addr)
-            for op in f.ops:
-                # The error markers (and the module error-code word) the original writes are held and written too.
-                for kind, addr in implicit_writes(op, prof.interface):
-                    if kind == "M":
-                        bits["M"].add(addr)
-                    else:
-                        mem.add((kind, addr))
         # The operands of the PLC data tables are held (the tables load them) and so is the MP-restart marker,
         # which makes the program load them again.
         for row in self.program.data_rows:
@@ -381,6 +386,13 @@ class Layout:
             known = self._bit_exprs[key] = E.Expr(text, "BOOL", frozenset([name.upper(), f"#{op.kind}"]), 0, 1, var=text)
         return known
 
+    def constant(self, value: int) -> E.Expr:
+        """A constant operand (K) as its DINT literal: one expression per value serves every read of it."""
+        known = self._constants.get(value)
+        if known is None:
+            known = self._constants[value] = E.int_const(value)
+        return known
+
     def bit_index(self, op: Operand, x: E.Expr, offset: int = 0) -> E.Expr:
         """The operand address of an indexed bit operand (for the accessor FB)."""
         return _index(op.addr + offset, x, 1, self.program.semantics)
@@ -403,6 +415,14 @@ class Layout:
         known = self._mem_exprs.get(key)
         if known is None:
             known = self._mem_exprs[key] = E.var(self.ref(self._declare_mem(op.kind, op.addr)), MEM_TYPE[op.kind])
+        return known
+
+    def place(self, lvalue: str) -> E.Expr:
+        """An lvalue text of write_value as the expression a store assigns to (one per text: a place without
+        index is written again and again)."""
+        known = self._places.get(lvalue)
+        if known is None:
+            known = self._places[lvalue] = E.var(lvalue, "BYTE")
         return known
 
     def write_value(self, op: Operand, x: E.Expr | None, value: E.Expr) -> list[tuple[str, E.Expr]]:

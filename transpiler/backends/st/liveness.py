@@ -81,8 +81,12 @@ class Liveness:
         self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
         self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
         self.fall_into = self._fall_throughs(roots)
-        self._use_def: dict[tuple, tuple[frozenset[str], frozenset[str]]] = {}
+        self._use_def: dict[object, tuple[frozenset[str], frozenset[str]]] = {}
+        self._forward: set[tuple[int, int]] = set()     # routines without a backward jump (see _routine)
         self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
+        # The ops of each routine that call routines, in order, with their callees (a few of its steps).
+        self.calls = {key: [(i, callees) for i, _, _, _, callees, _ in reversed(steps) if callees]
+                      for key, steps in self.steps.items()}
         self._solve()
 
     def _steps(self, key: tuple[int, int], body: list[int]) -> list[tuple]:
@@ -90,28 +94,43 @@ class Liveness:
         round: (index, use, def, successors, entry keys of the routines it calls, whether it ends the routine)."""
         ops = self.program.files[key[0]].ops
         out = []
+        forward = True
         for i in reversed(body):
             op = ops[i]
-            # use_def reads only these facts of an op: worked out once per distinct combination
+            code = op.code
+            # use_def reads only these facts of an op: worked out once per distinct combination (the code alone
+            # where the op has no bracket and an operand that reads no index: most ops)
             o = op.operand
-            facts = (op.code, op.bracket, None if o is None else (o.kind, o.indexed))
+            if op.bracket is None and (o is None or not o.indexed and o.kind != "X" and o.kind != "KF"):
+                facts = code
+            else:
+                facts = (code, op.bracket, None if o is None else (o.kind, o.indexed))
             known = self._use_def.get(facts)
             if known is None:
                 known = self._use_def[facts] = use_def(op)
             use, d = known
-            code = op.code
             # (successors and routines_entered, for the ops that neither jump nor call: most of them)
-            plain = code not in _BRANCHES
-            out.append((i, use, d, [i + 1] if plain else successors(ops, i),
-                        () if plain else tuple(c.key for c in routines_entered(op)), code in _ENDS))
+            if code not in _BRANCHES:
+                out.append((i, use, d, (i + 1,), (), code in _ENDS))
+                continue
+            succ = successors(ops, i)
+            forward = forward and all(s > i for s in succ)
+            out.append((i, use, d, succ, tuple(c.key for c in routines_entered(op)), code in _ENDS))
+        if forward:
+            self._forward.add(key)
         return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
         """For each routine, the routines whose entry label its body reaches without a call (falling through or
         jumping there): the structured translation calls them."""
-        entries = {r.key for r in self.program.routines}
-        return {r.key: [(r.file, i) for i in self.bodies[r.key] if i != r.index and (r.file, i) in entries]
-                for r in roots}
+        starts: dict[int, set[int]] = {}        # file -> op indices of its routine entries
+        for r in self.program.routines:
+            starts.setdefault(r.file, set()).add(r.index)
+        found: dict[tuple[int, int], list[tuple[int, int]]] = {}
+        for r in roots:
+            here = starts.get(r.file, set())
+            found[r.key] = [(r.file, i) for i in self.bodies[r.key] if i in here and i != r.index]
+        return found
 
     def _solve(self) -> None:
         # The sets only grow from round to round, so every round that changes something adds one register to one
@@ -127,7 +146,7 @@ class Liveness:
                     self.entry_use[key] = entry
                     changed = True
                 n_ops = len(self.program.files[key[0]].ops)
-                for i, _, _, _, callees, _ in reversed(self.steps[key]):
+                for i, callees in self.calls[key]:
                     for callee in callees:
                         after = live.get(i + 1, frozenset()) if i + 1 < n_ops else frozenset()
                         if callee in new_exit:
@@ -150,7 +169,8 @@ class Liveness:
         live: dict[int, frozenset[str]] = {i: empty for i in body}
         entry_use = self.entry_use
         steps = self.steps[key]
-        for _ in range(len(body) + 2):
+        # Without a backward jump, one pass over the ops, last first, sees every successor's final set already.
+        for _ in range(1 if key in self._forward else len(body) + 2):
             changed = False
             for i, use, d, succ, callees, ends in steps:
                 # (the same sets as `use | callees' entry sets | (successors' sets - d)`, without making a new set

@@ -49,6 +49,8 @@ MAX_LEN = 64
 # wants it is renamed), or a temporary could shadow an operand such as T5.
 TEMP_PREFIX = "tmp"
 _TEMP_NAME = re.compile(TEMP_PREFIX + r"[0-9]+", re.IGNORECASE)
+_ILLEGAL = re.compile(r"[^A-Za-z0-9_]")
+_UNDERSCORES = re.compile(r"_+")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,11 +109,14 @@ class NameTable:
 
 def legalise(name: str) -> tuple[str, str]:
     """A legal ST identifier close to `name` and the reason for any change ('' when unchanged)."""
+    if name.isascii() and name.isidentifier() and name[0] != "_" and name[-1] != "_" and "__" not in name \
+            and len(name) <= MAX_LEN:
+        return name, ""         # (most names: legal as they are, the rules below would change nothing)
     reasons = []
-    text = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    text = _ILLEGAL.sub("_", name)
     if text != name:
         reasons.append("illegal character")
-    collapsed = re.sub(r"_+", "_", text)
+    collapsed = _UNDERSCORES.sub("_", text)
     if collapsed != text:
         reasons.append("double underscore")
     text = collapsed

@@ -11,6 +11,10 @@ from transpiler.backends.st.exprs import Expr
 from transpiler.backends.st.routine import ExecutorPart, Unsupported
 
 
+# (what a word store keeps in flight while it is emitted: every register)
+_ALL_REGISTERS = frozenset(["WA", "X", "LA", "SA"])
+
+
 class OperandMixin(ExecutorPart):
     """Reads and writes operands: named variables, the byte array, indexed bits through their accessor FB."""
 
@@ -62,7 +66,7 @@ class OperandMixin(ExecutorPart):
             live = self.ctx.live_after(self.index - 1)          # live before this op: what it reads included
             inst = self.ctx.bit_accessor(o.kind, lambda name: name not in held and self.saves_nothing(name.upper(), live),
                                          self.ctx.out.access_rank(o.kind, key))
-            self.drop([kind_key[1] for kind_key in list(self._dependents(inst.upper())) if kind_key[0] == "reg"])
+            self.drop([kind_key[1] for kind_key in self._dependents(inst.upper()) if kind_key[0] == "reg"])
             self.ctx.out.add_access(S.Call(inst, (("IDX", index), ("WRITE", E.bool_const(False)))),
                                     o.kind, key, index.deps, write=False)
         held.add(inst)
@@ -100,7 +104,7 @@ class OperandMixin(ExecutorPart):
     def value(self, o: Operand) -> Expr:
         """A value operand as DINT-compatible typed expression (SINT/INT/DINT)."""
         if o.kind == "K":
-            return E.int_const(o.addr)
+            return self.ctx.layout.constant(o.addr)
         if o.kind == "X":
             return self.s.reg("X")
         if o.kind == "KF":
@@ -121,7 +125,8 @@ class OperandMixin(ExecutorPart):
     def _store_value(self, o: Operand, value: Callable[[], Expr]) -> None:
         """Store a DINT value into a B/W/D operand (one assignment, or one per byte in the byte array)."""
         layout = self.ctx.layout
-        first = layout.write_value(o, self._xi(o), value())
+        written = value()
+        first = layout.write_value(o, self._xi(o), written)
         count = len(first)
         if count > 1:
             self.pin_index(o)
@@ -134,9 +139,17 @@ class OperandMixin(ExecutorPart):
                 lv = lambda k=k: E.var(layout.write_value(o, self._xi(o), value())[k][0], "BYTE")
             else:
                 # (the places written of an operand without index are fixed: neither the value nor X moves them)
-                lv = lambda place=E.var(first[k][0], "BYTE"): place
-            rv = lambda k=k: layout.write_value(o, self._xi(o), value())[k][1]
-            self.store(lv, rv, frozenset(["WA", "X", "LA", "SA"]))
+                lv = lambda place=layout.place(first[k][0]): place
+            self.store(lv, lambda k=k: self._written(o, value, written, first, k), _ALL_REGISTERS)
+
+    def _written(self, o: Operand, value: Callable[[], Expr], written: Expr, first: list[tuple[str, Expr]],
+                 k: int) -> Expr:
+        """The value of place k of `o`, worked out again when saving values in flight changed the value or the
+        index (`first`: the places for the value `written` before)."""
+        v = value()
+        if v is written and not o.indexed:
+            return first[k][1]
+        return self.ctx.layout.write_value(o, self._xi(o), v)[k][1]
 
 
 def _access_key(index: Expr, x: Expr | None, base: int) -> tuple[int, str]:

@@ -170,7 +170,10 @@ def _propagate_in(root: list[S.Stmt], block: tuple[S.Stmt, ...] | list[S.Stmt]) 
                 new[j] = _Substitution(word, stmt.value).in_statement(block[j])
                 del new[i]
                 return new, stmt.target
-        inner = list(S.blocks(stmt))
+        nested_blocks = S.blocks(stmt)
+        if not nested_blocks:
+            continue
+        inner = list(nested_blocks)
         for k, nested in enumerate(inner):
             found = _propagate_in(root, nested)
             if found is not None:

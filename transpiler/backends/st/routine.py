@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 from types import MappingProxyType
-from typing import Callable, Iterator
+from typing import Callable
 
 from transpiler.diagnostics import Span
 from transpiler.ir import Op, Operand
@@ -63,8 +62,10 @@ class Emitter:
             self.pending_comments = []
 
     def add(self, stmt: S.Stmt) -> None:
-        self._forget_changed(stmt)
-        self.flush_comments()
+        if self.access_values:
+            self._forget_changed(stmt)
+        if self.pending_comments:
+            self.flush_comments()
         self.block.append(stmt)
 
     def add_access(self, call: S.Call, kind: str, key: AccessKey, reads: frozenset[str], write: bool) -> None:
@@ -102,24 +103,39 @@ class Emitter:
         else:
             self.access_values = {}
 
-    @contextlib.contextmanager
-    def nested(self, comments_before: bool = True) -> Iterator[list[S.Stmt]]:
+    def nested(self, comments_before: bool = True) -> _Branch:
         """Statements added inside go to the list yielded (a branch of the compound statement added after it).
 
         Comments waiting when it opens go before the compound statement (`comments_before`) or into the branch;
         those waiting when it closes end the branch. A branch may run after other paths (a loop body after its
         own end): it starts knowing no accessor values, and after it none is known either."""
-        if comments_before:
-            self.flush_comments()
-        saved, self.block = self.block, []
-        self.access_values = {}
-        inner = self.block
-        try:
-            yield inner
-            self.flush_comments()
-        finally:
-            self.block = saved
-            self.access_values = {}
+        return _Branch(self, comments_before)
+
+
+class _Branch:
+    """The context of Emitter.nested (a class of its own: a generator-based context manager costs several times
+    as much, and the structurer opens one for every branch of every IF)."""
+
+    def __init__(self, emitter: Emitter, comments_before: bool):
+        self.emitter = emitter
+        self.comments_before = comments_before
+        self.saved: list[S.Stmt] = []
+
+    def __enter__(self) -> list[S.Stmt]:
+        out = self.emitter
+        if self.comments_before:
+            out.flush_comments()
+        self.saved, out.block = out.block, []
+        out.access_values = {}
+        return out.block
+
+    def __exit__(self, kind, value, traceback) -> bool:
+        out = self.emitter
+        if kind is None:
+            out.flush_comments()
+        out.block = self.saved
+        out.access_values = {}
+        return False
 
 
 # The address of an indexed operand as (constant part, text of the variable part, '' when none): two keys with the

@@ -33,11 +33,16 @@ def simplify(block: Iterable[S.Stmt], registers: frozenset[str]) -> list[S.Stmt]
 
 
 def _block(block: Block, registers: frozenset[str]) -> Block:
+    """`block` simplified; `block` itself when nothing in it changes."""
     out: list[S.Stmt] = []
-    for stmt in _without_dead_stores(block, registers):
+    kept = _without_dead_stores(block, registers)
+    changed = kept is not block
+    for stmt in kept:
         inner_blocks = S.blocks(stmt)
         if inner_blocks:
-            stmt = S.with_blocks(stmt, [_block(inner, registers) for inner in inner_blocks])
+            new = [_block(inner, registers) for inner in inner_blocks]
+            if any(n is not inner for n, inner in zip(new, inner_blocks)):
+                stmt = S.with_blocks(stmt, new)
         if isinstance(stmt, S.If):
             if not S.has_code(stmt.then) and not S.has_code(stmt.orelse):
                 out.extend(stmt.then + stmt.orelse)
@@ -47,6 +52,8 @@ def _block(block: Block, registers: frozenset[str]) -> Block:
                 out[-1] = _joined(out[-1], stmt)
                 continue
         out.append(stmt)
+    if not changed and len(out) == len(kept) and all(a is b for a, b in zip(out, kept)):
+        return block
     return tuple(out)
 
 
@@ -87,15 +94,16 @@ def _flag_from_condition(stmt: S.If) -> S.Stmt:
     return S.Assign(then.target, value, stmt.note)
 
 
-def _reads(stmt: S.Stmt) -> set[str]:
+def _reads(stmt: S.Stmt) -> set[str] | frozenset[str]:
     """Every variable a statement (nested ones included) may read: its expressions' deps and the names in its
     texts (an index in an assignment's target is read too)."""
+    if type(stmt) is S.Assign:      # (most statements: no walk)
+        return _assign_reads(stmt)
     found: set[str] = set()
     for s in S.walk((stmt,)):
         exprs: list[E.Expr] = []
         if isinstance(s, S.Assign):
-            exprs = [s.value]
-            found |= E.names_in(s.target.split("[", 1)[1]) if "[" in s.target else set()
+            found |= _assign_reads(s)
         elif isinstance(s, S.Call):
             exprs = [value for _, value in s.args]
         elif isinstance(s, S.If):
@@ -111,8 +119,18 @@ def _reads(stmt: S.Stmt) -> set[str]:
     return found
 
 
+def _assign_reads(stmt: S.Assign) -> frozenset[str]:
+    found = stmt.value.deps | E.names_of(stmt.value)
+    return found | E.names_in(stmt.target.split("[", 1)[1]) if "[" in stmt.target else found
+
+
 def _leaves_or_calls(stmt: S.Stmt) -> bool:
     """The statement calls an FB (which may read a global) or leaves the block early."""
+    kind = type(stmt)
+    if kind is S.Assign:
+        return False
+    if kind is S.Call or kind is S.Return or kind is S.Exit:
+        return True
     return any(isinstance(s, (S.Call, S.Return, S.Exit)) for s in S.walk((stmt,)))
 
 
@@ -123,12 +141,13 @@ def _register_store(stmt: S.Stmt, registers: frozenset[str]) -> str | None:
     return name if name in registers else None
 
 
-def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
-    """Every path through `block` stores `reg` again before anything could read it: a store, or an IF/ELSE whose
-    condition does not read it and whose two branches each overwrite it (a division's zero check sets its error
-    marker on both)."""
-    for stmt in block:
-        if (isinstance(stmt, S.If) and stmt.orelse and reg not in stmt.cond.deps | E.names_of(stmt.cond)
+def _overwritten(block: Block, reg: str, registers: frozenset[str], start: int = 0) -> bool:
+    """Every path through `block[start:]` stores `reg` again before anything could read it: a store, or an IF/ELSE
+    whose condition does not read it and whose two branches each overwrite it (a division's zero check sets its
+    error marker on both)."""
+    for k in range(start, len(block)):
+        stmt = block[k]
+        if (type(stmt) is S.If and stmt.orelse and reg not in stmt.cond.deps | E.names_of(stmt.cond)
                 and _overwritten(stmt.then, reg, registers) and _overwritten(stmt.orelse, reg, registers)):
             return True
         if reg in _reads(stmt) or _leaves_or_calls(stmt):
@@ -140,5 +159,5 @@ def _overwritten(block: Block, reg: str, registers: frozenset[str]) -> bool:
 
 def _without_dead_stores(block: Block, registers: frozenset[str]) -> Block:
     dead = {i for i, stmt in enumerate(block)
-            if (reg := _register_store(stmt, registers)) is not None and _overwritten(block[i + 1:], reg, registers)}
-    return tuple(s for i, s in enumerate(block) if i not in dead)
+            if (reg := _register_store(stmt, registers)) is not None and _overwritten(block, reg, registers, i + 1)}
+    return tuple(s for i, s in enumerate(block) if i not in dead) if dead else block

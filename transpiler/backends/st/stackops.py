@@ -123,7 +123,7 @@ class StackMixin(ExecutorPart):
         if expected is None:
             return
         stack = self.s.stack
-        if len(stack) != len(expected) or any(kind != want for (kind, _), want in zip(stack, expected)):
+        if len(stack) != len(expected) or stack and any(kind != want for (kind, _), want in zip(stack, expected)):
             self.s.stack = [(k, E.var(self.static.slot(d, k), SLOT_TYPES[k])) for d, k in enumerate(expected)]
 
     def flush_stack(self) -> None:

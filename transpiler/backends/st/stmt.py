@@ -109,7 +109,11 @@ def is_code(stmt: Stmt) -> bool:
 
 
 def has_code(block: tuple[Stmt, ...] | list[Stmt]) -> bool:
-    return any(is_code(s) for s in block)
+    """Anything but comments in `block` (is_code of each, without a call per statement)."""
+    for s in block:
+        if type(s) is not Comment:
+            return True
+    return False
 
 
 def blocks(stmt: Stmt) -> tuple[tuple[Stmt, ...], ...]:

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
-from typing import Callable
+from typing import Callable, Sequence
 
 from transpiler.ir import CallTarget, FileCode, Op
 from transpiler.backends.st import exprs as E
@@ -13,6 +14,8 @@ from transpiler.backends.st.routine import Unsupported, tag
 from transpiler.backends.st.symbolic import Executor
 
 JUMPS = ("JP", "JPT", "JPF")
+# The op codes region treats apart from the executor's straight-line code.
+_CONTROL = frozenset({"LBL", *JUMPS, "EM", "EMT", "EMF", "CALL", "CALLT", "CALLF", "CASE"})
 
 
 class NotStructured(Exception):
@@ -37,6 +40,8 @@ class RoutineInfo:
     live_in: Callable[[int], frozenset[str]]
     # CM of a routine with a stack interface (see interfaces.py): emits the call and returns True, else False.
     interface_call: Callable[[Op, int, frozenset[str]], bool] | None = None
+    # The indices of the file's jumps with a target, in order, where the caller has them (else read from `body`).
+    file_jumps: Sequence[int] | None = None
 
 
 class Structurer:
@@ -47,12 +52,23 @@ class Structurer:
         self.ex = ex
         self.ops = info.file.ops
         self.out = ex.ctx.out
-        self.body = set(info.body)
+        ordered = sorted(info.body)
+        self.body = set(ordered)
+        self.last = ordered[-1] if ordered else -1     # the routine's last op
         self.jumps_to: dict[int, list[int]] = {}
-        for i in info.body:
-            op = self.ops[i]
-            if op.code in JUMPS and op.target is not None:
-                self.jumps_to.setdefault(op.target, []).append(i)
+        if info.file_jumps is None:
+            jumps = [i for i in ordered if self.ops[i].code in JUMPS and self.ops[i].target is not None]
+        elif ordered:
+            # (the file's jumps within the body's span, of the body: a few, where the body has dozens of ops)
+            lo = bisect.bisect_left(info.file_jumps, ordered[0])
+            hi = bisect.bisect_right(info.file_jumps, ordered[-1])
+            jumps = [i for i in info.file_jumps[lo:hi] if i in self.body]
+        else:
+            jumps = []
+        for i in jumps:
+            self.jumps_to.setdefault(self.ops[i].target, []).append(i)
+        self.jumps = jumps                          # the body's jumps with a target, in order
+        self.entries = sorted(i for i in info.other_entries if i in self.body)   # other routines' entries, in order
         self.loop_exits: list[int] = []    # exit index of each enclosing loop
         self.depth = 0                     # nesting of emitted IF/loop constructs
         self.loop_heads: set[int] = set()  # heads of the loops being emitted (their back edge is the loop itself)
@@ -94,15 +110,13 @@ class Structurer:
         for t, sources in self.jumps_to.items():
             if lo < t < hi and any(not lo <= s < hi for s in sources):
                 return False
-        for i in range(lo, hi):
-            if i not in self.body:
-                continue
-            op = self.ops[i]
-            if op.code in JUMPS and op.target is not None:
-                t = op.target
-                if not (lo <= t < hi or t in exit_ok or t in self._equiv(hi) or self._is_return_at(t)):
-                    return False
-            if i != lo and i in self.info.other_entries:
+        # (the body's jumps and entries in [lo, hi), found by bisection: regions are entered for every IF)
+        if bisect.bisect_right(self.entries, lo) < bisect.bisect_left(self.entries, hi):
+            return False        # an entry of another routine inside
+        jumps = self.jumps
+        for i in jumps[bisect.bisect_left(jumps, lo):bisect.bisect_left(jumps, hi)]:
+            t = self.ops[i].target
+            if not (lo <= t < hi or t in exit_ok or t in self._equiv(hi) or self._is_return_at(t)):
                 return False
         return True
 
@@ -117,12 +131,18 @@ class Structurer:
 
     def region(self, lo: int, hi: int) -> None:
         i = lo
+        body, ops, jumps_to, other_entries = self.body, self.ops, self.jumps_to, self.info.other_entries
         while i < hi:
-            if i not in self.body:
+            if i not in body:
                 i += 1
                 continue
-            op = self.ops[i]
-            if i != self.info.entry.index and i in self.info.other_entries:
+            op = ops[i]
+            if op.code not in _CONTROL and i not in jumps_to and i not in other_entries:
+                # (most ops: straight-line code for the executor)
+                self.ex.run(op, i)
+                i += 1
+                continue
+            if i != self.info.entry.index and i in other_entries:
                 # Falling through into another subprogram's label: call it and return (same effect, readable).
                 other = self.info.other_entries[i]
                 self.ex.flush(self._live(i))
@@ -165,7 +185,7 @@ class Structurer:
         live_exit = self.info.exit_live
         if op.code == "EM":
             self.ex.flush(live_exit)
-            last = self.depth == 0 and not any(j > i for j in self.body)
+            last = self.depth == 0 and i >= self.last
             if not last:
                 self.out.add(S.Return())
             self.ex.forget()

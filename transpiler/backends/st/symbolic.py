@@ -35,7 +35,10 @@ class Executor(LogicOpsMixin, WordOpsMixin, BracketOpsMixin, StackMixin, StringO
 
     def run(self, op: Op, index: int) -> None:
         self.index = index
-        self.sync_stack(index)
+        stack_at = self.stack_at
+        # (before most ops no entry is expected and none is held: nothing to bring in line)
+        if stack_at is not None and (stack_at.get(index) or self.s.stack):
+            self.sync_stack(index)
         for text in op.comments:
             self.ctx.out.comment(text)
         handler = HANDLERS.get(op.code)
