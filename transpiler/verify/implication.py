@@ -55,6 +55,10 @@ _CALL_DEPTH = 4                 # calls followed one inside another, at most
 _INDEXED_SPAN = 4096            # values of X up to which an indexed write counts as a write of each operand it reaches
 _READS = frozenset({"LD", "LDN", *GATES, "LDBITS"})
 _WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
+# ops that leave WA as it is (with LA apart from WA)
+_KEEPS_WA = frozenset({*_READS - {"LDBITS"}, *_WRITES, "CMP", "SCMP", "BT", "WST", "NOTL", "NOP", "LBL", "JPT", "JPF"})
+_WA_FEEDS = frozenset({"WLD", "ADD", "SUB", "MUL", "DIV", "MOD"})      # followed back from a compare of WA
+_KEEP = -1                      # an error marker an op leaves as it is
 Key = tuple[str, int]
 FactsAt = Callable[[int, int], Sequence[NcFact]]     # the NC facts that hold at a region start (file, op index)
 
@@ -79,6 +83,7 @@ class _Path:
     values: dict[Key, int | None]   # None: any value (a write not followed), a variable made when it is read
     la: int | None                  # None: not known here (a variable made when it is used)
     frames: list
+    wa: int | None = None           # WA where the ops since its last load are constants (None: not known)
 
 
 class _Run:
@@ -196,6 +201,7 @@ class _Run:
             for key in self.callees[op.call.key].writes:
                 path.values[key] = None
         path.la = None
+        path.wa = None
 
     def join(self, paths: list[_Path]) -> _Path:
         reach = 0
@@ -233,8 +239,11 @@ class _Run:
             return path if path.reach else None
         if c in _CALLS and op.call is not None and op.call.key in self.callees:
             return self.call(op, path, top and i in self.skip)
+        flags = self.word(op, path, top and i in self.skip)
         for kind, addr in implicit_writes(op, self.program.semantics.profile.interface, self.flag):
-            path.values[(kind, addr)] = None
+            found = flags.get((kind, addr))
+            if found != _KEEP:
+                path.values[(kind, addr)] = found
         if c in _READS and o is not None and o.is_bit:
             if c == "LDBITS":
                 path.la = None if self.shared else path.la
@@ -268,7 +277,8 @@ class _Run:
             path.la = None
             return path
         if c in ("CMP", "SCMP", "BT", "PLL"):
-            path.la = self.fresh()
+            known = self.tested(op, path.wa) if c in ("CMP", "BT") else None
+            path.la = self.fresh() if known is None else _ALL if known else 0
             if top:
                 self.reads[i] = path.la
         elif c == "NOTL":
@@ -279,7 +289,7 @@ class _Run:
                 path.frames.append("load" if br.load else path.la if path.la is not None else self.fresh())
                 path.la = None
             else:
-                path.frames.append(None)
+                path.frames.append(("wa", path.wa))
         elif c == "BCLOSE":
             self.close(i, op, path, top)
         elif c not in KEEPS_LA or (self.shared and c in WORD_WRITERS):
@@ -288,9 +298,72 @@ class _Run:
             path.frames = []
         return path
 
+    def word(self, op: Op, path: _Path, skipped: bool) -> dict[Key, int | None]:
+        """Follows WA through `op` where it is a constant (`L K100` `x K3`; any other value, a non-constant operand
+        or an op not followed here makes it unknown), and gives the error markers `op` sets where the operands fix
+        them (`/ K0` sets the division marker; `L K65536` `x K65536` the multiplication one): _KEEP where `op`
+        leaves the marker as it was. `skipped`: the op treated as absent, its markers any value."""
+        c, o = op.code, op.operand
+        wa, path.wa = path.wa, None
+        if self.shared:
+            return {}                       # LA is bit 7 of WA there: not followed
+        if c in _KEEPS_WA or c in ("BOPEN", "BCLOSE"):
+            path.wa = wa                    # (a bracket's close works out WA itself, close)
+            return {}
+        k = int32(o.addr) if o is not None and o.kind == "K" and not o.indexed else None
+        if c == "WLD":
+            path.wa = k
+            return {}
+        if c not in ("ADD", "SUB", "MUL", "DIV", "MOD") or skipped:
+            return {}
+        itf = self.program.semantics.profile.interface
+        sem = self.program.semantics
+        if c in ("DIV", "MOD"):
+            flag = itf.div_err if c == "DIV" else itf.mod_err
+            if k is None:
+                return {}
+            if k == 0:
+                # the zero divisor: the marker is set and WA is the dividend (or 0, A-11)
+                path.wa = None
+                return {("M", flag): _ALL}
+            if wa is None:
+                return {} if k == -1 else {("M", flag): 0}      # -2^31 / -1 may set it (A-12)
+            if wa == -(1 << 31) and k == -1:
+                return {}
+            q = abs(wa) // abs(k)
+            if c == "DIV":
+                if sem["div_semantics"] == "floor":
+                    return {("M", flag): 0}
+                path.wa = q if (wa < 0) == (k < 0) else -q
+            elif sem["div_semantics"] != "floor":
+                r = abs(wa) % abs(k)
+                path.wa = -r if wa < 0 else r
+            return {("M", flag): 0}
+        if wa is None or k is None:
+            return {}
+        exact = wa + k if c == "ADD" else wa - k if c == "SUB" else wa * k
+        result = int32(exact)
+        if c == "MUL":
+            over = result != exact
+            path.wa = wa if over and sem["mul_overflow_result"] == "unchanged" else result
+            return {("M", itf.mul_err): _ALL if over else 0}
+        path.wa = result
+        return {("M", itf.mul_err): _ALL} if result != exact else {("M", itf.mul_err): _KEEP}
+
+    def tested(self, op: Op, wa: int | None) -> int | None:
+        """The outcome of a compare or bit test of a known WA with a constant (None: not known)."""
+        o = op.operand
+        if wa is None or o is None or o.kind != "K" or o.indexed:
+            return None
+        if op.code == "BT":
+            return (wa >> (o.addr & 31)) & 1
+        return _compare_value(self.program.semantics, "D", wa, op.rel, o.addr)
+
     def close(self, i: int, op: Op, path: _Path, top: bool) -> None:
         saved = path.frames.pop() if path.frames else None
         br = op.bracket
+        saved_wa = saved[1] if isinstance(saved, tuple) else None
+        inner_wa, path.wa = path.wa, None
         if br.mode == "LOGIC" and br.op in BRACKET_GATES:
             inner = path.la if path.la is not None else self.fresh()
             if br.op in ("AN", "ON", "XON"):
@@ -302,7 +375,10 @@ class _Run:
             else:
                 path.la = _combine(BRACKET_GATES[br.op], saved, inner)
         elif op.rel:
-            path.la = self.fresh()
+            known = None
+            if saved_wa is not None and inner_wa is not None and self.program.semantics["bracket_width"] == 32:
+                known = _compare_value(self.program.semantics, "D", saved_wa, op.rel, inner_wa)
+            path.la = self.fresh() if known is None else _ALL if known else 0
             if top:
                 self.reads[i] = path.la
         elif self.shared:
@@ -348,6 +424,16 @@ def _relevant(program: Program, f: int, start: int, consumer: int, reads: set[in
     needed: set[Key] = set(keep)
     followed: set[tuple[int, int]] = set()
     _mark(program, f, start, consumer, reads, callees, followed, needed, 0)
+    # a compare or bit test of WA: the loads and constant arithmetic that give WA its value there
+    ops = program.files[f].ops
+    for i in reads:
+        if ops[i].code in ("CMP", "BT"):
+            j = i - 1
+            while j >= start and ops[j].code in _WA_FEEDS:
+                followed.add((f, j))
+                if ops[j].code == "WLD":
+                    break
+                j -= 1
     return followed, needed
 
 
@@ -362,7 +448,9 @@ def _mark(program: Program, f: int, start: int, end: int, reads: set[int], calle
             ops[i].code in ("EM", "EMT", "EMF") or ops[i].code in ("JP", "JPT", "JPF") and _jump_matters(
                 f, i, ops[i].target, end, followed) for i in span) or any(
             ops[i].operand is not None and ops[i].operand.is_bit and not ops[i].operand.indexed
-            and ops[i].code not in _READS and (ops[i].operand.kind, ops[i].operand.addr) in needed for i in span)
+            and ops[i].code not in _READS and (ops[i].operand.kind, ops[i].operand.addr) in needed for i in span) or any(
+            key in needed for i in span for key in implicit_writes(ops[i], program.semantics.profile.interface,
+                                                                    program.semantics["add_overflow"] == "flag"))
         if not matters:
             continue
         if depth < _CALL_DEPTH:
@@ -531,9 +619,11 @@ def tied_vectors(program: Program, decision: Decision, entry: Callable[[str, int
     held = facts(f, s) if callable(facts) else facts
     _split(tables, 0, path.reach & _facts_allow(run, held) & _invariants_allow(run, invariants, entries), 0, found)
     ops = program.files[f].ops
+    interface = program.semantics.profile.interface
     writes = tuple(j for g, j in sorted(run.followed) if g == f and s <= j < decision.index and (
         ops[j].code in _WRITES and ops[j].operand is not None and ops[j].operand.is_bit
-        or ops[j].code in _CALLS and ops[j].call is not None and ops[j].call.key in callees))
+        or ops[j].code in _CALLS and ops[j].call is not None and ops[j].call.key in callees
+        or ops[j].code in _WA_FEEDS and implicit_writes(ops[j], interface, run.flag)))
     return Tied(frozenset(found), s, writes)
 
 
