@@ -675,3 +675,46 @@ def test_no_range_of_an_nc_word_where_something_else_writes_it(tmp_path: Path, o
     assert below.status == "missing"
     clean = _program(tmp_path, "L W272\n== K0\n= O1\nEM\n")
     assert next(b for b in decision_coverage(clean, [], {("W", 272)}).boundaries if b.offset == -1).status == "missing"
+
+
+def test_constant_word_operations_fix_error_markers_compares_and_bit_tests(tmp_path: Path) -> None:
+    # WA followed through constant loads and arithmetic: 65536 x 65536 overflows (M4200 = 1), 3 x -4 does not
+    # (M4200 = 0), / K0 sets M4201, MOD K10 resets M4202; -5 >= -5, bit 2 of 4 and 5 < (2 + 4) are always 1. None
+    # of these conditions can ever change its outcome. Catches: the rule missing, a marker taken as any value, a
+    # compare of a constant WA left missing, the reason not naming the op the marker rests on.
+    program = _program(tmp_path, "L K65536\nx K65536\n= D0\nL M4200\n= M10\nL K3\nx K-4\n= D4\nL M4200\n= M11\n"
+                                 "L K100\n/ K0\n= D8\nL M4201\n= M12\nL K47\nMOD K10\n= D12\nL M4202\n= M13\n"
+                                 "L K-5\n>= K-5\n= O1\nL K4\nBT K2\n= O2\nL K4\nBT K33\n= O3\n"
+                                 "L K5\n<[\nL K2\n+ K4\n]\n= O4\nEM\n")
+    machine = _run(program, [{}, {}])
+    assert [machine.state.M[a] for a in (10, 11, 12, 13)] == [1, 0, 1, 0]
+    items, cov = _status(program, [machine])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 8
+    assert "M4200 is always 1 (set by main.src:2:1 x K65536 before this chain" in items[("M4200", "M10", 0)].reason
+    assert "M4200 is always 0 (set by main.src:7:1 x K-4" in items[("M4200", "M11", 0)].reason
+    assert "M4201 is always 1 (set by main.src:12:1 / K0" in items[("M4201", "M12", 0)].reason
+    assert "M4202 is always 0" in items[("M4202", "M13", 0)].reason
+    for text, out, value in (("K-5 >= K-5", "O1", 1), ("bit K2 of WA", "O2", 1), ("bit K33 of WA", "O3", 0)):
+        assert f"{text} is always {value}" in items[(text, out, 0)].reason and "WA holds one value" in \
+            items[(text, out, 0)].reason
+
+
+@pytest.mark.parametrize("text", [
+    "L W0\nx K65536\n= D0\nL M4200\n= M10\nEM\n",                  # WA not known: the product may not overflow
+    "L K100\n/ W0\n= D8\nL M4200\nL M4201\n= M10\nEM\n",           # a divisor that is no constant
+    "L K100\n/ K0\n= D8\nL I1\nJPT Skip\nL K7\n/ K7\n= D8\nLBL Skip\nL I2\nJPF Next\nL K100\n/ K2\nLBL Next\n"
+    "L M4201\n= M10\nEM\n",                                        # paths that leave the marker 1 or 0
+    "L K-5\nLBL Again\n>= K-5\n= M10\nL W0\nJPT Again\nEM\n",         # WA at a jump target: any value
+])
+def test_word_operations_not_all_constant_fix_nothing(tmp_path: Path, text: str) -> None:
+    # Catches: WA or an error marker claimed known through a non-constant operand, a join or a jump back.
+    program = _program(tmp_path, text)
+    items, cov = _status(program, [])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 0, cov.summary()["mcdc"]
+
+
+def test_the_shared_accumulator_model_follows_no_word(tmp_path: Path) -> None:
+    # LA is bit 7 of WA there: a constant WA is not followed. Catches: the rule firing under that model.
+    program = _program(tmp_path, "L K4\nBT K2\n= O2\nEM\n", accumulator_model="shared_bit7")
+    _, cov = _status(program, [])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 0

@@ -15,6 +15,10 @@ after a join). Values are truth tables over those variables (a Python int with o
 join of two paths is exact and the values a chain sees are over-approximated only by the free variables: a
 vector not among them can never occur, which is what an infeasible claim needs.
 
+WA is followed too where it is a constant (loaded from one and computed with constants, straight-line since):
+a compare or bit test of it with a constant is then a constant, and so are the error markers x, / and MOD set
+from it (`L K100` `/ K0` sets the division marker). Any other op that writes WA, a join or a call makes it unknown.
+
 Facts of the NC model (nc_facts.NC_FACTS, where they apply) narrow the free variables further: the start values of
 the NC's markers the region reads, and the outcomes of its compares of the NC's words with a constant (`L W262`
 `== K-1`), can only take the combinations some state of those operands that satisfies every fact gives. The NC

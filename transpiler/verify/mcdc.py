@@ -20,7 +20,7 @@ the values the register can hold there reach), a condition the outcome cannot de
 constants and the coupling of its chain (masked by a constant, or redundant), a condition the code before its
 chain in the same cycle ties to the others so that it never decides alone (implication.py: a reset on every path,
 a marker assigned from the chain's other operands, a timer or counter start no write can have set yet in the
-cycle, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
+cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that constant word operations fix, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
 it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
@@ -565,6 +565,10 @@ def _tied_reason(analysis: _Implications, decision: Decision, number: int, maski
     if starts:
         where.append(f"{', '.join(starts)}: a timer or counter start the service clears after every cycle, and no "
                      "write of it runs before this chain in the cycle")
+    ops_cond = decision.conditions[number]
+    if ops_cond.operand is None and ops_cond.op.code in ("CMP", "BT", "BCLOSE") and not any(
+            (v >> number & 1) != (next(iter(tied.vectors)) >> number & 1) for v in tied.vectors):
+        where.append("WA holds one value there: the constants it is loaded from and computed with before it")
     where += [fact.text for fact in resting]
     where += [f"{inv.text()} at every point of every cycle: both are 0 at power-on, nothing but the program "
               f"writes them, and each write keeps it ({', '.join(inv.writes[:6])}"
