@@ -221,13 +221,14 @@ def _load_scenarios(project: Project, paths: list[Path], names, diags: Diagnosti
 
 
 def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_untranslated: bool,
-               target: str = "matiec"):
-    """Run the back ends with the project's machine parameters; raises on any error."""
+               target: str = "matiec", xml_made=None):
+    """Run the back ends with the project's machine parameters (`xml_made`: see transpile_program); raises on any
+    error."""
     allowed = ("E-UNSUPPORTED",) if allow_untranslated else ()
     path, mp, diags = machine_parameters_of(project, mp_file, allowed=allowed)
     diags.raise_if_errors()
     from transpiler.backends.transpile import transpile_program
-    out = transpile_program(project.program, diags, mp, formats, mp_file=path, target=target)
+    out = transpile_program(project.program, diags, mp, formats, mp_file=path, target=target, xml_made=xml_made)
     if path is None and out.result.preset_vars:
         diags.report("E-MP-NONE", Span(str(project.main), 1, 1),
                      "no machine-parameter file (*.mp) beside the main program and no --mp: the timer and counter "
@@ -235,6 +236,13 @@ def _translate(project: Project, formats: set[str], mp_file: Path | None, allow_
     _fail_on_warnings(project, diags, "of the translation")
     diags.raise_if_errors()    # a partial translation is never written or compared as if it were whole
     return path, mp, out, diags
+
+
+def _xml_validation():
+    """A BackgroundValidation against the cached TC6 schema (read once for all the files), None when it is not
+    cached."""
+    from transpiler.backends.plcopen.xsd import BackgroundValidation, load_schema, schema_path
+    return BackgroundValidation(load_schema()) if schema_path() is not None else None
 
 
 def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_file: Path | None = None,
@@ -251,7 +259,13 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
     from transpiler.backends.st.dialect import TARGETS
     if target not in TARGETS:
         raise _usage(f"target is one of {', '.join(TARGETS)}, not '{target}'")
-    path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated, target)
+    validation = _xml_validation() if "xml" in formats and validate_xml else None
+    try:
+        path, _, out, diags = _translate(project, formats, mp_file, allow_untranslated, target,
+                                         validation.start if validation is not None else None)
+    finally:
+        if validation is not None:
+            validation.close()
     if target == "openplc":
         # The runtime's own build takes more than matiec does (names, accessor macros, I/O image): a translation it
         # would reject is a bug here, and nothing is written. The XML holds the same text.
@@ -260,19 +274,16 @@ def transpile(project: Project, *, formats: Iterable[str] = ("st", "xml"), mp_fi
         if problems:
             raise CompileFailed(list(diags.items) + problems)
     validated = False
-    if "xml" in formats and validate_xml:
-        from transpiler.backends.plcopen.xsd import load_schema, schema_path, validate_xml as validate
-        if schema_path() is not None:
-            schema = load_schema()      # (read once for all the files)
-            # The project and its libraries; the files in subfolders are no TC6 XML of their own (the editor
-            # project's plc.xml is project.xml byte for byte).
-            for name in sorted(n for n in out.files if n.endswith(".xml") and "/" not in n):
-                problems = validate(out.files[name], name, schema)
-                if problems:
-                    raise CompileFailed(list(diags.items) + [Diagnostic.of(
-                        "E-XSD", NO_SPAN, f"{name} does not validate against the TC6 schema (a bug in hh2iec; "
-                        "nothing was written)", *problems)])
-            validated = True
+    if validation is not None:
+        # The project and its libraries; the files in subfolders are no TC6 XML of their own (the editor
+        # project's plc.xml is project.xml byte for byte).
+        for name in sorted(n for n in out.files if n.endswith(".xml") and "/" not in n):
+            problems = validation.problems(name, out.files[name])
+            if problems:
+                raise CompileFailed(list(diags.items) + [Diagnostic.of(
+                    "E-XSD", NO_SPAN, f"{name} does not validate against the TC6 schema (a bug in hh2iec; "
+                    "nothing was written)", *problems)])
+        validated = True
     return Transpilation(out.files, out.st_text, out.result, path, tuple(diags.items), validated)
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from decimal import Decimal
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.pipeline import cyclic_gc_paused
@@ -25,6 +25,9 @@ from transpiler.backends.report.report import io_map_of, render_report
 from transpiler.backends.report.screens import mask_files
 
 
+XmlMade = Callable[[str, bytes], None]
+
+
 @dataclasses.dataclass(frozen=True)
 class Transpiled:
     result: StResult
@@ -33,36 +36,47 @@ class Transpiled:
 
 
 def transpile_program(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
-                      formats: set[str], mp_file: Path | None = None, target: str = DEFAULT_TARGET) -> Transpiled:
+                      formats: set[str], mp_file: Path | None = None, target: str = DEFAULT_TARGET,
+                      xml_made: XmlMade | None = None) -> Transpiled:
     """`mp` are the values of `mp_file`, named in the ST header, report.md and io_map.csv; `target` picks the
     dialect of project.st and project.xml (st/dialect.py). `st_text` is always the matiec text: that is what the
-    co-simulation runs; `result` is the matiec translation too, for the report and the I/O map."""
+    co-simulation runs; `result` is the matiec translation too, for the report and the I/O map. `xml_made` is
+    told each TC6 XML file at the top of the output as soon as it is made (its name and content), before the
+    other files are (the caller may check it meanwhile)."""
     with cyclic_gc_paused():
-        return _transpile(program, diags, mp, formats, mp_file, target)
+        return _transpile(program, diags, mp, formats, mp_file, target, xml_made or _no_one)
+
+
+def _no_one(name: str, data: bytes) -> None:
+    pass
 
 
 def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int], Decimal],
-               formats: set[str], mp_file: Path | None, target: str) -> Transpiled:
+               formats: set[str], mp_file: Path | None, target: str, xml_made: XmlMade) -> Transpiled:
     from transpiler.backends.plcopen.writer import render_target_xml, render_xml
     from transpiler.backends.st.writer import StPrinter
     mp_name = mp_file.name if mp_file is not None else None
     result = StBackend(program, diags, mp, mp_file=mp_name).build()
     project = result.project
     files: dict[str, bytes] = {}
-    printer = StPrinter()     # (one for the project and the libraries: the templates are compiled once)
-    st_text = printer.project(project)
     chosen = dialect(target)
     built = project
     if not chosen.builds_like(TARGETS[DEFAULT_TARGET]):
         # The same translation with the target's references and bit reads; its diagnostics are the matiec run's.
         built = StBackend(program, Diagnostics(), mp, mp_file=mp_name, dialect=chosen).build().project
     laid_out = for_target(built, target)
+    # (project.xml first, so that it is checked while the rest is made)
+    project_xml = render_target_xml(laid_out) if "xml" in formats else None
+    if project_xml is not None:
+        xml_made("project.xml", project_xml)
+    printer = StPrinter()     # (one for the project and the libraries: the templates are compiled once)
+    st_text = printer.project(project)
     if "st" in formats:
         # The matiec layout of the matiec translation is st_text itself (printing the target's layout would print it again).
         same_text = laid_out.project is project and laid_out.dialect.st_template == TARGETS[DEFAULT_TARGET].st_template
         files["project.st"] = (st_text if same_text else printer.target(laid_out)).encode("utf-8")
-    if "xml" in formats:
-        files["project.xml"] = render_target_xml(laid_out)
+    if project_xml is not None:
+        files["project.xml"] = project_xml
         if chosen.xml_globals == "configuration":
             # The editors built on matiec (OpenPLC Editor, Beremiz) open a folder as a project.
             files.update(project_folder(files["project.xml"]))
@@ -73,6 +87,7 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
             files[LIB_ST] = render_library_st(library, printer).encode("utf-8")
         if "xml" in formats:
             files[LIB_XML] = render_xml(library)
+            xml_made(LIB_XML, files[LIB_XML])
     # HH_Lib: every helper and the timer/counter blocks as a library of their own (hh_lib.py); project.st keeps
     # the ones it uses and stays self-contained.
     helpers = hh_lib.library_project(program.semantics, project.name)
@@ -80,6 +95,7 @@ def _transpile(program: Program, diags: Diagnostics, mp: Mapping[tuple[int, int]
         files[hh_lib.ST_FILE] = render_library_st(helpers, printer).encode("utf-8")
     if "xml" in formats:
         files[hh_lib.XML_FILE] = render_xml(helpers)
+        xml_made(hh_lib.XML_FILE, files[hh_lib.XML_FILE])
     # A native project folder of the target (one file per object), beside project.st and from the same text.
     native = None
     if chosen.project_folder == "twincat" and "st" in formats:

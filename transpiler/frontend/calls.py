@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.frontend.flow import routine_body
+from transpiler.frontend.flow import RoutineBodies
 from transpiler.frontend.lowering import FileLowering
 from transpiler.frontend.symbols import folded_key
 from transpiler.ir import CallTarget, FileCode
@@ -102,9 +102,11 @@ def link(low: FileLowering, lowerings: list[FileLowering], exports: dict[str, Ca
             diags.report("E-JUMP-SCOPE", span, f"jump target {name} is not a label of this file{where}")
 
 
-def call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagnostics) -> tuple[tuple[CallTarget, ...], int]:
-    """The routines reached from the main program and SUBM jobs, and the static call depth; reports recursion and depth."""
-    nodes, edges, roots = _call_edges(files)
+def call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagnostics, bodies: RoutineBodies
+               ) -> tuple[tuple[CallTarget, ...], int]:
+    """The routines reached from the main program and SUBM jobs, and the static call depth; reports recursion and depth.
+    `bodies` keeps the body of the main program and of each routine reached."""
+    nodes, edges, roots = _call_edges(files, bodies)
     recursive = _report_recursion(_strong_components(edges), nodes, edges, diags)
     depth_limit = int(semantics["call_depth"])
     depth = _longest_paths(edges, recursive)
@@ -116,7 +118,8 @@ def call_graph(files: tuple[FileCode, ...], semantics: Semantics, diags: Diagnos
     return routines, max_depth
 
 
-def _call_edges(files: tuple[FileCode, ...]) -> tuple[dict[_Key, CallTarget], _Edges, list[CallTarget]]:
+def _call_edges(files: tuple[FileCode, ...], bodies: RoutineBodies
+                ) -> tuple[dict[_Key, CallTarget], _Edges, list[CallTarget]]:
     """Walk the routine bodies from the main program: the routines found, the calls of each, and the roots (main, SUBM)."""
     main = CallTarget(0, 0, "<main>")
     nodes: dict[tuple[int, int], CallTarget] = {}
@@ -129,7 +132,7 @@ def _call_edges(files: tuple[FileCode, ...]) -> tuple[dict[_Key, CallTarget], _E
             continue
         out: list[tuple[CallTarget, Span]] = []        # callee and the span of the call
         ops = files[node.file].ops
-        for i in routine_body(files, node):
+        for i in bodies(node):
             op = ops[i]
             code = op.code
             if code in _CALLS:

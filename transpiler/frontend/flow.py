@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Mapping
+
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
 from transpiler.frontend.lowering import FileLowering
 from transpiler.frontend.opcodes import STRUCT_ALL
-from transpiler.ir import CallTarget, FileCode, Op
+from transpiler.ir import CallTarget, FileCode, Op, Program
 
 LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
                              "E-FILE-NOT-FOUND", "E-FILE-ESCAPE", "E-FILE-READ", "E-FILE-INCLUDE-CYCLE"})
@@ -109,12 +111,22 @@ def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
 
 
 class RoutineBodies:
-    """routine_body of each entry of one program's files, worked out once: the back end's analyses (liveness, the
-    stack interfaces, the job plan, the translation itself) each walk every routine's body."""
+    """routine_body of each entry of one program's files, worked out once: the call graph and the back end's analyses
+    (liveness, the stack interfaces, the job plan, the translation itself) each walk every routine's body.
+    `known` are bodies of these files worked out before (Program.routine_bodies)."""
 
-    def __init__(self, files: tuple[FileCode, ...]):
+    def __init__(self, files: tuple[FileCode, ...], known: Mapping[tuple[int, int], tuple[int, ...]] | None = None):
         self.files = files
-        self._bodies: dict[tuple[int, int], tuple[int, ...]] = {}
+        self._bodies: dict[tuple[int, int], tuple[int, ...]] = dict(known or {})
+
+    @classmethod
+    def of(cls, program: Program) -> RoutineBodies:
+        """The bodies of `program`'s files, starting from those its front end worked out."""
+        return cls(program.files, program.routine_bodies)
+
+    def worked_out(self) -> dict[tuple[int, int], tuple[int, ...]]:
+        """A copy of the bodies asked for so far, by entry key."""
+        return dict(self._bodies)
 
     def __call__(self, entry: CallTarget) -> tuple[int, ...]:
         key = (entry.file, entry.index)

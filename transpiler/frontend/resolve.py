@@ -11,8 +11,8 @@ from typing import Mapping
 
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.calls import call_graph, exports_of, link
-from transpiler.frontend.flow import (LOST_LINE_CODES, check_flow, check_module_starts, flow_is_complete, routine_body,
-                                      successors)
+from transpiler.frontend.flow import (LOST_LINE_CODES, RoutineBodies, check_flow, check_module_starts, flow_is_complete,
+                                      routine_body, successors)
 from transpiler.frontend.load import ParsedProject
 from transpiler.frontend.lowering import FileLowering
 from transpiler.frontend.mask_refs import resolve_masks
@@ -40,9 +40,10 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics,
         if flow_is_complete(low, lost_lines):
             check_flow(i, f, diags)
     check_module_starts(files, lowerings, diags)
-    routines, depth = call_graph(files, semantics, diags)
+    bodies = RoutineBodies(files)
+    routines, depth = call_graph(files, semantics, diags, bodies)
     masks = resolve_masks(project.masks, symbols, semantics, diags)
     modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
     return Program(files, symbols.all_symbols(), semantics, routines, depth, tuple(modules), project.files_read,
                    dict(project.defines), project.inactive, tuple(auto), project.line_count, project.config_file,
-                   tuple(sorted(overrides.items())), masks)
+                   tuple(sorted(overrides.items())), masks, routine_bodies=bodies.worked_out())

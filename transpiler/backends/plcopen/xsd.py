@@ -151,3 +151,53 @@ def validate_xml(data: bytes, filename: str = "project.xml", schema: etree.XMLSc
     if schema.validate(document):
         return []
     return [f"{filename}:{error.line}: {error.message}" for error in schema.error_log]
+
+
+class BackgroundValidation:
+    """validate_xml of the files handed to `start`, one after the other on a thread of their own, while the caller
+    goes on making the other files: lxml parses and validates without holding the GIL, so on a second core the check
+    costs the translation little wall time. One thread for all the files: a schema keeps one error log, which two
+    validations at the same time would mix. `problems` waits for a file's result."""
+
+    def __init__(self, schema: etree.XMLSchema):
+        import queue
+        import threading
+        self.schema = schema
+        self._todo: queue.SimpleQueue[tuple[str, bytes] | None] = queue.SimpleQueue()
+        self._results: dict[str, list[str] | BaseException] = {}
+        self._checked: dict[str, threading.Event] = {}
+        self._event = threading.Event
+        # (a daemon: a translation that fails before asking for the results does not wait for the check)
+        self._worker = threading.Thread(target=self._work, name="xsd-validation", daemon=True)
+        self._worker.start()
+
+    def start(self, name: str, data: bytes) -> None:
+        """Validate `data` (the file `name`) in the background."""
+        self._checked[name] = self._event()
+        self._todo.put((name, data))
+
+    def problems(self, name: str, data: bytes) -> list[str]:
+        """validate_xml's answer for the file `name` (its exception, if it raised one); one not given to `start` is
+        validated here, after the thread's files."""
+        if name not in self._checked:
+            self.close()
+            self._worker.join()
+            return validate_xml(data, name, self.schema)
+        self._checked[name].wait()
+        result = self._results[name]
+        if isinstance(result, BaseException):
+            raise result
+        return result
+
+    def close(self) -> None:
+        """No more files: the thread ends after the ones given (closing twice does no harm)."""
+        self._todo.put(None)
+
+    def _work(self) -> None:
+        while (item := self._todo.get()) is not None:
+            name, data = item
+            try:
+                self._results[name] = validate_xml(data, name, self.schema)
+            except BaseException as exc:      # noqa: BLE001 - handed to the caller of problems(), which raises it
+                self._results[name] = exc
+            self._checked[name].set()

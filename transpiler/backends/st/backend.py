@@ -108,7 +108,7 @@ class StBackend:
         layout = Layout(self.program, self.names, self.helpers_used.add, self.dialect)
         self.layout = layout
         self._name_instances()
-        self.bodies = RoutineBodies(self.program.files)
+        self.bodies = RoutineBodies.of(self.program)
         self.liveness = Liveness(self.program, self.bodies)
         self.stack: tuple[str, str] | None = None
         self.stack_analysis = StackAnalysis(self.program, _module_effect, bodies=self.bodies)

@@ -103,7 +103,7 @@ class StackAnalysis:
     def __init__(self, program: Program, module_effect: Callable[[int], Effect | None] = lambda number: None,
                  capacity_words: int | None = None, bodies: RoutineBodies | None = None):
         self.program = program
-        self.bodies = bodies or RoutineBodies(program.files)
+        self.bodies = bodies or RoutineBodies.of(program)
         self.module_effect = module_effect
         self.capacity = capacity_words if capacity_words is not None else int(program.semantics["data_stack_words"])
         self.effects: dict[tuple[int, int], Effect] = {}

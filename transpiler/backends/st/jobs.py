@@ -95,7 +95,7 @@ class RoutineJobs:
 
 def plan_jobs(program: Program, bodies: RoutineBodies | None = None) -> JobPlan:
     """Number the SUBM targets of `program` and find the routines the jobs call."""
-    bodies = bodies or RoutineBodies(program.files)
+    bodies = bodies or RoutineBodies.of(program)
     entries = {r.key: r for r in program.routines}
     roots: dict[tuple[int, int], CallTarget] = {}
     for f in program.files:

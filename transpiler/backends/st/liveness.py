@@ -71,7 +71,7 @@ class Liveness:
 
     def __init__(self, program: Program, bodies: RoutineBodies | None = None):
         self.program = program
-        bodies = bodies or RoutineBodies(program.files)
+        bodies = bodies or RoutineBodies.of(program)
         self.main = CallTarget(0, 0, "<main>")
         roots = [self.main] + list(program.routines)
         self.bodies = {r.key: bodies(r) for r in roots}
