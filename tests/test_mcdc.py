@@ -718,3 +718,26 @@ def test_the_shared_accumulator_model_follows_no_word(tmp_path: Path) -> None:
     program = _program(tmp_path, "L K4\nBT K2\n= O2\nEM\n", accumulator_model="shared_bit7")
     _, cov = _status(program, [])
     assert cov.summary()["mcdc"]["conditions_infeasible"] == 0
+
+
+@pytest.mark.parametrize("text, runs", [
+    # WA computed from an NC word: 100 - M code takes -6 and -4 with M codes 106 and 104
+    ("L K100\n- W260\n== K-5\n= O1\nEM\n", [[{"m_function": 104}], [{"m_function": 106}]]),
+    # WA computed from X: 100 - X is 97 when X is 3, whatever range X holds
+    ("L K0\n= X\nL I1\nIFT\nL K3\n= X\nENDI\nL K100\n- X\n== K97\n= O1\nEM\n", None),
+])
+def test_a_compare_of_a_computed_wa_is_no_compare_of_the_operand_before_it(tmp_path: Path, text: str, runs) -> None:
+    # The op before the compare is arithmetic, not a load: neither the NC word's range nor the index register's
+    # range says anything about WA. Catches: the operand before the compare taken for the compared word (W260's
+    # 0..32767 claimed for 100 - W260, X's 0..3 for 100 - X).
+    program = _program(tmp_path, text)
+    assert all(b.status != "infeasible" for b in decision_coverage(program, []).boundaries)
+    if runs is not None:
+        machines = [_run_nc(program, [({}, []), ({}, jobs), ({}, []), ({}, [])]) for jobs in runs]
+        machines += [_run_nc(program, [({}, [{"m_function": 105}]), ({}, [])])]
+    else:
+        machines = [_run(program, [{"I1": 0}]), _run(program, [{"I1": 1}, {"I1": 1}])]
+    reached = decision_coverage(program, [m.coverage for m in machines])
+    # (100 - X is 100 or 97 there: only 97 of the three values can occur, and it does)
+    expected = {-1, 0, 1} if runs is not None else {0}
+    assert {b.offset for b in reached.boundaries if b.status == "reached"} == expected

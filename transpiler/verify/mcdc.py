@@ -751,11 +751,16 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
         return dataclasses.replace(item, status="infeasible", reason=found.reason(value))
     x = xs.get(cmp.key)
     ops = program.files[cmp.file].ops
-    word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
+    # The word compared: the compare's operand, or the one loaded just before it (decisions.Compare's rule); where WA
+    # was computed (`L K100` `- W260` `== K-5`) the operand before the compare is no side of it.
+    load = ops[cmp.index - 1] if cmp.index > 0 else None
+    word = ops[cmp.index].operand if cmp.constant_left else \
+        load.operand if load is not None and load.code == "WLD" else None
     fact = ranges.get((word.kind, word.addr)) if word is not None and not word.indexed else None
     # (the fact is about the word's signed content; a compare that reads it zero-extended sees 65535 for -1)
     if fact is not None and not fact.holds({fact.operands[0]: sext(value, 8 * BYTES[word.kind])}):
-        return dataclasses.replace(item, status="infeasible", reason=f"{cmp.right if cmp.constant_left else cmp.left} never holds {value}: {fact.text}")
+        shown = cmp.right if cmp.constant_left else cmp.left
+        return dataclasses.replace(item, status="infeasible", reason=f"{shown} never holds {value}: {fact.text}")
     if x is None or word is None or word.kind != "X" or x[0] < 0 or program.semantics["compare_signedness"] == \
             "unsigned":
         return item
