@@ -67,3 +67,23 @@ def test_quick_init_refuses_what_it_cannot_build():
 
     with pytest.raises(TypeError):
         quick_init(Mutable)
+
+
+def test_quick_init_refuses_a_slotted_layout_it_cannot_switch():
+    # The class switch of a slotted record needs the plain slots of the record alone: a slotted base or a weak
+    # reference slot change the layout, and the first record built would fail. Refused when decorated instead.
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Base:
+        name: str
+
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Derived(Base):
+        count: int = 0
+
+    @dataclasses.dataclass(frozen=True, slots=True, weakref_slot=True)
+    class Weak:
+        name: str
+
+    for cls in (Derived, Weak):
+        with pytest.raises(TypeError, match="quick_init takes a slotted record only"):
+            quick_init(cls)

@@ -249,7 +249,8 @@ class Program:
     masks: tuple[Mask, ...] = ()            # the project's screen masks, references resolved
     data_rows: tuple[DataRow, ...] = ()                 # rows of the PLC data tables, in file and line order
     # The op indices of the main program's and every routine's body (flow.routine_body), keyed by CallTarget.key:
-    # the call graph walks them all, and the back end's analyses walk them again.
+    # the call graph walks them all, and the back end's analyses walk them again. Derived from `files`: a Program
+    # made from another one with other files (dataclasses.replace) must leave them out.
     routine_bodies: Mapping[tuple[int, int], tuple[int, ...]] = dataclasses.field(default_factory=dict)
 
     @property

@@ -38,8 +38,13 @@ def quick_init(cls: type[T]) -> type[T]:
             stores.append(f"    self.{f.name} = {f.name}")
     if slotted:
         # The record is filled in as an instance of a plain class with the same slots (whose fields take an ordinary,
-        # fast attribute store), then given back its own class: CPython allows that switch between classes of the
-        # same layout, and nothing else can see the record in between.
+        # fast attribute store), then given back its own class: CPython allows that switch only between classes of
+        # the same layout, so the record may have no base with slots of its own and no weak-reference slot (checked
+        # here, where a mistake shows at import and not at the first record built); nothing else can see the record
+        # in between.
+        if cls.__bases__ != (object,) or "__weakref__" in cls.__slots__:
+            raise TypeError(f"{cls.__name__}: quick_init takes a slotted record only without a base class and "
+                            "without weakref_slot")
         namespace["_fields_only"] = type(f"{cls.__name__}Fields", (), {"__slots__": cls.__slots__})
         namespace["_set_class"] = object.__setattr__
         stores = (["    record_class = type(self)", "    _set_class(self, '__class__', _fields_only)"] + stores

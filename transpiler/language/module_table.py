@@ -298,6 +298,13 @@ MODULE_ROWS: tuple[Module, ...] = (
 MODULE_TABLE: Mapping[int, Module] = MappingProxyType({m.number: m for m in MODULE_ROWS})
 
 
+def writes_anywhere(number: int) -> bool:
+    """Whether a call of PLC module `number` may write memory the program does not name: one that writes to an
+    address it is given, or one this table does not know (what it writes is unknown)."""
+    row = MODULE_TABLE.get(number)
+    return row is None or any("address" in p.name for p in row.params)
+
+
 def nearest(number: int, count: int = 3) -> list[int]:
     """The `count` known module numbers closest to `number` (hint of E-MODULE-UNKNOWN)."""
     return sorted(sorted(MODULE_TABLE, key=lambda n: (abs(n - number), n))[:count])

@@ -14,7 +14,7 @@ import dataclasses
 from typing import Callable, Mapping
 
 from transpiler.ir import Program
-from transpiler.language.module_table import MODULE_TABLE
+from transpiler.language.module_table import writes_anywhere
 from transpiler.verify.index_range import index_ranges
 from transpiler.verify.scenario import NC_VALUE_RANGES
 from transpiler.verify.simulate import indexed_operands, operand_writers, program_operands
@@ -181,7 +181,4 @@ def applicable_facts(program: Program, driven: set[tuple[str, int]]) -> tuple[Nc
 
 
 def _writes_anywhere(op) -> bool:
-    if op.call is None or not op.call.is_module:
-        return False
-    row = MODULE_TABLE.get(op.call.module)
-    return row is None or any("address" in p.name for p in row.params)
+    return op.call is not None and op.call.is_module and writes_anywhere(op.call.module)

@@ -37,7 +37,7 @@ from transpiler.exec.interp.decisions import Compare
 from transpiler.exec.interp.support import saturate
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program, sext
-from transpiler.language.module_table import MODULE_TABLE
+from transpiler.language.module_table import writes_anywhere
 from transpiler.verify.nc_facts import NC_MODEL_OWNED
 from transpiler.verify.index_range import index_ranges
 
@@ -222,10 +222,7 @@ class _Analysis:
         """(the cell `op` stores into by name, or None; the cells it may change otherwise, None: every cell)."""
         o = op.operand
         if op.code in _CALLS and op.call is not None and op.call.is_module:
-            row = MODULE_TABLE.get(op.call.module)
-            if row is None or any("address" in p.name for p in row.params):
-                return None, None
-            return None, set()
+            return (None, None) if writes_anywhere(op.call.module) else (None, set())
         if op.code not in _MEM_WRITERS or o is None or o.kind not in _BITS:
             return None, set()
         size = BYTES[o.kind]
@@ -417,8 +414,7 @@ class _Analysis:
             return
         o = op.operand
         if op.code in _CALLS and op.call is not None and op.call.is_module:
-            row = MODULE_TABLE.get(op.call.module)
-            if row is None or any("address" in p.name for p in row.params):
+            if writes_anywhere(op.call.module):
                 exposed.update(state.fresh)
             return
         if o is None or o.kind not in _BITS or op.code in ("WST", "POP"):
