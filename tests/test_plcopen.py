@@ -143,6 +143,21 @@ def test_transpile_validates_every_xml_file_and_writes_nothing_invalid(schema: e
     assert len(diagnostic.notes) == 1 and diagnostic.notes[0].startswith("project.xml:") and "priority" in diagnostic.notes[0]
 
 
+def test_background_validation_checks_the_text_it_is_asked_about(schema: etree.XMLSchema) -> None:
+    # The thread validated one text; the caller asks about another one under the same name (a file made again
+    # after it was handed over): the answer is the other text's, checked then. Catches: the answer for the bytes
+    # the thread saw given for bytes that are written.
+    good = b'<?xml version="1.0" encoding="utf-8"?>\n<nothing/>\n'
+    check = xsd.BackgroundValidation(schema)
+    check.start("project.xml", good)
+    other = good.replace(b"nothing", b"still_nothing")
+    try:
+        found = check.problems("project.xml", other)
+    finally:
+        check.close()
+    assert found and "still_nothing" in found[0]
+
+
 # --- one translation, two containers --------------------------------------------------------
 
 

@@ -166,6 +166,7 @@ class BackgroundValidation:
         self._todo: queue.SimpleQueue[tuple[str, bytes] | None] = queue.SimpleQueue()
         self._results: dict[str, list[str] | BaseException] = {}
         self._checked: dict[str, threading.Event] = {}
+        self._given: dict[str, bytes] = {}
         self._event = threading.Event
         # (a daemon: a translation that fails before asking for the results does not wait for the check)
         self._worker = threading.Thread(target=self._work, name="xsd-validation", daemon=True)
@@ -174,12 +175,14 @@ class BackgroundValidation:
     def start(self, name: str, data: bytes) -> None:
         """Validate `data` (the file `name`) in the background."""
         self._checked[name] = self._event()
+        self._given[name] = data
         self._todo.put((name, data))
 
     def problems(self, name: str, data: bytes) -> list[str]:
-        """validate_xml's answer for the file `name` (its exception, if it raised one); one not given to `start` is
-        validated here, after the thread's files."""
-        if name not in self._checked:
+        """validate_xml's answer for the file `name` (its exception, if it raised one); one not given to `start`, or
+        given with other content than `data` (the text written is the one checked), is validated here, after the
+        thread's files."""
+        if self._given.get(name) is not data:
             self.close()
             self._worker.join()
             return validate_xml(data, name, self.schema)
