@@ -34,6 +34,7 @@ from typing import Callable, Mapping, Sequence
 from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.exec.interp.gen_exprs import int32
+from transpiler.exec.interp.support import divide, remainder
 from transpiler.ir import Op, Program
 from transpiler.verify.index_range import index_ranges
 from transpiler.verify.nc_facts import NcFact
@@ -326,23 +327,13 @@ class _Run:
             flag = itf.div_err if c == "DIV" else itf.mod_err
             if k is None:
                 return {}
-            if k == 0:
-                # the zero divisor: the marker is set and WA is the dividend (or 0, A-11)
-                path.wa = None
-                return {("M", flag): _ALL}
             if wa is None:
-                return {} if k == -1 else {("M", flag): 0}      # -2^31 / -1 may set it
-            if wa == -(1 << 31) and k == -1:
-                return {}
-            q = abs(wa) // abs(k)
-            if c == "DIV":
-                if sem["div_semantics"] == "floor":
-                    return {("M", flag): 0}
-                path.wa = q if (wa < 0) == (k < 0) else -q
-            elif sem["div_semantics"] != "floor":
-                r = abs(wa) % abs(k)
-                path.wa = -r if wa < 0 else r
-            return {("M", flag): 0}
+                # the divisor alone: 0 sets the marker, -1 may (-2^31 / -1, A-12), any other clears it
+                return {("M", flag): _ALL} if k == 0 else {} if k == -1 else {("M", flag): 0}
+            # the interpreter's own division
+            path.wa, error = (divide if c == "DIV" else remainder)(
+                wa, k, sem["div_semantics"] == "floor", 1 if sem["div_min_by_minus_one"] == "flag" else 0)
+            return {("M", flag): _ALL if error else 0}
         if wa is None or k is None:
             return {}
         exact = wa + k if c == "ADD" else wa - k if c == "SUB" else wa * k

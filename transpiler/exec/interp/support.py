@@ -22,6 +22,36 @@ _FROM_CHARS = bytes.maketrans(b"01", b"\x00\x01")
 Warn = Callable[[str, str, int], None]        # code, message, op id
 
 
+
+def divide(a: int, b: int, floor: bool, min_flag: int) -> tuple[int, int]:
+    """`a / b` of two 32-bit values and its error flag (A-11 floor or truncating, A-12 the flag of -2^31 / -1):
+    the interpreter's division, and the one the coverage analyses work constant word arithmetic out with."""
+    if b == 0:
+        return (0 if floor else a), 1
+    if floor:
+        q = a // b
+    else:
+        q = abs(a) // abs(b)
+        if (a < 0) != (b < 0):
+            q = -q
+    if q == -INT32_MIN:                 # -2^31 / -1
+        return INT32_MIN, min_flag
+    return q, 0
+
+
+def remainder(a: int, b: int, floor: bool, min_flag: int) -> tuple[int, int]:
+    """`a MOD b` of two 32-bit values and its error flag, as divide."""
+    if b == 0:
+        return (0 if floor else a), 1
+    if floor:
+        r = a % b
+    else:
+        r = abs(a) % abs(b)
+        if a < 0:
+            r = -r
+    return r, (min_flag if (a == INT32_MIN and b == -1) else 0)
+
+
 class Runtime:
     """Per-machine state the generated code reaches through helpers (stack, jobs, modules) and the helpers themselves."""
 
@@ -173,28 +203,10 @@ class Runtime:
     # ---- division (A-11, A-12, 17b.4): (result, flag)
 
     def div(self, a: int, b: int) -> tuple[int, int]:
-        if b == 0:
-            return (0 if self.div_floor else a), 1
-        if self.div_floor:
-            q = a // b
-        else:
-            q = abs(a) // abs(b)
-            if (a < 0) != (b < 0):
-                q = -q
-        if q == -INT32_MIN:                 # -2^31 / -1
-            return INT32_MIN, self.min_flag
-        return q, 0
+        return divide(a, b, self.div_floor, self.min_flag)
 
     def mod(self, a: int, b: int) -> tuple[int, int]:
-        if b == 0:
-            return (0 if self.div_floor else a), 1
-        if self.div_floor:
-            r = a % b
-        else:
-            r = abs(a) % abs(b)
-            if a < 0:
-                r = -r
-        return r, (self.min_flag if (a == INT32_MIN and b == -1) else 0)
+        return remainder(a, b, self.div_floor, self.min_flag)
 
     # ---- strings (A-50)
 
