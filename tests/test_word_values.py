@@ -21,8 +21,7 @@ from transpiler.verify.guided import generate
 from transpiler.verify.index_range import index_ranges
 from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.scenario import load_scenario
-from transpiler.verify.simulate import build_machine, project_names
-from transpiler.verify.stimulus import build_stimulus
+from transpiler.verify.simulate import build_machine, project_names, run_scenario
 from transpiler.verify.word_values import word_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -225,17 +224,9 @@ def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_a_cons
     program = loaded.program
     names = project_names(program)
     compiled = compile_program(program, coverage=True)
-    sets = []
     scenarios = [load_scenario(folder / "scenario.yaml", names)] if (folder / "scenario.yaml").exists() else []
     scenarios += generate(program, names, 400, seed=2, seeds=scenarios)
-    for scenario in scenarios:
-        stimulus = build_stimulus(scenario, names)
-        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
-        for cycle in range(stimulus.cycles):
-            if machine.halted:
-                break
-            machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
-        sets.append(machine.coverage)
+    sets = _coverage_sets(program, scenarios, names, compiled)
     _bounds_inside(program, sets, driven_operands(scenarios, names), power_on_operands(scenarios, names))
     rng = random.Random(5)
     machine = Machine(program, compiled=compiled, coverage=True)
@@ -244,6 +235,13 @@ def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_a_cons
             break
         machine.run_cycle(cycle, [("I", rng.randrange(16), rng.randrange(2)) for _ in range(4)])
     _bounds_inside(program, [machine.coverage])
+
+
+def _coverage_sets(program, scenarios, names, compiled) -> list:
+    """The reference machine's coverage of each scenario, run as `hh2iec simulate` runs it (up to its first fault)."""
+    return [run_scenario(program, scenario, names,
+                         machine=build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+                         ).machine.coverage for scenario in scenarios]
 
 
 def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_the_sample() -> None:
@@ -256,15 +254,7 @@ def test_no_reached_boundary_value_is_outside_what_the_analysis_allows_on_the_sa
     scenarios = [load_scenario(p, names) for p in sorted((SAMPLE / "scenarios").glob("*.yaml"))]
     scenarios += generate(program, names, 1500, seed=4, seeds=scenarios,
                           machine_parameters=SAMPLE / "MP_data.mp")
-    sets = []
-    for scenario in scenarios:
-        stimulus = build_stimulus(scenario, names)
-        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
-        for cycle in range(stimulus.cycles):
-            if machine.halted:
-                break
-            machine.run_cycle(cycle, stimulus.writes(cycle), stimulus.nc_actions(cycle))
-        sets.append(machine.coverage)
+    sets = _coverage_sets(program, scenarios, names, compiled)
     checked = _bounds_inside(program, sets, driven_operands(scenarios, names), power_on_operands(scenarios, names))
     assert checked > 50
 
