@@ -39,7 +39,7 @@ from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
 from transpiler.verify.index_range import index_ranges
-from transpiler.verify.word_values import WordValues, word_values
+from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
 _ENUMERATE = 14             # free conditions up to which unique-cause feasibility is decided by enumeration
@@ -155,9 +155,11 @@ def _masking_pair(a: int, b: int, bit: int, n: int, function) -> bool:
 # ----------------------------------------------------------------------------------------------------- constants
 
 def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
-    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs)."""
+    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs), and
+    (word_values.OVERRIDDEN_MODULE, number) of every module whose results one replaces (`module_results`)."""
     driven: set[tuple[str, int]] = set()
     for scenario in scenarios:
+        driven.update((OVERRIDDEN_MODULE, int(number)) for number in scenario.module_results)
         written = list(scenario.initial)
         for event in scenario.events:
             written += list(event.set)
