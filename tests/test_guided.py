@@ -111,22 +111,6 @@ def test_compare_pairs_let_the_search_put_a_compared_word_next_to_its_constant(t
     assert near & {99, 101}, [(s.initial, [e.set for e in s.events]) for s in kept]
 
 
-def test_compare_pairs_follow_a_word_passed_to_a_subprogram_on_the_data_stack(tmp_path):
-    # `PS D8` `PS W12` `CM Sub`, `LBL Sub` `PL W20` `PL D24`: the subprogram compares D24, a copy of D8 (the last pushed
-    # is pulled first), so D8's power-on value is what reaches `< K0`; a push not right before the call, a pull after
-    # other code and a pull of another width are no copies.
-    (tmp_path / "main.src").write_text(
-        "PS    D8\nPS    W12\nCM    Sub\nPS    W14\nL     I1\nCM    Other\nPS    W16\nCM    Wide\nEM\n"
-        "LBL Sub\nPL    W20\nPL    D24\nL     D24\n<     K0\n=     O1\nL     W20\n==    K3\n=     O2\nEM\n"
-        "LBL Other\nL     I2\nPL    W30\nL     W30\n==    K4\n=     O3\nEM\n"
-        "LBL Wide\nPL    D40\nL     D40\n==    K5\n=     O4\nEM\n")
-    project = api.load_project(api.project_options(tmp_path / "main.src"))
-    corners = harvest(project.program, project_names(project.program))
-    pairs = set(corners.compare_pairs)
-    assert {("D8", "D", 0), ("W12", "W", 3)} <= pairs, pairs
-    assert not {name for name, _, _ in pairs} & {"W14", "W16"}, pairs
-
-
 def test_dirty_fillers_start_every_written_marker_at_1_once(tmp_path):
     # `R M6` only ever writes M6's power-on value 0: a translation that drops the store is told apart only from a
     # run in which M6 starts at 1. The two dirty filler runs start each written marker at opposite values.

@@ -187,7 +187,7 @@ _COPY_DEPTH = 3             # copies followed back from a compared word (`L W32`
 def _compares(program: Program) -> tuple[set[tuple[OperandRef, int]], dict[OperandRef, set[OperandRef]]]:
     """(each word compared with a constant by a load and a compare in a row (`L W10` `> K100`, or `L K100`
     `< W10`), with the constant at the word's width; each word's sources: the words loaded and stored into it in
-    a row, and the words pushed for it where a subprogram pulls it as a parameter, _stack_copies)."""
+    a row)."""
     compared: set[tuple[OperandRef, int]] = set()
     sources: dict[OperandRef, set[OperandRef]] = {}
     for code in program.files:
@@ -201,38 +201,7 @@ def _compares(program: Program) -> tuple[set[tuple[OperandRef, int]], dict[Opera
             word, const = (prev.operand, op.operand) if op.operand.kind == "K" else (op.operand, prev.operand)
             if const.kind == "K" and _plain_word(word):
                 compared.add((_ref(word), _signed(const.addr, word.kind)))
-    for word, source in _stack_copies(program):
-        sources.setdefault(word, set()).add(source)
     return compared, sources
-
-
-def _stack_copies(program: Program) -> set[tuple[OperandRef, OperandRef]]:
-    """(word, source) of each parameter a subprogram takes from the data stack: the words pushed just before a call
-    (`PS W8` `PS W10` `CM Sub`) and pulled first thing in the subprogram (`LBL Sub` `PL W20` `PL W22`), the last
-    pushed pulled first (W20 from W10, W22 from W8): the program's usual way of passing a word on."""
-    found: set[tuple[OperandRef, OperandRef]] = set()
-    for code in program.files:
-        for i, op in enumerate(code.ops):
-            target = op.call
-            if op.code != "CALL" or target is None or target.is_module or target.file < 0:
-                continue
-            pushed: list = []
-            j = i - 1
-            while j >= 0 and code.ops[j].code == "PUSH" and code.ops[j].operand is not None:
-                pushed.append(code.ops[j].operand)        # last pushed first
-                j -= 1
-            callee = program.files[target.file].ops
-            k = target.index
-            while k < len(callee) and callee[k].code == "LBL":
-                k += 1
-            for source in pushed:
-                if k >= len(callee) or callee[k].code != "POP" or callee[k].operand is None:
-                    break
-                word = callee[k].operand
-                if _plain_word(source) and _plain_word(word) and source.kind == word.kind:
-                    found.add((_ref(word), _ref(source)))
-                k += 1
-    return found
 
 
 def _compare_pairs(compared, sources, drivable: dict[str, str], name) -> tuple[tuple[str, str, int], ...]:
