@@ -186,3 +186,40 @@ def test_error_values_hold_every_error_result_the_model_gives() -> None:
                 seen.add(results[m.error_result])
             assert seen <= m.error_values, (m.number, seen - m.error_values)
             assert len(seen) > 2, (m.number, seen)
+
+
+def test_a_call_in_the_module_s_own_context_never_gives_the_wrong_context_s_result() -> None:
+    # error_values_in drops the wrong context's result where the call runs only in the right one: the model, called
+    # there with corner parameters, tables present or not, never gives it. Catches: a row whose wrong-context code
+    # is one of its own error codes too.
+    from itertools import product
+
+    from transpiler.exec.interp.sysmodel import SysContext
+    corners = (-1, 0, 1, 2, 3, 5, 63, 64, 65, 1000)
+    for filled in (False, True):
+        sys = SysContext()
+        if filled:
+            for file_type, line, element in product((0, 1, 2), (0, 1, 5), (0, 1, 7)):
+                sys.set_table(file_type, line, element, 1)
+        for m in (m for m in mt.MODULE_ROWS if m.error_values is not None and m.context != mt.ANY):
+            right = m.context == mt.SUBMIT
+            narrowed = m.error_values_in(right)
+            assert narrowed == m.error_values - {m.context_error_result(not right)} != m.error_values
+            for params in product(corners, repeat=m.nparams):
+                results, _, _ = sys.call_in(m.number, list(params), right)
+                assert results[m.error_result] in narrowed, (m.number, params, results)
+            wrong, _, _ = sys.call_in(m.number, [0] * m.nparams, not right)
+            assert wrong[m.error_result] == m.context_error_result(not right) not in narrowed
+
+
+def test_error_values_in_keeps_every_value_where_the_context_is_not_known_or_wrong() -> None:
+    # Catches: the wrong context's result dropped for a call in the wrong context or of unknown context, and for
+    # a cyclic-only module the job's result (24) is the one that drops.
+    import dataclasses
+    row = mt.MODULE_TABLE[9093]
+    assert row.error_values_in(None) == row.error_values_in(False) == row.error_values
+    cyclic = dataclasses.replace(row, context=mt.CYCLIC, context_result=None, error_values=frozenset({0, 2, 24}))
+    assert cyclic.error_values_in(False) == {0, 2}
+    assert cyclic.error_values_in(True) == cyclic.error_values_in(None) == {0, 2, 24}
+    anywhere = dataclasses.replace(row, context=mt.ANY)
+    assert anywhere.error_values_in(True) == anywhere.error_values_in(False) == row.error_values

@@ -302,3 +302,55 @@ def test_module_results_of_a_scenario_count_as_driven(tmp_path: Path) -> None:
     (tmp_path / "s.yaml").write_text("name: s\ncycles: 1\nmodule_results:\n  9093: [7, -1]\n")
     scenario = load_scenario(tmp_path / "s.yaml", project_names(program))
     assert ("module", 9093) in driven_operands([scenario], project_names(program))
+
+
+JOB_TABLE_READ = """{main}EM
+
+LBL Read
+PS    K0
+PS    W20
+PS    K1
+CM    9093
+PL    D32
+PL    W40
+L     W40
+==    K0
+=     O1
+EM
+"""
+
+
+def _line_of_compare(program) -> int:
+    """The source line of the program's only `==    K0`."""
+    lines = program.files[0].ops
+    found = {op.span.line for op in lines if op.code == "CMP" and op.rel == "=="}
+    assert len(found) == 1, found
+    return found.pop()
+
+
+def test_a_submit_module_called_only_in_a_job_never_gives_its_wrong_context_code(tmp_path: Path) -> None:
+    # 9093 is submit-only: code 1 is its result in the cyclic program. Called only from a submitted job, W40 holds
+    # 0, 2..5. Catches: the claim where the routine is called cyclically too, or only cyclically (1 is all it can
+    # give there), or where the A-46q context rule is off.
+    job = _program(tmp_path, JOB_TABLE_READ.format(main="SUBM  Read\n"))
+    assert _held(job)[(_line_of_compare(job), "==", 0)] == frozenset({0, 2, 3, 4, 5})
+    cov = decision_coverage(job, [])
+    c1 = {item.what(): item for item in cov.boundaries}["boundary W40 == K0: W40 = c+1 (1)"]
+    assert c1.status == "infeasible" and "called only in a submitted job" in c1.reason, c1.reason
+    both = _program(tmp_path, JOB_TABLE_READ.format(main="SUBM  Read\nCM    Read\n"))
+    assert _held(both)[(_line_of_compare(both), "==", 0)] == frozenset(range(6))
+    cyclic = _program(tmp_path, JOB_TABLE_READ.format(main="CM    Read\n"))
+    assert _held(cyclic)[(_line_of_compare(cyclic), "==", 0)] == frozenset(range(6))
+    ignored = _program(tmp_path, JOB_TABLE_READ.format(main="SUBM  Read\n"), module_context="ignore")
+    assert _held(ignored)[(_line_of_compare(ignored), "==", 0)] == frozenset(range(6))
+
+
+def test_a_job_s_callee_and_a_fall_through_run_in_the_job_context(tmp_path: Path) -> None:
+    # The job calls a routine that falls into the reading label: both run in the job only. The same call reached
+    # from the cyclic program through a CASE table is in both contexts.
+    text = "{main}EM\n\nLBL Job\nCM    Pre\nEM\n\nLBL Pre\nL     K0\n" + JOB_TABLE_READ.split("EM\n", 1)[1]
+    job = _program(tmp_path, text.format(main="SUBM  Job\n"))
+    assert _held(job)[(_line_of_compare(job), "==", 0)] == frozenset({0, 2, 3, 4, 5})
+    case = _program(tmp_path, text.format(main="SUBM  Job\nL     K0\nCASE  B0\nCM    Pre\nENDC\n"))
+    assert _held(case)[(_line_of_compare(case), "==", 0)] == frozenset(range(6))
+

@@ -92,6 +92,15 @@ class Module:
             return None
         return code if self.context_result is None else self.context_result
 
+    def error_values_in(self, in_job: bool | None) -> frozenset[int] | None:
+        """error_values of a call known to run in a submit job (True) or in the cyclic program (False); None: either
+        may run it. Where that is the module's own context, the wrong context's result drops out: the model gives it
+        nowhere else (tests/test_module_table.py calls it with corner parameters in the right context)."""
+        if self.error_values is None or in_job is None or self.context_error(in_job):
+            return self.error_values
+        wrong = self.context_error_result(not in_job)
+        return self.error_values if wrong is None else self.error_values - {wrong}
+
 
 def _v(spec: str) -> tuple[Value, ...]:
     """'name[unit], name2' -> Values; keeps the rows below one line each."""

@@ -13,7 +13,9 @@ The analysis works on bit patterns of memory operands (B/W/D named without an in
   the module table (all memory), the NC model's words and the NC interface bytes, the module error-code word, a
   data-table row, and every operand a scenario sets after power-on. A pull (`PL`) right after a module call that
   takes the module's error result stores the codes its row states (Module.error_values), unless a scenario
-  replaces that module's results (`module_results`: driven as ("module", number)).
+  replaces that module's results (`module_results`: driven as ("module", number)); less the code of a call in the
+  wrong context where the call runs only in the module's own one (a submit-only module called only from submitted
+  jobs: no path of the cyclic program's calls reaches it; a cyclic-only one never reached from a job).
 - The power-on value: 0, or any value for an operand a scenario sets before cycle 0 (`initial`); none at all where
   the first cycle stores the operand before anything reads it (first_cycle: the main program followed with every
   call inlined and the first-cycle marker 1), since no read can see it then.
@@ -37,8 +39,9 @@ from typing import Iterable, Mapping
 
 from transpiler.exec.interp.decisions import Compare
 from transpiler.exec.interp.support import saturate
+from transpiler.frontend.flow import RoutineBodies, routines_entered
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.ir import BYTES, Op, Program, sext
+from transpiler.ir import BYTES, CallTarget, Op, Program, sext
 from transpiler.language.module_table import MODULE_TABLE, writes_anywhere
 from transpiler.verify.nc_facts import NC_MODEL_OWNED
 from transpiler.verify.index_range import index_ranges
@@ -194,6 +197,7 @@ class _Analysis:
         self.outside = self._outside_bytes(driven - power_on)
         self.overridden = {number for kind, number in driven if kind == OVERRIDDEN_MODULE}
         self.dirty = {b for kind, addr in power_on if kind in _BITS for b in _bytes((kind, addr))}
+        self.contexts = self._contexts()
         self.callees = self._callee_writes()
         self.linked = self._linked()
         self.interface = sem.profile.interface
@@ -245,10 +249,60 @@ class _Analysis:
 
     def error_codes(self, f: int, i: int) -> frozenset[int] | None:
         """The values the pull at op i can take where it is the k-th pull right after a call of a module whose k-th
-        result is its error result with stated values (Module.error_values), nothing entering in between and no
-        scenario replacing the module's results; None otherwise."""
+        result is its error result with stated values (Module.error_values, less the wrong context's result where
+        the call runs only in the module's own context), nothing entering in between and no scenario replacing the
+        module's results; None otherwise."""
         row = self.pulled_module(f, i)
-        return None if row is None else row.error_values
+        return None if row is None else row.error_values_in(self.call_context(f, self.pulls_from(f, i)))
+
+    def pulls_from(self, f: int, i: int) -> int:
+        """The op index of the call whose results the pull at op i takes (pulled_module found it)."""
+        ops = self.program.files[f].ops
+        j = i
+        while ops[j - 1].code == "POP":
+            j -= 1
+        return j - 1
+
+    def pulled_from(self, f: int, i: int) -> str:
+        """What the pull at op i takes, for the reason: the module's error result, and where the call runs when
+        that leaves the wrong context's result out."""
+        row = self.pulled_module(f, i)
+        where = ""
+        if self.error_codes(f, i) != row.error_values:
+            where = (", called only in a submitted job" if self.call_context(f, self.pulls_from(f, i)) else
+                     ", called only in the cyclic program")
+        return f"the error result of module {row.number}{where}"
+
+    def call_context(self, f: int, i: int) -> bool | None:
+        """True where op i runs only inside submitted jobs, False where only in the cyclic program, None where both
+        may run it (or the A-46q context rule is off: no call fails for its context then, and no claim is made)."""
+        if self.program.semantics["module_context"] != "enforce":
+            return None
+        cyclic, job = (f, i) in self.contexts[0], (f, i) in self.contexts[1]
+        return None if cyclic == job else job
+
+    def _contexts(self) -> tuple[set[tuple[int, int]], set[tuple[int, int]]]:
+        """(file, op index) of the ops the cyclic program can run (the main program from its start and every
+        routine it calls, through CASE tables and falls into other labels too) and of those a submitted job can run
+        (every SUBM target and what it calls), whatever the values: the machine runs nothing else, and a job's
+        code runs with the in-job flag set, the cyclic program's without it."""
+        bodies = RoutineBodies.of(self.program)
+
+        def reach(roots: list[CallTarget]) -> set[tuple[int, int]]:
+            found: set[tuple[int, int]] = set()
+            seen: set[tuple[int, int]] = set()
+            while roots:
+                r = roots.pop()
+                if r.key in seen:
+                    continue
+                seen.add(r.key)
+                for i in bodies(r):
+                    found.add((r.file, i))
+                    roots.extend(routines_entered(self.program.files[r.file].ops[i]))
+            return found
+        jobs = [op.call for _, _, op in self.ops if op.code == "SUBM" and op.call is not None
+                and not op.call.is_module and op.call.file >= 0]
+        return reach([CallTarget(file=0, index=0)]), reach(jobs)
 
     def pulled_module(self, f: int, i: int):
         """The module row whose error result the pull at op i takes (see error_codes), or None."""
@@ -521,7 +575,7 @@ class _Analysis:
                     found[c] = None
                 if cell is not None:
                     found[cell] = _union(found[cell], self.stored_values(f, i, op, cell, flow.wa))
-                    pulled = f" (the error result of module {self.pulled_module(f, i).number})" if op.code == "POP" else ""
+                    pulled = f" ({self.pulled_from(f, i)})" if op.code == "POP" else ""
                     writes.setdefault(cell, []).append(f"{op.span}{pulled}")
             if found == stored:
                 return before, stored, writes, entry
