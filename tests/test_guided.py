@@ -180,3 +180,49 @@ def test_power_on_patterns_tell_every_byte_from_its_neighbours():
             assert -(1 << (8 * width - 1)) <= value < (1 << (8 * width - 1))
         memory = corners.power_on(rng)
         assert set(memory) == {"W4", "D8", "B3", "M1"} and memory["M1"] in (0, 1)
+
+
+# D8 reaches the subprogram's D24 through the data stack; W34 is (W30 - W32 + 24) MOD 24, i.e. W30 - W32 + 24 for the
+# start values that matter.
+STACK_AND_SUM = ("PS    D8\nPS    W12\nCM    Sub\nL     W30\n-     W32\n+     K24\nMOD   K24\n=     W34\n"
+                 "L     W34\n==    K0\n=     O3\nEM\n"
+                 "LBL Sub\nPL    W20\nPL    D24\nL     D24\n<     K0\n=     O1\nL     K5\n>     W20\n=     O2\nEM\n")
+
+
+def test_boundary_sources_follow_stack_parameters_and_sums_back_to_power_on_words(tmp_path):
+    # Catches: the last pushed taken for the first pulled, a subtracted word's sign lost, the other words' start
+    # values left out of the value asked for, and the constant-left compare's difference taken the wrong way.
+    (tmp_path / "main.src").write_text(STACK_AND_SUM)
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    sources = harvest(project.program, project_names(project.program)).boundary_sources
+    by_name = {}
+    for s in sources:
+        by_name.setdefault(s.name, []).append(s)
+    d8, = by_name["D8"]
+    assert (d8.coefficient, d8.offset, d8.others, d8.constant) == (1, 0, (), 0)
+    assert d8.value(-1, {}) == -1 and d8.value(1, {}) == 1
+    w12, = by_name["W12"]                   # `L K5` `> W20`: left - right = 5 - W20
+    assert not w12.word_left and w12.value(-1, {}) == 6
+    w32, = by_name["W32"]
+    assert (w32.coefficient, w32.offset, w32.others) == (-1, 24, (("W30", 1),))
+    assert w32.value(-1, {"W30": 3}) == 28 and w32.value(0, {}) == 24
+    w30, = by_name["W30"]
+    assert w30.value(-1, {"W32": 28}) == 3
+    assert w32.value(-1, {"W30": 40000}) is None or Corners.clamp(w32.value(-1, {"W30": 40000}), "W") == \
+        w32.value(-1, {"W30": 40000})
+
+
+def test_the_search_tries_a_missing_boundary_value_from_its_power_on_source_first(tmp_path):
+    # The seed drives D24 and W34 to 0 (every word starts at 0): the first candidates the search runs start D8 and
+    # W30 at the values that give -1 and 1 there, the boundary values the seed misses, and all are kept. Catches:
+    # the source not found, the value asked for from the wrong side, the directed candidates queued behind random
+    # ones.
+    (tmp_path / "main.src").write_text(STACK_AND_SUM)
+    (tmp_path / "seed.yaml").write_text("name: seed\ncycles: 5\n")
+    project = api.load_project(api.project_options(tmp_path / "main.src"))
+    names = project_names(project.program)
+    seed = load_scenario(tmp_path / "seed.yaml", names)
+    kept = generate(project.program, names, 200, seed=7, seeds=[seed])
+    first = {tuple(s.initial.items()) for s in kept[:4]}
+    assert first == {(("D8", -1),), (("D8", 1),), (("W30", -25),), (("W30", -23),)}, [s.initial for s in kept]
+    assert all(s.cycles <= 5 for s in kept[:4])

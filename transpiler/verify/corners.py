@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import random
-from typing import Any
+from typing import Any, Mapping
 
 from transpiler.ir import Program
 from transpiler.verify.nc_facts import NC_MODEL_OWNED
@@ -40,6 +40,9 @@ class Corners:
     # (name, kind, constant) of a drivable word the program compares with a constant, directly or through copies:
     # the stimulus can put it one below, at and one above the constant (a fuzzer's compare log, found statically)
     compare_pairs: tuple[tuple[str, str, int], ...] = ()
+    # the drivable words whose power-on value reaches a compare of a word with a constant (boundary_sources): the
+    # search tries each boundary value a run has not shown yet from them first, before random mutations
+    boundary_sources: tuple["BoundarySource", ...] = ()
 
     def word_value(self, rng: random.Random, kind: str) -> int:
         """A value in the range of a `kind` (B/W/D) operand: mostly near a constant, sometimes an edge, sometimes
@@ -171,6 +174,7 @@ def harvest(program: Program, names: NameTable) -> Corners:
     remanent_words = tuple((name(r), r.kind) for r in remanent if r.kind in _WIDTH_BITS)
     return Corners(
         compare_pairs=_compare_pairs(compared, sources, dict(foreign_words + remanent_words), name),
+        boundary_sources=boundary_sources(program, dict(foreign_words + remanent_words), name),
         constants=tuple(sorted(constants)),
         tables=tuple(sorted(tables)),
         values=tuple(sorted(values)),
@@ -218,6 +222,144 @@ def _compare_pairs(compared, sources, drivable: dict[str, str], name) -> tuple[t
             if name(ref) in drivable:
                 pairs.add((name(ref), ref.kind, const))
     return tuple(sorted(pairs))
+
+
+@dataclasses.dataclass(frozen=True)
+class BoundarySource:
+    """A word the stimulus may start at power-on whose value reaches a compare of a word with a constant: there the
+    compared word is `coefficient` x the source + `offset` + the sum of the `others` (name, coefficient) at their
+    start values, through copies (`L W8` `= W10`), sums and differences with constants and other words on the way
+    (`L W8` `- W12` `+ K24` `MOD K24` `= W10`, the remainder taken as the value itself, as for small values), and
+    parameters passed on the data stack (`PS W8` `CM Sub`, `LBL Sub` `PL W10`). A way to pick start values, not a
+    claim: a run shows whether the value reached the compare."""
+
+    op: int             # the compare's op id (every file's ops numbered in order, as the coverage numbers them)
+    name: str           # display name of the source word
+    kind: str
+    coefficient: int    # 1 or -1
+    offset: int
+    others: tuple[tuple[str, int], ...]
+    constant: int
+    word_left: bool     # `L W10` `< K5` (the boundary difference is word - constant), not `L K5` `> W10`
+
+    def value(self, difference: int, initial: Mapping[str, Any]) -> int | None:
+        """The source's start value that gives the compare `difference` (left - right) where the other words start
+        as `initial` has them (0 where it leaves them out), None where it does not fit the source's width."""
+        word = self.constant + difference if self.word_left else self.constant - difference
+        rest = self.offset
+        for name, coefficient in self.others:
+            start = initial.get(name, 0)
+            if not isinstance(start, int):
+                return None
+            rest += coefficient * start
+        value = (word - rest) * self.coefficient
+        return value if Corners.clamp(value, self.kind) == value else None
+
+
+def boundary_sources(program: Program, drivable: dict[str, str], name) -> tuple[BoundarySource, ...]:
+    """Each compare of a plain word with a constant and each drivable word (display name -> kind) whose power-on
+    value reaches it, a few steps back (_COPY_DEPTH; see BoundarySource)."""
+    feeds = _linear_feeds(program)
+    found: list[BoundarySource] = []
+    opid = 0
+    for code in program.files:
+        for prev, op in zip((None, *code.ops), code.ops):
+            if op.code == "CMP" and prev is not None and prev.code == "WLD" and op.operand is not None \
+                    and prev.operand is not None:
+                left = op.operand.kind == "K"
+                word, const = (prev.operand, op.operand) if left else (op.operand, prev.operand)
+                if const.kind == "K" and _plain_word(word):
+                    constant = _signed(const.addr, word.kind)
+                    for ref, coefficient, offset, others in _ways_back(_ref(word), feeds):
+                        if name(ref) in drivable:
+                            found.append(BoundarySource(opid, name(ref), ref.kind, coefficient, offset,
+                                                        tuple((name(o), c) for o, c in others), constant, left))
+            opid += 1
+    return tuple(found)
+
+
+Linear = tuple[OperandRef, int, int, tuple[tuple[OperandRef, int], ...]]   # (source, coefficient, offset, others)
+
+
+def _ways_back(word: OperandRef, feeds: dict[OperandRef, list[Linear]]) -> list[Linear]:
+    """The words `word` is made from, a few steps back, each as a linear function (word = coefficient x source +
+    offset + others); the first way found to each source."""
+    ways: dict[OperandRef, Linear] = {word: (word, 1, 0, ())}
+    frontier = [ways[word]]
+    for _ in range(_COPY_DEPTH):
+        nxt: list[Linear] = []
+        for ref, coefficient, offset, others in frontier:
+            for src, a, more, extra in feeds.get(ref, ()):
+                if src in ways:
+                    continue
+                way = (src, coefficient * a, offset + coefficient * more,
+                       others + tuple((o, coefficient * c) for o, c in extra))
+                ways[src] = way
+                nxt.append(way)
+        frontier = nxt
+    return [ways[ref] for ref in sorted(ways, key=lambda r: (r.kind, r.addr))]
+
+
+def _linear_feeds(program: Program) -> dict[OperandRef, list[Linear]]:
+    """Word -> the ways a store makes it from other words: `L W8` [`+`/`-` a constant or a plain word]...
+    [`MOD K`] `= W10` gives W10 from W8 (coefficient 1) and from each word added (1) or subtracted (-1), the rest
+    as offset and others; a parameter pulled from the data stack comes from the word pushed for it."""
+    feeds: dict[OperandRef, list[Linear]] = {}
+    for code in program.files:
+        ops = code.ops
+        for i, op in enumerate(ops):
+            if op.code != "WLD" or op.operand is None or not _plain_word(op.operand):
+                continue
+            terms: list[tuple[OperandRef, int]] = [(_ref(op.operand), 1)]
+            offset, j = 0, i + 1
+            while j < len(ops) and ops[j].operand is not None and (
+                    ops[j].code in ("ADD", "SUB") and (ops[j].operand.kind == "K" or _plain_word(ops[j].operand))
+                    or ops[j].code == "MOD" and ops[j].operand.kind == "K"):
+                sign = -1 if ops[j].code == "SUB" else 1
+                if ops[j].code != "MOD" and ops[j].operand.kind == "K":
+                    offset += sign * _signed(ops[j].operand.addr, "D")
+                elif ops[j].code != "MOD":
+                    terms.append((_ref(ops[j].operand), sign))
+                j += 1
+            if j >= len(ops) or ops[j].code != "WST" or ops[j].operand is None or not _plain_word(ops[j].operand):
+                continue
+            target = _ref(ops[j].operand)
+            for k, (src, a) in enumerate(terms):
+                others = tuple(t for n, t in enumerate(terms) if n != k)
+                # word = a x src + offset + others  ->  per source, coefficient a (1 or -1)
+                feeds.setdefault(target, []).append((src, a, offset, others))
+    for word, source in _stack_copies(program):
+        feeds.setdefault(word, []).append((source, 1, 0, ()))
+    return feeds
+
+
+def _stack_copies(program: Program) -> set[tuple[OperandRef, OperandRef]]:
+    """(word, source) of each parameter a subprogram takes from the data stack: the words pushed just before a call
+    (`PS W8` `PS W10` `CM Sub`) and pulled first thing in the subprogram (`LBL Sub` `PL W20` `PL W22`), the last
+    pushed pulled first (W20 from W10, W22 from W8): the program's usual way of passing a word on."""
+    found: set[tuple[OperandRef, OperandRef]] = set()
+    for code in program.files:
+        for i, op in enumerate(code.ops):
+            target = op.call
+            if op.code != "CALL" or target is None or target.is_module or target.file < 0:
+                continue
+            pushed: list = []
+            j = i - 1
+            while j >= 0 and code.ops[j].code == "PUSH" and code.ops[j].operand is not None:
+                pushed.append(code.ops[j].operand)        # last pushed first
+                j -= 1
+            callee = program.files[target.file].ops
+            k = target.index
+            while k < len(callee) and callee[k].code == "LBL":
+                k += 1
+            for source in pushed:
+                if k >= len(callee) or callee[k].code != "POP" or callee[k].operand is None:
+                    break
+                word = callee[k].operand
+                if _plain_word(source) and _plain_word(word) and source.kind == word.kind:
+                    found.add((_ref(word), _ref(source)))
+                k += 1
+    return found
 
 
 def _plain_word(operand) -> bool:

@@ -66,6 +66,8 @@ class Probe:
     # the features not seen before this run, each with the cycle it first appeared in: (op id, outcome),
     # ("bit", ...), ("value", ...), ("bound", op id, difference), ("mcdc", decision, condition)
     firsts: Mapping = dataclasses.field(default_factory=dict)
+    # op id of each word compare the run drove to a boundary value (seen before or not) -> the first such cycle
+    compares_at: Mapping = dataclasses.field(default_factory=dict)
 
     @property
     def new(self) -> frozenset:
@@ -126,6 +128,7 @@ class Search:
         vectors: list[tuple[int, int, int]] = []
         run_vectors: dict[int, set[int]] = {}
         firsts: dict = {}
+        compares_at: dict = {}
         read_toggled = machine.reader([(ref.kind, ref.addr) for ref in self.toggled])
         # The values not seen yet (in this run or kept runs), per watched bit: these lists shrink fast, so the
         # per-cycle check costs little once the common states were seen.
@@ -166,6 +169,9 @@ class Search:
                     fresh |= self.shown(number, run_vectors[number]) - local
             if fresh:
                 local |= fresh
+                for feature in fresh:
+                    if feature[0] == "bound":
+                        compares_at.setdefault(feature[1], cycle)
                 fresh -= self.seen
                 if fresh:
                     firsts.update(dict.fromkeys(fresh, cycle))
@@ -175,7 +181,7 @@ class Search:
                 if reached:
                     firsts.update(dict.fromkeys((("bit", str(self.toggled[i]), v) for i, v in reached), cycle))
                     unseen = [pair for pair in unseen if pair not in reached]
-        return Probe(ok, tuple(vectors), firsts)
+        return Probe(ok, tuple(vectors), firsts, compares_at)
 
     def keep(self, probe: Probe, cycles: int | None = None) -> None:
         """Take the run's features and condition vectors of its first `cycles` cycles (all: None) as seen."""
@@ -183,6 +189,51 @@ class Search:
         for cycle, number, vector in probe.vectors:
             if cycles is None or cycle < cycles:
                 self.vectors.setdefault(number, set()).add(vector)
+
+
+class Directed:
+    """The search's directed candidates: for each run that drives a compare of a word with a constant near its
+    constant (any of its boundary values), each boundary value of that compare not shown yet is tried from each
+    power-on source of the word (Corners.boundary_sources): that run, up to the cycle it reached the compare, with
+    the source started at the value that gives the missing difference (worked out from the run's own start values
+    of the other words on the way). A missing value that only a power-on value gives (a speed of -1 the program
+    takes over unchanged, a pocket count that comes out -1 from a remanent position beyond the magazine) is then
+    tried at once, where random mutations would pick that word, that value and a run reaching the compare together
+    only by chance. At most RUNS_PER_COMPARE runs per compare; the candidates go through the search's budget rule
+    like any other."""
+
+    RUNS_PER_COMPARE = 24
+
+    def __init__(self, sources, names: NameTable):
+        self.names = names
+        self.by_op: dict[int, list] = {}
+        for source in sources:
+            self.by_op.setdefault(source.op, []).append(source)
+        self.runs: dict[int, int] = {}          # compare op id -> runs queued for it
+        self.queue: list[tuple[Scenario, int, object, int]] = []   # (run, cycles, source, difference)
+
+    def reached(self, probe: Probe, run: Scenario) -> None:
+        """Queue the candidates of the compares `run` (kept as it is) drives near their constant."""
+        for op, cycle in sorted(probe.compares_at.items(), key=lambda item: item[1]):
+            if op not in self.by_op or cycle >= run.cycles or self.runs.get(op, 0) >= self.RUNS_PER_COMPARE:
+                continue
+            self.runs[op] = self.runs.get(op, 0) + 1
+            self.queue += [(run, min(run.cycles, cycle + 1 + MARGIN), source, difference)
+                           for source in self.by_op[op] for difference in (-1, 0, 1)]
+
+    def next(self, search: Search, serial: int) -> Scenario | None:
+        """The next queued candidate whose boundary value no kept run has shown yet (None: none left)."""
+        while self.queue:
+            run, cycles, source, difference = self.queue.pop(0)
+            if ("bound", source.op, difference) in search.seen:
+                continue
+            value = source.value(difference, run.initial)
+            if value is None or run.initial.get(source.name) == value:
+                continue
+            child = run.model_copy(update={"name": f"{_stem(run.name)}_g{serial}", "expect": [],
+                                           "initial": {**run.initial, source.name: value}})
+            return _cut(child, cycles, self.names)
+        return None
 
 
 def _events_with(scenario: Scenario, extra: list[Event]) -> list[Event]:
@@ -371,11 +422,13 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
                     base_mp, toggled=toggled, decisions=decision_table(program).decisions)
     limit = search_cycles if search_cycles is not None else min(SEARCH_MAX, max(SEARCH_MIN, SEARCH_FACTOR * budget))
     corpus: list[Scenario] = []
+    directed = Directed(corners.boundary_sources, names)
     for scenario in seeds:
         probe = search.probe(scenario)
         if probe is not None:
             search.keep(probe)
             corpus.append(bind(scenario.model_copy(update={"expect": []}), names))
+            directed.reached(probe, corpus[-1])
     kept: list[Scenario] = []
     spent = 0
 
@@ -394,12 +447,15 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
     spent_on_values = 0
     while spent < budget and search.interpreter_cycles < limit and stale < STALE_LIMIT:
         serial += 1
-        # Short parents give short children, which leave more of the budget to the next find.
-        parent = rng.choices(corpus, weights=[1.0 / max(50, min(s.cycles, CHILD_CYCLES)) for s in corpus])[0]
-        child = mutate(parent, rng, corners, names, serial)
+        child = directed.next(search, serial)
+        tried = child is not None       # a directed candidate that fails does not count as stale
+        if child is None:
+            # Short parents give short children, which leave more of the budget to the next find.
+            parent = rng.choices(corpus, weights=[1.0 / max(50, min(s.cycles, CHILD_CYCLES)) for s in corpus])[0]
+            child = mutate(parent, rng, corners, names, serial)
         probe = search.probe(child)
         if probe is None or not probe.new or probe.last_new >= budget - spent:
-            stale += 1
+            stale += not tried
             continue
         last = probe.last_before_mcdc
         length = min(probe.cycles_ok, (probe.last_new if last < 0 else last) + 1 + MARGIN, budget - spent)
@@ -411,6 +467,7 @@ def generate(program: Program, names: NameTable, budget: int, seed: int, seeds: 
         stale = 0
         child = _cut(child, length, names)
         search.keep(probe, length)
+        directed.reached(probe, child)
         kept.append(child)
         corpus.append(child)
         spent += length
