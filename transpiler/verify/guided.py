@@ -6,6 +6,8 @@ coverage) and mutates its members: an NC job moved to a corner value (verify/cor
 random cycle, a foreign word or marker set to a corner value, an input set, remanent memory started at a corner (one
 word, or all of it at byte patterns and corners), rare random toggles added, a word the program compares with a
 constant put next to that constant, a word's start value moved arithmetically (doubled, halved, plus or minus one).
+Before random mutations, a run that brings a word compare near its constant is tried again with a power-on word that
+reaches the compare started at the value each boundary value not shown yet needs (Directed).
 Each candidate runs on the reference interpreter alone (no ST side, with coverage); one that reaches a branch
 outcome or CASE entry not seen before, a marker or output the program writes in a state (0 or 1) not seen before, a
 word compare whose operands come out equal or one apart in a way not seen before (its boundary values: a mutated
