@@ -177,10 +177,12 @@ def _random_memory_runs(program, runs: int, cycles: int, seed: int) -> list[Mach
     return machines
 
 
-def _check_recorded(program, machines) -> int:
+def _check_recorded(program, machines, files: frozenset[str] | None = None) -> int:
     runner = Runner(program)
     checked = 0
     for decision in decision_table(program).decisions:
+        if files is not None and Path(program.files[decision.file].path).name not in files:
+            continue
         seen = seen_vectors(runner, decision)
         if seen is None:
             continue
@@ -208,5 +210,7 @@ def test_recorded_vectors_of_the_samples_are_among_the_ones_found(project: str) 
     result = compile_project(ProjectOptions(main=main), make_semantics("itnc530", {}))
     if not result.ok:
         pytest.skip("the project needs options this test does not give")
-    runs, cycles = (4, 40) if project == "basic_program" else (8, 40)
-    _check_recorded(result.program, _random_memory_runs(result.program, runs, cycles, 7))
+    # the sample: its step chains (every chain of it takes the analysis half a minute)
+    files = frozenset({"Toolaut1.src", "Mfunction.src", "Chip_conveyor.src"}) if project == "basic_program" else None
+    assert _check_recorded(result.program, _random_memory_runs(result.program, 8, 40, 7), files) > 0 or \
+        not decision_table(result.program).decisions

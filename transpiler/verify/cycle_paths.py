@@ -64,6 +64,7 @@ class _NotJoined(Exception):
 
 _RETURN = (-1, -1)              # where a subprogram run with its paths joined returns to
 _EAGER = 8                      # chain bits split at the start at most
+_DEEP = ("deep",)               # the bottom of a data stack whose lower entries are not known
 _LISTED = 64                    # values a word's known values are listed up to
 
 
@@ -148,13 +149,13 @@ class _Path:
     wa: Word | None = None              # None: unknown
     source: Key | None = None           # the word WA was loaded from, while it still holds what WA holds
     frames: list = dataclasses.field(default_factory=list)
-    stack: list | None = dataclasses.field(default_factory=list)   # the data stack (see pushed); None: not known
+    stack: list = dataclasses.field(default_factory=list)      # the data stack, top last (see pushed)
     calls: tuple = ()                   # return points (file, op index)
     reads: dict[int, int | None] = dataclasses.field(default_factory=dict)     # condition op -> value read
 
     def copy(self) -> _Path:
         return _Path(dict(self.bits), dict(self.words), self.la, self.wa, self.source, list(self.frames),
-                     None if self.stack is None else list(self.stack), self.calls, dict(self.reads))
+                     list(self.stack), self.calls, dict(self.reads))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -247,6 +248,7 @@ class Runner:
         f = decision.file
         self.target = (f, min(reads))
         self.leading = self._leading(self.target)
+        self._leads: dict[tuple[int, int], bool] = {}
         arrivals: set[tuple] = set()
         first = _Path({}, {})
         todo: list[tuple[int, int, _Path]] = []
@@ -415,10 +417,13 @@ class Runner:
     def leads_to(self, point: tuple[int, int]) -> bool:
         """Whether control at `point` can come to the decision run for (self.target) in this cycle: the code it
         reaches without a call reads the decision's first condition, or calls an entry whose code can."""
+        if point in self._leads:
+            return self._leads[point]
         reached = self.reach(point)
-        return self.target in reached or any(
+        self._leads[point] = self.target in reached or any(
             t is not None and not t.is_module and t.file >= 0 and t.key in self.leading
             for g, j in reached for op in (self.program.files[g].ops[j],) for t in (op.call, *op.case_targets))
+        return self._leads[point]
 
     def _leading(self, target: tuple[int, int]) -> set[tuple[int, int]]:
         """The entries whose code, with the calls it makes, can come to op `target`."""
@@ -432,10 +437,9 @@ class Runner:
             found |= more
 
     def pushed(self, path: _Path, op: Op) -> list | None:
-        """The data stack after a push: entries (width in bits, value), None where its contents are not known."""
+        """The data stack after a push: entries (width in bits, value) on top of what is known of it (_DEEP at
+        its bottom: what lies below is not known)."""
         c, o = op.code, op.operand
-        if path.stack is None:
-            return None
         if c == "PSL":
             entry = (16, path.la)
         elif c == "PSW":
@@ -457,11 +461,11 @@ class Runner:
         width = 32 if c in ("PLW",) or c == "POP" and o is not None and not o.is_bit else 16 if c != "PLX" else \
             int(self.program.semantics["psx_width"])
         value = None
-        if path.stack and path.stack[-1][0] == width:
+        if path.stack and path.stack[-1] != _DEEP and path.stack[-1][0] == width:
             value = path.stack[-1][1]
             path.stack = path.stack[:-1]
-        else:
-            path.stack = None
+        elif path.stack != [_DEEP]:
+            path.stack = [_DEEP]        # another width than pushed, or below what is known: its layout is lost
         if c == "PLL":
             path.la = value if isinstance(value, int) else None
             if i in reads:
@@ -517,26 +521,38 @@ class Runner:
                 out.append((g, j, p))
             else:
                 out.extend(self.call(f, i, op.call, p))
+        if c in ("CALLT", "CALLF") and len(taken) == 2 and not self.joining and op.call is not None \
+                and op.call.key not in self.leading and all((g, j) == (f, i + 1) for g, j, _ in out):
+            # a conditional call of a subprogram the decision is not reached from: its two ways joined (each
+            # call of the cycle's modules would double the paths otherwise)
+            joined = out[0][2]
+            for _, _, other in out[1:]:
+                joined = _join(joined, other)
+            joined.calls = path.calls
+            return [(f, i + 1, joined)]
         return out
 
     def call(self, f: int, i: int, target, path: _Path) -> list[tuple[int, int, _Path]]:
         if target is not None and target.is_module:
             # a PLC module: what it writes, pulls and pushes is not followed
             self.forget_all(path)
-            path.la, path.stack = None, None
+            path.la, path.stack = None, [_DEEP]
             return [(f, i + 1, path)]
         if target is None or target.file < 0:
             return []                   # the program faults there
         if len(path.calls) >= _DEPTH:
             raise _GiveUp
         if not self.joining and target.key not in self.leading:
-            # the decision cannot be reached from this subprogram: its paths joined, or what it may write unknown
+            # the decision cannot be reached from this subprogram: its paths joined, or what it may write unknown;
+            # a path that cannot come to the decision after it either ends here
+            if not any(self.leads_to(point) for point in ((f, i + 1), *path.calls)):
+                return []
             calls, reads = path.calls, path.reads
             try:
                 back = self.summarize(target.file, target.index, path.copy(), 1)
             except _NotJoined:
                 self.forget_all(path)
-                path.la, path.stack, path.frames = None, None, []
+                path.la, path.stack, path.frames = None, [_DEEP], []
                 return [(f, i + 1, path)]
             if back is None:
                 return []
@@ -690,7 +706,7 @@ def _join(a: _Path, b: _Path) -> _Path:
     same = a.wa == b.wa and a.source == b.source
     return _Path({k: v for k, v in a.bits.items() if b.bits.get(k) == v}, words,
                  a.la if a.la == b.la else None, a.wa if same else None, a.source if same else None,
-                 a.frames if a.frames == b.frames else [], a.stack if a.stack == b.stack else None, a.calls,
+                 a.frames if a.frames == b.frames else [], a.stack if a.stack == b.stack else [_DEEP], a.calls,
                  {k: v for k, v in a.reads.items() if b.reads.get(k, -1) == v})
 
 

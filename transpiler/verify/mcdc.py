@@ -23,7 +23,9 @@ a marker assigned from the chain's other operands, a timer or counter start no w
 cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that constant word operations fix, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
-it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+it), a condition no path of the cycle that comes to its chain lets decide alone (cycle_paths.py: the code run from
+where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them),
+and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
