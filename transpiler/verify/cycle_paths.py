@@ -33,6 +33,7 @@ from transpiler.exec.interp.gen_exprs import int32
 from transpiler.exec.interp.support import saturate
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program, sext
+from transpiler.language.module_table import writes_anywhere
 from transpiler.verify.index_range import index_ranges
 
 MAX_STEPS = 200_000         # ops run over all paths of one start, at most
@@ -58,12 +59,20 @@ class _GiveUp(Exception):
     """The run cannot follow this code (a loop, deep calls, too many paths or steps)."""
 
 
+class _NeedSplit(Exception):
+    """A subprogram run with its paths joined reads a bit of the chain whose start value is not known: the path
+    that calls it splits on that bit first."""
+
+    def __init__(self, key: Key):
+        super().__init__(key)
+        self.key = key
+
+
 class _NotJoined(Exception):
     """A subprogram whose paths cannot be joined so (a loop, running off its file, deep calls)."""
 
 
 _RETURN = (-1, -1)              # where a subprogram run with its paths joined returns to
-_EAGER = 8                      # chain bits split at the start at most
 _DEEP = ("deep",)               # the bottom of a data stack whose lower entries are not known
 _LISTED = 64                    # values a word's known values are listed up to
 
@@ -152,10 +161,11 @@ class _Path:
     stack: list = dataclasses.field(default_factory=list)      # the data stack, top last (see pushed)
     calls: tuple = ()                   # return points (file, op index)
     reads: dict[int, int | None] = dataclasses.field(default_factory=dict)     # condition op -> value read
+    written: set[Key] = dataclasses.field(default_factory=set)     # the chain's bits written since the start
 
     def copy(self) -> _Path:
         return _Path(dict(self.bits), dict(self.words), self.la, self.wa, self.source, list(self.frames),
-                     list(self.stack), self.calls, dict(self.reads))
+                     list(self.stack), self.calls, dict(self.reads), set(self.written))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -186,6 +196,8 @@ class Runner:
         self.ranges = index_ranges(program)
         self.joining = 0
         self.steps = 0
+        self.split: set[Key] = set()
+        self._writes: dict[tuple[int, int], tuple[frozenset, frozenset, bool, bool]] = {}
         self.target: tuple[int, int] = (-1, -1)
         self.leading: set[tuple[int, int]] = set()
         self._reach: dict[tuple[int, int], frozenset[tuple[int, int]]] = {}
@@ -246,19 +258,12 @@ class Runner:
                  if c.operand is not None and c.operand.is_bit and not c.operand.indexed}
         reads = {c.index for c in decision.conditions}
         f = decision.file
+        self.split = split
         self.target = (f, min(reads))
         self.leading = self._leading(self.target)
         self._leads: dict[tuple[int, int], bool] = {}
         arrivals: set[tuple] = set()
-        first = _Path({}, {})
-        todo: list[tuple[int, int, _Path]] = []
-        # the chain's bits at the start, one run per combination where they are few (a subprogram run with its
-        # paths joined keeps them apart then), else forked where they are read
-        eager = sorted(split)[:_EAGER]
-        for combo in range(1 << len(eager)):
-            path = first.copy()
-            path.bits.update({key: combo >> n & 1 for n, key in enumerate(eager)})
-            todo.append((start[0], start[1], path))
+        todo: list[tuple[int, int, _Path]] = [(start[0], start[1], _Path({}, {}))]
         self.steps = 0
         try:
             while todo:
@@ -312,7 +317,7 @@ class Runner:
                 self.count()
                 if not 0 <= i < len(ops):
                     raise _NotJoined
-                for g, j, q in self.step(f, i, ops[i], here, set(), set()):
+                for g, j, q in self.step(f, i, ops[i], here, self.split, set()):
                     if (g, j) == _RETURN:
                         returned.append(q)
                         continue
@@ -341,6 +346,10 @@ class Runner:
             return [(path, path.bits[key])]
         if key not in split:
             return [(path, None)]
+        if self.joining:
+            if key in path.written:
+                return [(path, None)]
+            raise _NeedSplit(key)       # its value at the start matters: the caller's path splits on it
         other = path.copy()
         path.bits[key], other.bits[key] = 0, 1
         return [(path, 0), (other, 1)]
@@ -366,10 +375,7 @@ class Runner:
                    "RES": 0 if la == 1 or old == 0 else old if la == 0 else None,
                    "SETN": 1 if la == 0 or old == 1 else old if la == 1 else None,
                    "RESN": 0 if la == 0 or old == 0 else old if la == 1 else None}[c]
-            if new is None:
-                path.bits.pop(key, None)
-            else:
-                path.bits[key] = new
+            self.put(path, key, new)
             return nxt
         if c in ("JP", "JPT", "JPF", "EM", "EMT", "EMF", "CALL", "CALLT", "CALLF"):
             return self.control(f, i, op, path)
@@ -385,6 +391,18 @@ class Runner:
             return [(f, i + 1, p) for p in self.compare(path, op.rel, int32(o.addr), i in reads, i)]
         if c == "WST" and o is not None and not o.indexed and o.kind in ("B", "W", "D"):
             self.store(path, (o.kind, o.addr), path.wa)
+            return nxt
+        if c == "STBITS" and o is not None and o.is_bit and not o.indexed:
+            # B=/W=/D=: bit n of WA goes to the operand n places on
+            v = path.wa.value if path.wa is not None else None
+            for n in range(op.nbits):
+                self.put(path, (o.kind, o.addr + n), None if v is None else (v >> n) & 1)
+            return nxt
+        if c == "LDBITS" and o is not None and o.is_bit and not o.indexed:
+            got = [path.bits.get((o.kind, o.addr + n)) for n in range(op.nbits)]
+            known = None not in got and not got[-1]     # (the top bit 0: signed or not, the same value)
+            v = sum(b << n for n, b in enumerate(got)) if known else 0
+            path.wa, path.source = (Word(v, v) if known else None), None
             return nxt
         if c in ("PSL", "PSW", "PUSH", "PSX"):
             path.stack = self.pushed(path, op)
@@ -476,10 +494,7 @@ class Runner:
             if o.indexed:
                 self.forget_indexed(f, i, op, path)
             elif o.is_bit:
-                if isinstance(value, int):
-                    path.bits[(o.kind, o.addr)] = value
-                else:
-                    path.bits.pop((o.kind, o.addr), None)
+                self.put(path, (o.kind, o.addr), value if isinstance(value, int) else None)
             elif o.kind in ("B", "W", "D"):
                 self.store(path, (o.kind, o.addr), value if isinstance(value, Word) else None)
         return [(f, i + 1, path)]
@@ -534,9 +549,13 @@ class Runner:
 
     def call(self, f: int, i: int, target, path: _Path) -> list[tuple[int, int, _Path]]:
         if target is not None and target.is_module:
-            # a PLC module: what it writes, pulls and pushes is not followed
-            self.forget_all(path)
-            path.la, path.stack = None, [_DEEP]
+            # a PLC module: what it pulls and pushes is not followed, nor what it writes: its error marker and
+            # code word (havoc), or anything where it writes to an address it is given (or is not in the table)
+            if writes_anywhere(target.module):
+                self.forget_all(path)
+            for key in implicit_writes(self.program.files[f].ops[i], self.interface, self.flag):
+                self.put(path, key, None) if key[0] not in ("B", "W", "D") else self.forget_word(path, key)
+            path.la, path.wa, path.source, path.stack = None, None, None, [_DEEP]
             return [(f, i + 1, path)]
         if target is None or target.file < 0:
             return []                   # the program faults there
@@ -550,8 +569,15 @@ class Runner:
             calls, reads = path.calls, path.reads
             try:
                 back = self.summarize(target.file, target.index, path.copy(), 1)
+            except _NeedSplit as need:
+                out = []
+                for value in (0, 1):
+                    branch = path.copy()
+                    branch.bits[need.key] = value
+                    out += self.call(f, i, target, branch)
+                return out
             except _NotJoined:
-                self.forget_all(path)
+                self.forget_written(path, target.key)
                 path.la, path.stack, path.frames = None, [_DEEP], []
                 return [(f, i + 1, path)]
             if back is None:
@@ -655,6 +681,71 @@ class Runner:
         if path.source is not None and path.source[1] < hi and lo < path.source[1] + BYTES[path.source[0]]:
             path.source = None
 
+    def writes(self, entry: tuple[int, int], inside: tuple = ()) -> tuple[frozenset, frozenset, bool, bool]:
+        """What a subprogram and those it calls may write: (bit operands, kinds of bits written through an index
+        register of unknown reach, whether any word, whether anything at all)."""
+        if entry in self._writes:
+            return self._writes[entry]
+        keys: set[Key] = set()
+        kinds: set[str] = set()
+        words = everything = entry in inside        # (recursion: anything)
+        for g, j in sorted(self.reach(entry)) if not everything else ():
+            op = self.program.files[g].ops[j]
+            c, o = op.code, op.operand
+            keys.update(k for k in implicit_writes(op, self.interface, self.flag) if k[0] not in ("B", "W", "D"))
+            words |= any(k[0] in ("B", "W", "D") for k in implicit_writes(op, self.interface, self.flag))
+            for t in (op.call, *op.case_targets):
+                if t is None:
+                    continue
+                if t.is_module:
+                    everything |= writes_anywhere(t.module)
+                elif t.file >= 0:
+                    more = self.writes(t.key, inside + (entry,))
+                    keys |= more[0]
+                    kinds |= more[1]
+                    words |= more[2]
+                    everything |= more[3]
+            if c not in _MODELLED and c not in ("CALL", "CALLT", "CALLF", "CASE", "JP", "JPT", "JPF", "EM", "EMT",
+                                                  "EMF", "LBL"):
+                everything = True
+            elif c in _MEMORY_WRITERS and o is not None and o.is_bit:
+                width = op.nbits if c == "STBITS" else 1
+                x = self.ranges.get((g, j)) if o.indexed else (0, 0)
+                if x is None or x[1] - x[0] > 4096:
+                    kinds.add(o.kind)
+                else:
+                    keys.update((o.kind, a) for a in range(o.addr + x[0], o.addr + x[1] + width))
+            elif c in _MEMORY_WRITERS and o is not None and o.kind in ("B", "W", "D"):
+                words = True
+        found = (frozenset(keys), frozenset(kinds), words, everything)
+        if not inside or not everything:
+            self._writes[entry] = found
+        return found
+
+    def forget_written(self, path: _Path, entry: tuple[int, int]) -> None:
+        """What the subprogram entered at `entry` may write is unknown."""
+        keys, kinds, words, everything = self.writes(entry)
+        if everything:
+            self.forget_all(path)
+            return
+        for key in keys:
+            self.put(path, key, None)
+        for key in [k for k in path.bits if k[0] in kinds]:
+            del path.bits[key]
+        path.written |= {k for k in self.split if k[0] in kinds}
+        if words:
+            path.words.clear()
+            path.wa, path.source = None, None
+
+    def put(self, path: _Path, key: Key, value: int | None) -> None:
+        """A write of bit `key` (None: a value not known)."""
+        if value is None:
+            path.bits.pop(key, None)
+        else:
+            path.bits[key] = value
+        if key in self.split:
+            path.written.add(key)
+
     def forget_indexed(self, f: int, i: int, op: Op, path: _Path) -> None:
         """A write through the index register: the bits of its kind it can reach (those base + X reaches for the
         values index_range finds X can hold there; all of the kind where that is not known), or every word."""
@@ -667,10 +758,13 @@ class Runner:
         width = op.nbits if op.code == "STBITS" else 1
         for key in [k for k in path.bits if k[0] == o.kind and (
                 x is None or o.addr + x[0] <= k[1] < o.addr + x[1] + width)]:
-            del path.bits[key]
+            self.put(path, key, None)
+        path.written |= {k for k in self.split if k[0] == o.kind and (
+            x is None or o.addr + x[0] <= k[1] < o.addr + x[1] + width)}
 
     def forget_all(self, path: _Path) -> None:
         path.bits.clear()
+        path.written |= self.split
         path.words.clear()
         path.wa, path.source = None, None
 
@@ -678,16 +772,17 @@ class Runner:
         """An op not followed exactly: what it may write is unknown."""
         c, o = op.code, op.operand
         for key in implicit_writes(op, self.interface, self.flag):
-            path.bits.pop(key, None)
-            self.forget_word(path, key) if key[0] in ("B", "W", "D") else None
-        if c in ("SUBM", "CAN", "RPLY", "KFIELD") or c not in _MODELLED:
-            self.forget_all(path)       # an op of a kind not modelled here
+            self.put(path, key, None) if key[0] not in ("B", "W", "D") else self.forget_word(path, key)
+        if c not in _MODELLED:
+            # an op of a kind not modelled here (a submitted job runs after the program: SUBM, RPLY and CAN
+            # write no memory the cycle's program reads after them)
+            self.forget_all(path)
         elif c in _MEMORY_WRITERS and o is not None:
             if o.indexed:
                 self.forget_indexed(f, i, op, path)
             elif o.is_bit:
                 for n in range(op.nbits if c == "STBITS" else 1):
-                    path.bits.pop((o.kind, o.addr + n), None)
+                    self.put(path, (o.kind, o.addr + n), None)
             elif o.kind in ("B", "W", "D"):
                 self.forget_word(path, (o.kind, o.addr))
         if c == "BT" and path.wa is not None and path.wa.value is not None and o is not None and o.kind == "K":
@@ -707,7 +802,7 @@ def _join(a: _Path, b: _Path) -> _Path:
     return _Path({k: v for k, v in a.bits.items() if b.bits.get(k) == v}, words,
                  a.la if a.la == b.la else None, a.wa if same else None, a.source if same else None,
                  a.frames if a.frames == b.frames else [], a.stack if a.stack == b.stack else [_DEEP], a.calls,
-                 {k: v for k, v in a.reads.items() if b.reads.get(k, -1) == v})
+                 {k: v for k, v in a.reads.items() if b.reads.get(k, -1) == v}, a.written | b.written)
 
 
 def _gate(gate: str, a: int | None, b: int | None) -> int | None:
