@@ -115,7 +115,7 @@ def test_an_abort_before_the_case_keeps_its_condition_from_the_steps(tmp_path: P
     for output in ("O1", "O2", "O3"):
         item = items[("M2", output)]
         assert item.status == "infeasible", (output, item)
-        assert "on every path of the cycle to this chain, followed from the start of main.src:1:1" in item.reason
+        assert "on every path of the cycle to this chain, followed from the start of the main program (main.src:1:1)" in item.reason
         assert output == "O3" or "M2 is always 1" in item.reason
     # the other conditions of those chains are not claimed
     assert items[("I3", "O1")].status == "missing" and items[("I3", "O2")].status == "missing"

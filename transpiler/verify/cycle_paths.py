@@ -831,4 +831,6 @@ def seen_vectors(runner: Runner, decision: Decision) -> Seen | None:
 def start_name(program: Program, start: tuple[int, int]) -> str:
     ops: Sequence[Op] = program.files[start[0]].ops
     op = ops[start[1]]
-    return f"LBL {op.label} ({op.span})" if op.code == "LBL" and op.label else f"the start of {op.span}"
+    if start == (0, 0):
+        return f"the start of the main program ({op.span})"
+    return f"LBL {op.label} ({op.span})" if op.code == "LBL" and op.label else f"{op.span}"
