@@ -144,6 +144,56 @@ def test_a_subprogram_called_from_two_places_starts_its_own_runs(tmp_path: Path)
     assert _items(program)[("M2", "O1")].status == "missing"
 
 
+_GROUP = """CM Decode
+CM Module
+CM Ack
+EM
+LBL Decode
+LN I1
+IFT
+L K0
+W= M100
+ENDI
+L I1
+AN M50
+= M51
+L I1
+= M50
+L M51
+EMF
+L I2
+S M101
+EM
+LBL Module
+{done}EM
+LBL Ack
+L I1
+A[
+L M100
+O M120
+]
+= O1
+EM
+"""
+
+
+@pytest.mark.parametrize("done, claimed", [("L M101\nA I3\n= M120\n", True), ("L I3\n= M120\n", False)],
+                         ids=["done_from_pending", "done_from_an_input"])
+def test_a_group_cleared_without_the_strobe_is_followed_through_the_modules(tmp_path: Path, done: str,
+                                                                             claimed: bool) -> None:
+    # Without the strobe I1, Decode clears the pending markers M100..M115 (W=), and Module's done marker M120 is
+    # a pending one ANDed with an input: Ack's chain never sees I1 = 0 with M100 OR M120 = 1. Decode and Module
+    # cannot reach the chain: they are run with their paths joined, and the path calling Decode splits on I1,
+    # which it reads first. A done marker from an input alone breaks it. Catches: W= not followed, a joined
+    # subprogram losing the chain's bit, the split made after the call.
+    program = _program(tmp_path, _GROUP.format(done=done))
+    item = _items(program)[("I1", "O1")]
+    assert (item.status == "infeasible") == claimed, item
+    if claimed:
+        assert "on every path of the cycle to this chain" in item.reason
+    assert _check_recorded(program, _random_memory_runs(program, 6, 30, 5)) > 0
+
+
 def test_words_narrowed_by_compares() -> None:
     word = Word(-128, 127)
     yes, no = word.split("<>", 0)

@@ -13,11 +13,17 @@ forks where it reads an operand of the decision's chain whose value it does not 
 where a word it knows a range of is compared with a constant or dispatched on by CASE (one path per outcome, each
 with the word's range narrowed: `<> K0` taken leaves the word without 0, not taken makes it 0), and where a jump,
 conditional call or module end depends on a logic accumulator it does not know. Bits otherwise follow three-valued
-logic (unknown AND 0 is 0). Any op not followed exactly makes what it may write unknown (a PLC module call, a write
-through the index register, an op of a kind not modelled: all of memory). A path that ends the start subprogram
-ends. The run gives up (no claim) at a jump back (a loop), a recursion or deep calls, or when the paths or steps
-exceed their limits, and for semantics in which words or LA are not followed so (shared accumulator, zero
-extension, unsigned compares, dynamic chains).
+logic (unknown AND 0 is 0); B=/W=/D= of a known WA, the data stack (PS/PL, PSL/PLL, PSW/PLW: known entries above
+an unknown bottom) and word stores of known values are followed too. A subprogram the decision cannot be reached
+from is run with its paths joined where they meet (its inner paths do not matter, only the state it returns with);
+where it reads a bit of the chain whose value at the start is not known yet, the path calling it forks on that bit
+first; where it jumps back, what it and its callees may write is unknown. Anything else not followed exactly makes
+what it may write unknown: a PLC module its error marker and code word (all of memory where it writes to an
+address it is given), a write through the index register the operands index_range lets it reach, an op of a kind
+not modelled all of memory. A path that ends the start subprogram ends, and so does one that can no longer come to
+the chain. The run gives up (no claim) at a jump back on the way to the chain (a loop), deep calls, or when the
+paths or steps exceed their limits, and for semantics in which words or LA are not followed so (shared
+accumulator, zero extension, unsigned compares, dynamic chains).
 
 Where every run of the decision starts: the subprogram whose code reaches the chain without a call between (its
 entry: the main program's start, a called or CASE-entered label, a submitted job); where all the calls of that
