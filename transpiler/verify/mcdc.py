@@ -23,7 +23,9 @@ a marker assigned from the chain's other operands, a timer or counter start no w
 cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that constant word operations fix, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
-it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+it), a condition no path of the cycle that comes to its chain lets decide alone (cycle_paths.py: the code run from
+where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them),
+and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from transpiler.ir import BYTES, Program, sext
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
+from transpiler.verify.cycle_paths import Runner, Seen, seen_vectors, start_name
 from transpiler.verify.index_range import index_ranges
 from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
@@ -700,6 +703,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             reason = _tied_reason(implications, item.decision, item.number, item.masking, invariants)
             if reason:
                 conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
+    # what is still missing may be ruled out by the paths that come to its chain (cycle_paths)
+    if explain_missing:
+        _explain_by_paths(program, conditions)
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
     xs: dict[tuple[int, int], tuple[int, int]] | None = None
@@ -715,6 +721,28 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                      for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
+
+
+def _explain_by_paths(program: Program, conditions: list[ConditionItem]) -> None:
+    """Marks the missing conditions the paths that come to their chain never show (cycle_paths) as infeasible."""
+    runner: Runner | None = None
+    found: dict[tuple[int, int], Seen | None] = {}
+    for k, item in enumerate(conditions):
+        if item.status != "missing":
+            continue
+        decision = item.decision
+        if decision.key not in found:
+            runner = runner or Runner(program)
+            found[decision.key] = seen_vectors(runner, decision)
+        seen = found[decision.key]
+        if seen is None or not seen.vectors or _showable(decision, item.number, item.masking, seen.vectors):
+            continue
+        ties = _ties(decision, item.number, Tied(seen.vectors, seen.start[1], ()))
+        reason = (f"{item.condition.text} cannot change the outcome on its own here: "
+                  f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain, "
+                  f"followed from {start_name(program, seen.start)} through the calls and CASE entries on the way, "
+                  "with the values the compares, jumps and stores on each path leave its markers and words)")
+        conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
