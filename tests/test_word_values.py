@@ -274,3 +274,49 @@ def test_unsigned_compares_get_no_claim(tmp_path: Path) -> None:
     # nothing about it. Catches: a claim made on the wrong reading of the word.
     held = _held(_steps(tmp_path, compare_signedness="unsigned"))
     assert set(held.values()) == {None}
+
+
+def test_products_and_quotients_by_a_constant_are_followed(tmp_path: Path) -> None:
+    # A doubling loop from 1 until 100 leaves only powers of two at its test (never 99, 100, 101); MOD and / of a
+    # constant work the values out; a product by a word the analysis does not know leaves WA any. Catches: a
+    # product taken as any value (no claim), or a product by an unknown word taken as known.
+    text = ("L K1\n= W10\nREPEAT\nL W10\nx K2\n= W10\nL W10\n>= K100\nUNTILT\n"
+            "L K7\n= W20\nL W20\nMOD K4\n== K3\n= O1\nL W20\n/ K-2\n== K-3\n= O2\n"
+            "L W20\nx W30\n== K14\n= O3\nEM\n")
+    program = _program(tmp_path, text)
+    held = _held(program)
+    assert held[(8, ">=", 100)] == {2, 4, 8, 16, 32, 64, 128}
+    assert held[(14, "==", 3)] == {3}
+    assert held[(18, "==", -3)] == {-3}
+    assert held[(22, "==", 14)] is None
+    # the whole coverage: the three values around 100 are infeasible with the stores named
+    table = decision_table(program)
+    items = {i.what(): i for i in decision_coverage(program, [], table=table).boundaries}
+    item = items["boundary W10 >= K100: W10 = c (100)"]
+    assert item.status == "infeasible" and "2, 4, 8, 16, 32, 64, 128" in item.reason, item.reason
+
+
+@pytest.mark.parametrize("semantics, value", [({}, 0), ({"mul_overflow_result": "unchanged"}, 65536)])
+def test_an_overflowing_product_follows_the_assumption(tmp_path: Path, semantics: dict, value: int) -> None:
+    # 65536 x 65536 overflows; the low bits (0) or WA unchanged (65536). Catches: one rule for both choices.
+    held = _held(_program(tmp_path, "L K65536\nx K65536\n== K0\n= O1\nEM\n", **semantics))
+    assert held[(3, "==", 0)] == {value}
+
+
+def test_rply_gives_running_only_in_code_a_job_reaches(tmp_path: Path) -> None:
+    # The main program's RPLY sees 0 or 2 (no job runs while it does); the job's own RPLY, and one in a routine the
+    # job calls (also called from the main program), may see 1. Catches: 1 left out where a job can run the RPLY,
+    # or RPLY's answer taken as any value.
+    text = ("RPLY W12\n== K0\n= O1\nL I1\nCMT Ask\nL M4172\nJPF Done\nSUBM Job\n= W12\nLBL Done\nEM\n"
+            "LBL Job\nRPLY W12\n== K1\n= O2\nCM Ask\nEM\n"
+            "LBL Ask\nRPLY W12\n== K2\n= O3\nEM\n")
+    program = _program(tmp_path, text)
+    held = _held(program)
+    assert held[(2, "==", 0)] == {0, 2}
+    assert held[(14, "==", 1)] == {0, 1, 2}
+    assert held[(20, "==", 2)] == {0, 1, 2}
+    table = decision_table(program)
+    items = {i.what(): i for i in decision_coverage(program, [], table=table).boundaries}
+    item = items["boundary WA == K0: WA = c+1 (1)"]
+    assert item.status == "infeasible" and "only inside the job it asks about" in item.reason, item.reason
+    assert items["boundary WA == K1: WA = c (1)"].status == "missing"
