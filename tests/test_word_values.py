@@ -18,7 +18,7 @@ from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 from transpiler.verify.guided import generate
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import index_values
 from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import build_machine, project_names, run_scenario
@@ -190,7 +190,7 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
     how many reached values were checked against a claim."""
     table = decision_table(program)
     values = word_values(program, table.compares, set(driven), set(power_on))
-    xs = index_ranges(program)
+    xs = index_values(program)
     checked = 0
     for cmp in table.compares:
         if cmp.constant is None:
@@ -207,8 +207,8 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
                 assert value in held.values, (str(cmp.op.span), value, sorted(held.values))
                 checked += 1
             if word is not None and word.kind == "X" and cmp.key in xs:
-                lo, hi = xs[cmp.key]
-                assert lo <= value <= hi or lo < 0, (str(cmp.op.span), value, (lo, hi))
+                x = xs[cmp.key]
+                assert x.holds(value) or x.lo < 0, (str(cmp.op.span), value, x)
     return checked
 
 

@@ -38,7 +38,8 @@ from transpiler.ir import BYTES, Program, sext
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import XValues, index_ranges, index_values
+from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_values import WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -668,6 +669,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             bounds.setdefault(key, set()).update(found)
     state: _Values | None = None
     implications: _Implications | None = None
+    strings: StringCompares | None = None
     conditions: list[ConditionItem] = []
     for decision in table.decisions:
         recorded = vectors.get(decision.key, set())
@@ -686,8 +688,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 state = constant_bits(program, table, set(driven))
                 implications = _Implications(program, state, consumed_start_zero(program, set(driven)),
                                              applicable_facts(program, set(driven)), table)
+            if strings is None:
+                strings = StringCompares(program)
             reason = (_infeasible_reason(decision, number, coupled, state)
-                      or _tied_reason(implications, decision, number, coupled))
+                      or _tied_reason(implications, decision, number, coupled)
+                      or _constant_string_reason(strings, decision, number))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     # what is still missing may be explained by a relation that holds across cycles (implication.Invariant)
     missing = [k for k, item in enumerate(conditions) if item.status == "missing"]
@@ -700,19 +705,31 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
-    xs: dict[tuple[int, int], tuple[int, int]] | None = None
+    xs: dict[tuple[int, int], XValues] | None = None
     ranges: dict[tuple[str, int], NcFact] = {}
     for cmp in table.compares:
         items = _boundary_items(cmp, bounds.get(cmp.key, set()))
         if explain_missing and any(i.status == "missing" for i in items):
             if held is None:
                 held = word_values(program, table.compares, set(driven), set(power_on))
-                xs = index_ranges(program)
+                xs = index_values(program)
                 ranges = {f.operands[0]: f for f in applicable_facts(program, set(driven)) if len(f.operands) == 1}
             items = [_explained(program, cmp, item, held, xs, ranges) if item.status == "missing" else item
                      for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
+
+
+def _constant_string_reason(strings: StringCompares, decision: Decision, number: int) -> str:
+    """Why condition `number`, a string compare the code right before it fixes (string_values.py), can never be
+    shown: it never changes; "" where it is no such compare."""
+    cond = decision.conditions[number]
+    found = strings.outcome(cond.file, cond.index)
+    if found is None:
+        return ""
+    outcome, left, right = found
+    return (f"{cond.text} is always {int(outcome)}: SA holds \"{left}\" and the operand \"{right}\" there, set by the "
+            "string loads, appends and stores right before it on the only way to it")
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
@@ -738,7 +755,7 @@ def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
 
 
 def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordValues,
-               xs: Mapping[tuple[int, int], tuple[int, int]], ranges: Mapping[tuple[str, int], NcFact]
+               xs: Mapping[tuple[int, int], XValues], ranges: Mapping[tuple[str, int], NcFact]
                ) -> BoundaryItem:
     """`item` (missing) as infeasible where the values the word can hold at the compare (word_values), the values
     the index register can hold there (index_range) or the values the NC model writes to a word only it writes
@@ -768,7 +785,20 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
         return dataclasses.replace(item, status="infeasible",
                                    reason=f"X holds only {x[0]}..{x[1]} here, not {value}: the index register's "
                                           "loads, steps and compares before this one on every path keep it there")
-    return item
+    residue = _index_residue_reason(x, value)
+    return dataclasses.replace(item, status="infeasible", reason=residue) if residue else item
+
+
+def _index_residue_reason(x: XValues, value: int) -> str:
+    """Why X cannot hold `value`, inside its interval, where its loads and steps keep it to one residue (a loop
+    stepping X by 2 from 0 never gives it an odd value); "" where it can."""
+    if x.modulus == 1 or x.holds(value):
+        return ""
+    if x.modulus == 0:
+        return (f"X holds only {x.residue} here, not {value}: the index register's loads and steps before this one on "
+                "every path give it no other value")
+    return (f"X holds only values {x.residue} modulo {x.modulus} here ({x.lo}..{x.hi}), not {value}: the index "
+            f"register's loads and steps before this one on every path keep it at {x.residue} modulo {x.modulus}")
 
 
 def figures(cov: Mapping[str, Any]) -> str:
