@@ -771,3 +771,30 @@ def test_a_string_compare_is_not_fixed_where_something_else_can_reach_it(tmp_pat
     machine = _run(program, [{"I1": 1}, {"I1": 0}])
     items, cov = _status(program, [machine])
     assert cov.summary()["mcdc"]["conditions_infeasible"] == 0
+
+
+def _timed(program, mp: dict, rows: list[dict[str, int]]) -> Machine:
+    machine = Machine(program, mp, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, row in enumerate(rows):
+        machine.run_cycle(cycle, [("I", int(name[1:]), value) for name, value in row.items()])
+    return machine
+
+
+def test_the_running_bit_of_a_timer_with_preset_0_in_every_run_is_always_0(tmp_path: Path) -> None:
+    # MP4110.3 = 0: T51 never runs however I1 starts T3, so its condition cannot be shown. A run with a preset of
+    # 3 cycles shows it; a write of T51 by the program or a scenario, or no run at all, leaves it missing.
+    # Catches: the claim made without looking at the runs' presets, or over a write of the bit.
+    rows = [{"I1": 1}, {"I1": 0}, {}, {}, {"I1": 1}, {}]
+    program = _program(tmp_path, "L I1\n= T3\nL T51\n= O4\nEM\n")
+    idle = _timed(program, {"4110.3": 0}, rows)
+    assert idle.coverage.idle_timers >= {51} and 51 not in _timed(program, {"4110.3": 0.06}, rows).coverage.idle_timers
+    items, _ = _status(program, [idle])
+    t51 = items[("T51", "O4", 0)]
+    assert t51.status == "infeasible" and "MP4110.3" in t51.reason and "is 0 in every run" in t51.reason, t51
+    items, _ = _status(program, [idle, _timed(program, {"4110.3": 0.06}, rows)])
+    assert items[("T51", "O4", 0)].status == "shown"
+    assert _status(program, [idle], driven={("T", 51)})[0][("T51", "O4", 0)].status == "missing"
+    assert _status(program, [])[0][("T51", "O4", 0)].status == "missing"
+    written = _program(tmp_path, "L I1\n= T3\nL I2\n= T51\nL T51\n= O4\nEM\n")
+    items, _ = _status(written, [_timed(written, {"4110.3": 0}, rows)])
+    assert items[("T51", "O4", 0)].status != "infeasible"

@@ -35,9 +35,10 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Program, sext
+from transpiler.language.presets import TIMER_MP
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
-    inductive_invariants, program_entries, tied_vectors
+    inductive_invariants, program_entries, tied_vectors, write_sites
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_values import WordValues, word_values
@@ -670,6 +671,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     state: _Values | None = None
     implications: _Implications | None = None
     strings: StringCompares | None = None
+    idle: dict[tuple[str, int], str] = {}
     conditions: list[ConditionItem] = []
     for decision in table.decisions:
         recorded = vectors.get(decision.key, set())
@@ -690,9 +692,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                                              applicable_facts(program, set(driven)), table)
             if strings is None:
                 strings = StringCompares(program)
+                idle = _idle_timers(program, sets, driven)
             reason = (_infeasible_reason(decision, number, coupled, state)
                       or _tied_reason(implications, decision, number, coupled)
-                      or _constant_string_reason(strings, decision, number))
+                      or _constant_string_reason(strings, decision, number)
+                      or _idle_timer_reason(decision, number, idle))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     # what is still missing may be explained by a relation that holds across cycles (implication.Invariant)
     missing = [k for k, item in enumerate(conditions) if item.status == "missing"]
@@ -730,6 +734,39 @@ def _constant_string_reason(strings: StringCompares, decision: Decision, number:
     outcome, left, right = found
     return (f"{cond.text} is always {int(outcome)}: SA holds \"{left}\" and the operand \"{right}\" there, set by the "
             "string loads, appends and stores right before it on the only way to it")
+
+
+def _idle_timers(program: Program, sets: Sequence, driven: set[tuple[str, int]]) -> dict[tuple[str, int], str]:
+    """The timer running bits no run can see at 1, with the machine parameter that says why: the timer's preset is 0
+    in every run (Coverage.idle_timers), so the timer service never sets the bit, and nothing else writes it (no write
+    of the program, named, implicit or through the index register, and no scenario)."""
+    if not sets:
+        return {}
+    idle = frozenset.intersection(*(frozenset(getattr(cov, "idle_timers", ())) for cov in sets))
+    if not idle:
+        return {}
+    profile = program.semantics.profile
+    sites, other, indexed = write_sites(program)
+    if "T" in indexed:
+        return {}
+    out: dict[tuple[str, int], str] = {}
+    for addr in sorted(idle):
+        key = ("T", addr)
+        if key in driven or key in sites or key in other:
+            continue
+        number = profile.timer_start[0] + addr - profile.timer_running[0]
+        out[key] = f"MP{TIMER_MP}.{number}"
+    return out
+
+
+def _idle_timer_reason(decision: Decision, number: int, idle: Mapping[tuple[str, int], str]) -> str:
+    """Why condition `number`, a running bit of a timer whose preset is 0 in every run, can never be shown: it is
+    always 0; "" where it is no such bit."""
+    o = decision.conditions[number].operand
+    if o is None or o.indexed or (o.kind, o.addr) not in idle:
+        return ""
+    return (f"{o.display()} is always 0: its timer's preset ({idle[(o.kind, o.addr)]}) is 0 in every run, so the "
+            "timer service never sets it, and neither the program nor a scenario writes it")
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
