@@ -23,7 +23,9 @@ a marker assigned from the chain's other operands, a timer or counter start no w
 cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that constant word operations fix, a fact of the NC model's writes where nothing else writes its operands, see nc_facts.py; subprograms called
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
-it), and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+it), a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
+preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
+(word_values.py; for X, index_range's interval and congruence). Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations

@@ -6,7 +6,8 @@ The analysis works on bit patterns of memory operands (B/W/D named without an in
 "any" (a set larger than _MAX_VALUES is "any"):
 
 - What the program can store: every `=` of the operand with a value the analysis knows (a constant, a copy of a
-  word whose values it knows, plus or minus a constant) adds its values; anything else that writes memory makes
+  word whose values it knows, plus or minus, times, divided by or modulo a constant; RPLY's answers, without
+  "running" where no submitted job reaches the RPLY) adds its values; anything else that writes memory makes
   the operand "any": a store of an unknown value, INC, DEC, a pull from the data stack, a write of another operand
   that shares one of its bytes (B, W and D overlap), a write through the index register that can reach one of its
   bytes (index_range gives X there; unknown: all memory), a PLC module that takes a memory address or is not in
