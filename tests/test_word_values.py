@@ -22,6 +22,7 @@ from transpiler.verify.index_range import index_values
 from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import build_machine, project_names, run_scenario
+from transpiler.verify.word_relations import word_relations
 from transpiler.verify.word_values import word_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -191,9 +192,16 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
     table = decision_table(program)
     values = word_values(program, table.compares, set(driven), set(power_on))
     xs = index_values(program)
+    relations = word_relations(program)
     checked = 0
     for cmp in table.compares:
         if cmp.constant is None:
+            low, high = relations.get(cmp.key, (None, None))
+            for cov in coverage_sets:
+                for difference in cov.bounds.get(cmp.key, ()):
+                    assert (low is None or difference >= low) and (high is None or difference <= high), \
+                        (str(cmp.op.span), difference, (low, high))
+                    checked += 1
             continue
         reached = set()
         for cov in coverage_sets:
@@ -320,3 +328,46 @@ def test_rply_gives_running_only_in_code_a_job_reaches(tmp_path: Path) -> None:
     item = items["boundary WA == K0: WA = c+1 (1)"]
     assert item.status == "infeasible" and "only inside the job it asks about" in item.reason, item.reason
     assert items["boundary WA == K1: WA = c (1)"].status == "missing"
+
+
+COUNTING = "L K0\n= W6\nL W6\n< W30\nWHILET\n{body}L W6\n{step}= W6\nL W6\n< W30\nENDW\nEM\n{routines}"
+
+
+def _relation(program, line: int) -> tuple:
+    table = decision_table(program)
+    cmp = next(c for c in table.compares if c.op.span.line == line)
+    return word_relations(program).get(cmp.key, (None, None))
+
+
+def test_a_counting_loop_never_passes_its_limit_at_its_test(tmp_path: Path) -> None:
+    # The body runs with W6 < W30 and adds 1: at the test at its end W6 - W30 <= 0, so +1 is infeasible; runs with
+    # limits -1..40 reach -1 and 0 only. Catches: the fact lost over the step (no claim), or the step not counted.
+    program = _program(tmp_path, COUNTING.format(body="", step="+ K1\n", routines=""))
+    assert _relation(program, 10) == (None, 0)
+    assert _relation(program, 4) == (None, None)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, limit in enumerate(range(-1, 40)):
+        machine.state.write("W", 30, limit)
+        machine.run_cycle(cycle, [])
+    _bounds_inside(program, [machine.coverage])
+    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 10)
+    assert machine.coverage.bounds[cmp.key] == {-1, 0}
+    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
+    item = items["boundary W6 < W30: W6 - W30 = +1"]
+    assert item.status == "infeasible" and item.reason.startswith("W6 - W30 is at most 0 here, never +1"), item
+
+
+@pytest.mark.parametrize("body, step, routines, why", [
+    ("", "+ K2\n", "", "a step of 2 can pass the limit by one"),
+    ("L W6\n= W30\n", "+ K1\n", "", "the limit written in the body"),
+    ("CM Sub\n", "+ K1\n", "LBL Sub\nL K9\n= W30\nEM\n", "a call in the body"),
+    ("L K-1\n= B7\n", "+ K1\n", "", "a store of a byte of W6"),
+    ("L K0\n= X\nL K5\n= W6[X]\n", "+ K1\n", "", "a store through the index register"),
+    ("", "- K1\n", "", "a step down"),
+])
+def test_no_difference_is_claimed_where_the_loop_may_break_it(tmp_path: Path, body: str, step: str, routines: str,
+                                                               why: str) -> None:
+    # Catches: a fact kept over a write that changes one of the words, or a step that may pass the limit.
+    program = _program(tmp_path, COUNTING.format(body=body, step=step, routines=routines))
+    assert _relation(program, 10 + body.count("\n"))[1] is None, why
+

@@ -43,6 +43,7 @@ from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_
     inductive_invariants, program_entries, tied_vectors, write_sites
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
+from transpiler.verify.word_relations import word_relations
 from transpiler.verify.word_values import WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -713,6 +714,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     held: WordValues | None = None
     xs: dict[tuple[int, int], XValues] | None = None
     ranges: dict[tuple[str, int], NcFact] = {}
+    relations: dict[tuple[int, int], tuple[int | None, int | None]] | None = None
     for cmp in table.compares:
         items = _boundary_items(cmp, bounds.get(cmp.key, set()))
         if explain_missing and any(i.status == "missing" for i in items):
@@ -722,6 +724,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 ranges = {f.operands[0]: f for f in applicable_facts(program, set(driven)) if len(f.operands) == 1}
             items = [_explained(program, cmp, item, held, xs, ranges) if item.status == "missing" else item
                      for item in items]
+            if cmp.constant is None:
+                relations = word_relations(program) if relations is None else relations
+                items = [_related(cmp, item, relations) if item.status == "missing" else item for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
@@ -769,6 +774,23 @@ def _idle_timer_reason(decision: Decision, number: int, idle: Mapping[tuple[str,
         return ""
     return (f"{o.display()} is always 0: its timer's preset ({idle[(o.kind, o.addr)]}) is 0 in every run, so the "
             "timer service never sets it, and neither the program nor a scenario writes it")
+
+
+def _related(cmp: Compare, item: BoundaryItem,
+             relations: Mapping[tuple[int, int], tuple[int | None, int | None]]) -> BoundaryItem:
+    """`item` (missing, of a compare of two words) as infeasible where the difference the words can have there
+    (word_relations) leaves its offset out."""
+    low, high = relations.get(cmp.key, (None, None))
+    offset = item.offset
+    if high is not None and offset > high:
+        bound = f"{cmp.left} - {cmp.right} is at most {high}"
+    elif low is not None and offset < low:
+        bound = f"{cmp.left} - {cmp.right} is at least {low}"
+    else:
+        return item
+    return dataclasses.replace(item, status="infeasible", reason=(
+        f"{bound} here, never {offset:+d}: the compares of the two words the jumps before it went on, and the steps "
+        "of one of them by a constant since, on every path to it, keep the difference there"))
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
