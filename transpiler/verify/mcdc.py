@@ -25,7 +25,8 @@ in that code followed into), a condition a relation between two of its chain's o
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
 it), a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
 preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
-(word_values.py; for X, index_range's interval and congruence). Only these reasons are claimed; a condition that is merely hard
+(word_values.py; for X, index_range's interval and congruence; for a compare of two words, the differences
+word_relations.py allows). Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
