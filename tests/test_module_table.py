@@ -162,3 +162,27 @@ def test_old_profile_sets_m3171(tmp_path: Path) -> None:
     """, profile="tnc407", mp={"910.0": "100.1200"})
     cycles(m, 1)
     assert values(m, "M2", "D0") == {"M2": 1, "D0": 0}      # submit-only in the cyclic program
+
+
+def test_error_values_hold_every_error_result_the_model_gives() -> None:
+    # A row's error_values let the boundary analysis claim that a word pulled from that result holds nothing else:
+    # the model, called with corner parameters from the cyclic program and from a job, with tables present and not,
+    # never gives another value there.
+    from itertools import product
+
+    from transpiler.exec.interp.sysmodel import SysContext
+    corners = (-1, 0, 1, 2, 3, 5, 63, 64, 65, 1000)
+    rows = [m for m in mt.MODULE_ROWS if m.error_values is not None]
+    assert {m.number for m in rows} >= {9092, 9093, 9094}
+    for filled in (False, True):
+        sys = SysContext()
+        if filled:
+            for file_type, line, element in product((0, 1, 2), (0, 1, 5), (0, 1, 7)):
+                sys.set_table(file_type, line, element, 1)
+        for m in rows:
+            seen = set()
+            for params, in_job in product(product(corners, repeat=m.nparams), (False, True)):
+                results, _, _ = sys.call_in(m.number, list(params), in_job)
+                seen.add(results[m.error_result])
+            assert seen <= m.error_values, (m.number, seen - m.error_values)
+            assert len(seen) > 2, (m.number, seen)

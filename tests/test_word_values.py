@@ -371,3 +371,30 @@ def test_no_difference_is_claimed_where_the_loop_may_break_it(tmp_path: Path, bo
     program = _program(tmp_path, COUNTING.format(body=body, step=step, routines=routines))
     assert _relation(program, 10 + body.count("\n"))[1] is None, why
 
+
+TABLE_READ = "PS    K0\nPS    W20\nPS    K1\nCM    9093\n{pulls}L     W40\n==    K0\n=     O1\nEM\n"
+
+
+def test_a_pulled_error_result_holds_only_the_module_s_codes(tmp_path: Path) -> None:
+    # 9093's second result is its error code (0..5, error_values): a word pulled from it is never -1. Catches: the
+    # value result taken for the error result (pull order), a claim where a scenario replaces the module's results,
+    # where something runs between the call and the pull, and for a module whose result carries a value too.
+    program = _program(tmp_path, TABLE_READ.format(pulls="PL    D32\nPL    W40\n"))
+    assert _held(program)[(8, "==", 0)] == frozenset(range(6))
+    assert _held(program, driven={("module", 9093)})[(8, "==", 0)] is None
+    cov = decision_coverage(program, [])
+    low = {item.what(): item for item in cov.boundaries}["boundary W40 == K0: W40 = c-1 (-1)"]
+    assert low.status == "infeasible" and "(the error result of module 9093)" in low.reason, low.reason
+    swapped = _program(tmp_path, TABLE_READ.format(pulls="PL    W40\nPL    D32\n"))
+    assert _held(swapped)[(8, "==", 0)] is None
+    between = _program(tmp_path, TABLE_READ.format(pulls="PL    D32\nL     K3\nPL    W40\n"))
+    assert _held(between)[(9, "==", 0)] is None
+    timer = _program(tmp_path, "PS    K0\nCM    9192\nPL    W40\nL     W40\n==    K0\n=     O1\nEM\n")
+    assert _held(timer)[(5, "==", 0)] is None
+
+
+def test_module_results_of_a_scenario_count_as_driven(tmp_path: Path) -> None:
+    program = _program(tmp_path, TABLE_READ.format(pulls="PL    D32\nPL    W40\n"))
+    (tmp_path / "s.yaml").write_text("name: s\ncycles: 1\nmodule_results:\n  9093: [7, -1]\n")
+    scenario = load_scenario(tmp_path / "s.yaml", project_names(program))
+    assert ("module", 9093) in driven_operands([scenario], project_names(program))

@@ -64,6 +64,10 @@ class Module:
     error_result: int | None = None       # index of a result that carries the error code too
     context_code: int | None = None       # W1022 code of a call in the wrong context (None: 20 / 24)
     context_result: int | None = None     # the error result's value then (None: the W1022 code)
+    # The values the error result can take where it carries nothing but the module's own result codes (the wrong
+    # context's included); None: not stated (it may carry a value too, or W1022 codes differ from it).
+    # tests/test_module_table.py calls the model with corner parameters in both contexts and checks them.
+    error_values: frozenset[int] | None = None
 
     @property
     def nparams(self) -> int:
@@ -178,14 +182,14 @@ MODULE_ROWS: tuple[Module, ...] = (
        MACHINE, profiles=OLD, confidence="P", assumptions=("A-46g: push order string, line, column, colour",)),
     _m(9092, "HH_FindInTable", "search an entry in the tables selected for program run", "type, element, value",
        "line, error", {**_E_MPTAB, 6: "value not found"}, DATA, context=SUBMIT, confidence="P", error_result=1,
-       context_result=1,
+       context_result=1, error_values=frozenset(range(7)),
        assumptions=("A-46h: parameters file type, element, value; results line, error (call lines lost)",), modelled=True),
     _m(9093, "HH_ReadTable", "read one element of a tool/pocket/datum table", "type, line, element",
        "value[scaled by the field's decimals], error", _E_MPTAB, DATA, context=SUBMIT, error_result=1, modelled=True,
-       context_result=1),
+       context_result=1, error_values=frozenset(_E_MPTAB)),
     _m(9094, "HH_WriteTable", "write one element of a tool/pocket/datum table", "type, line, element, value",
        "error", {**_E_MPTAB, 6: "value out of range"}, DATA, context=SUBMIT, error_result=0, modelled=True,
-       context_result=1),
+       context_result=1, error_values=frozenset(range(7))),
     _m(9095, "HH_ActivateCompensation", "activate a line of the .CMA compensation table", "line", "error",
        {0: "ok", 1: "line missing", 2: ".COM table missing", 3: ".COM > 256 entries", 4: "too many points",
         5: "too many .COM tables / after program start without strobe", 6: "no .CMA", 7: "not in a submit job"},

@@ -45,7 +45,7 @@ from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_relations
-from transpiler.verify.word_values import WordValues, word_values
+from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
 _ENUMERATE = 14             # free conditions up to which unique-cause feasibility is decided by enumeration
@@ -161,9 +161,11 @@ def _masking_pair(a: int, b: int, bit: int, n: int, function) -> bool:
 # ----------------------------------------------------------------------------------------------------- constants
 
 def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
-    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs)."""
+    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs), and
+    (word_values.OVERRIDDEN_MODULE, number) of every module whose results one replaces (`module_results`)."""
     driven: set[tuple[str, int]] = set()
     for scenario in scenarios:
+        driven.update((OVERRIDDEN_MODULE, int(number)) for number in scenario.module_results)
         written = list(scenario.initial)
         for event in scenario.events:
             written += list(event.set)

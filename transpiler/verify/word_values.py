@@ -12,7 +12,9 @@ The analysis works on bit patterns of memory operands (B/W/D named without an in
   that shares one of its bytes (B, W and D overlap), a write through the index register that can reach one of its
   bytes (index_range gives X there; unknown: all memory), a PLC module that takes a memory address or is not in
   the module table (all memory), the NC model's words and the NC interface bytes, the module error-code word, a
-  data-table row, and every operand a scenario sets after power-on.
+  data-table row, and every operand a scenario sets after power-on. A pull (`PL`) right after a module call that
+  takes the module's error result stores the codes its row states (Module.error_values), unless a scenario
+  replaces that module's results (`module_results`: driven as ("module", number)).
 - The power-on value: 0, or any value for an operand a scenario sets before cycle 0 (`initial`); none at all where
   the first cycle stores the operand before anything reads it (first_cycle: the main program followed with every
   call inlined and the first-cycle marker 1), since no read can see it then.
@@ -39,7 +41,7 @@ from transpiler.exec.interp.submit import REPLY_STATES
 from transpiler.exec.interp.support import divide, remainder, saturate
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program, sext
-from transpiler.language.module_table import writes_anywhere
+from transpiler.language.module_table import MODULE_TABLE, writes_anywhere
 from transpiler.verify.nc_facts import NC_MODEL_OWNED
 from transpiler.verify.index_range import index_ranges
 
@@ -58,6 +60,7 @@ _BIT_WRITERS = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC
 _RELATIONS = {"==": lambda a, b: a == b, "<>": lambda a, b: a != b, "<": lambda a, b: a < b,
               "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, ">=": lambda a, b: a >= b}
 
+OVERRIDDEN_MODULE = "module"    # kind of a driven entry (kind, number): a scenario replaces that module's results
 Cell = tuple[str, int]          # (kind, byte address) of a named B/W/D operand
 Values = frozenset | None       # bit patterns, or None: any
 
@@ -189,17 +192,18 @@ class _Analysis:
             for b in _bytes(cell):
                 self.by_byte.setdefault(b, []).append(cell)
         self.ops = [(f, i, op) for f, code in enumerate(program.files) for i, op in enumerate(code.ops)]
+        self.entries = {(f, op.target) for f, i, op in self.ops if op.code in ("JP", "JPT", "JPF")
+                        and op.target is not None}
+        self.entries |= {(t.file, t.index) for _, _, op in self.ops for t in (op.call, *op.case_targets)
+                         if t is not None and not t.is_module and t.file >= 0}
         self.outside = self._outside_bytes(driven - power_on)
+        self.overridden = {number for kind, number in driven if kind == OVERRIDDEN_MODULE}
         self.dirty = {b for kind, addr in power_on if kind in _BITS for b in _bytes((kind, addr))}
         self.callees = self._callee_writes()
         self.linked = self._linked()
         self.interface = sem.profile.interface
         self.flag = sem["add_overflow"] == "flag"
         self.job_code: set[tuple[int, int]] | None = None     # worked out at the first RPLY (replies)
-        self.entries = {(f, op.target) for f, i, op in self.ops if op.code in ("JP", "JPT", "JPF")
-                        and op.target is not None}
-        self.entries |= {(t.file, t.index) for _, _, op in self.ops for t in (op.call, *op.case_targets)
-                         if t is not None and not t.is_module and t.file >= 0}
 
     # ------------------------------------------------------------------------------------ what memory the program
     # does not own
@@ -240,10 +244,37 @@ class _Analysis:
             return None, self.overlapping(o.addr + x[0] * step, o.addr + x[1] * step + size)
         cell = (o.kind, o.addr)
         others = self.overlapping(o.addr, o.addr + size) - {cell}
-        if op.code != "WST":
+        if op.code != "WST" and (op.code != "POP" or self.error_codes(f, i) is None):
             others.add(cell)
             return None, others
         return cell, others
+
+    def error_codes(self, f: int, i: int) -> frozenset[int] | None:
+        """The values the pull at op i can take where it is the k-th pull right after a call of a module whose k-th
+        result is its error result with stated values (Module.error_values), nothing entering in between and no
+        scenario replacing the module's results; None otherwise."""
+        row = self.pulled_module(f, i)
+        return None if row is None else row.error_values
+
+    def pulled_module(self, f: int, i: int):
+        """The module row whose error result the pull at op i takes (see error_codes), or None."""
+        ops = self.program.files[f].ops
+        j = i
+        while j > 0 and ops[j - 1].code == "POP" and not self.entered(f, j):
+            j -= 1
+        call = ops[j - 1] if j > 0 and not self.entered(f, j) else None
+        if call is None or call.code != "CALL" or call.call is None or not call.call.is_module:
+            return None
+        row = MODULE_TABLE.get(call.call.module)
+        if row is None or row.error_values is None or row.error_result != i - j or row.number in self.overridden \
+                or self.program.semantics.profile.name not in row.profiles:
+            return None
+        return row
+
+    def stored_values(self, f: int, i: int, op: Op, cell: Cell, wa: frozenset | None) -> Values:
+        """The patterns op i stores into `cell` (its named store): WA's values, or a module's error codes."""
+        values = self.error_codes(f, i) if op.code == "POP" else wa
+        return None if values is None else frozenset(self.store(cell, v) for v in values)
 
     def _linked(self) -> set[tuple[int, int]]:
         """(file, op index) of every op a path of jumps and calls leads to from an entry, whatever the values."""
@@ -495,9 +526,9 @@ class _Analysis:
                 for c in others:
                     found[c] = None
                 if cell is not None:
-                    values = None if flow.wa is None else frozenset(self.store(cell, v) for v in flow.wa)
-                    found[cell] = _union(found[cell], values)
-                    writes.setdefault(cell, []).append(str(op.span))
+                    found[cell] = _union(found[cell], self.stored_values(f, i, op, cell, flow.wa))
+                    pulled = f" (the error result of module {self.pulled_module(f, i).number})" if op.code == "POP" else ""
+                    writes.setdefault(cell, []).append(f"{op.span}{pulled}")
             if found == stored:
                 return before, stored, writes, entry
             stored = {c: _union(stored[c], found[c]) for c in self.cells}
@@ -657,7 +688,7 @@ class _Analysis:
             for k in others:
                 cells[k] = (None, frozenset())
             if cell is not None:
-                cells[cell] = (None if wa is None else frozenset(self.store(cell, v) for v in wa), frozenset())
+                cells[cell] = (self.stored_values(f, i, op, cell, wa), frozenset())
             changed = others | {cell}
             facts = frozenset(fact for fact in facts if fact[1] not in changed)
         facts = self.facts_after(f, i, op, facts)
