@@ -6,7 +6,7 @@ import dataclasses
 from typing import Union
 
 from transpiler.diagnostics import Span
-from transpiler.records import quick_init
+from transpiler.records import builder, quick_init
 
 
 @quick_init
@@ -32,6 +32,9 @@ class Instr:
     operand: OperandSyntax | None
     span: Span
     comments: tuple[str, ...] = ()
+
+
+new_instr = builder(Instr)      # Instr(...) for the parser's loop over the lines
 
 
 @dataclasses.dataclass(frozen=True, slots=True)

@@ -11,7 +11,7 @@ from transpiler.frontend.opcodes import (ARITH, BIT_GROUPS, COMPARES, GATE_AS_LO
                                          WORD_GATES)
 from transpiler.frontend.operands import label_text
 from transpiler.frontend.structure import StructureMatcher
-from transpiler.ir import Bracket, CallTarget, Op, Operand
+from transpiler.ir import Bracket, CallTarget, Op, Operand, new_op
 from transpiler.language.modules import MODULES, nearest
 from transpiler.language.semantics import Semantics
 
@@ -77,8 +77,8 @@ class ChainLowering:
         shape_key = (m, operand.kind if operand is not None else None, chain_open, last_acc)
         shape = self._shapes.get(shape_key)
         if shape is not None:
-            return (Op(shape.code, m, instr.span, operand, instr.comments, rel=shape.rel, nbits=shape.nbits,
-                       chain_open=chain_open), shape.chain_open, shape.last_acc)
+            return (new_op(shape.code, m, instr.span, operand, instr.comments, rel=shape.rel, nbits=shape.nbits,
+                           chain_open=chain_open), shape.chain_open, shape.last_acc)
         base = dict(mnemonic=m, span=instr.span, operand=operand, comments=instr.comments, chain_open=chain_open)
         is_bit = operand is not None and operand.is_bit
         is_str = operand is not None and operand.kind in ("S", "STR")

@@ -11,7 +11,7 @@ from transpiler.frontend.opcodes import CONTROL, STRUCT_ALL
 from transpiler.frontend.operands import OperandResolver, label_text
 from transpiler.frontend.structure import StructureMatcher
 from transpiler.frontend.symbols import SymTables
-from transpiler.ir import Op, Operand
+from transpiler.ir import Op, Operand, new_op
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.semantics import Semantics
 from transpiler.records import replaced
@@ -128,8 +128,8 @@ class FileLowering:
             # and comments (no diagnostic, no queued jump, no bracket), so it is not checked and lowered again.
             known = self.plain_lowered.get((m, instr.operand, self.chain_open, self.last_acc))
             if known is not None:
-                self.ops.append(Op(known.code, m, instr.span, known.operand, instr.comments, rel=known.rel,
-                                   nbits=known.nbits, chain_open=self.chain_open))
+                self.ops.append(new_op(known.code, m, instr.span, known.operand, instr.comments, rel=known.rel,
+                                       nbits=known.nbits, chain_open=self.chain_open))
                 self.chain_open, self.last_acc = known.chain_open, known.last_acc
                 return
         index = len(self.ops)

@@ -313,7 +313,7 @@ class SrcParser(_CachedLineParser):
             if kfield is None:
                 known = accepted.get(code) or self._accepted_by_shape(code)
                 if known is not None:       # an instruction line (or its shape) met before, accepted without a diagnostic
-                    statements.append(ast.Instr(known[0], known[1], span, comments))
+                    statements.append(ast.new_instr(known[0], known[1], span, comments))
                     continue
             status, result = self.parse_line(code)
             if status == "range":
