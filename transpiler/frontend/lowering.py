@@ -66,8 +66,21 @@ class FileLowering:
     def run(self) -> None:
         self._collect_kfields()
         instr_type = ast.Instr
+        plain_lowered = self.plain_lowered
+        ops = self.ops
         for stmt in self.src.statements:
             if type(stmt) is instr_type:         # (nine lines in ten: tested first)
+                if self.case_open is None:
+                    # Most lines repeat an instruction lowered before in the same chain state: its op differs only
+                    # in span and comments (no diagnostic, no queued jump, no bracket), so it is not checked and
+                    # lowered again.
+                    chain_open = self.chain_open
+                    known = plain_lowered.get((stmt.mnemonic, stmt.operand, chain_open, self.last_acc))
+                    if known is not None:
+                        ops.append(new_op(known.code, stmt.mnemonic, stmt.span, known.operand, stmt.comments,
+                                          rel=known.rel, nbits=known.nbits, chain_open=chain_open))
+                        self.chain_open, self.last_acc = known.chain_open, known.last_acc
+                        continue
                 self._instruction(stmt)
             elif isinstance(stmt, ast.Global):
                 self.globals.append(stmt)
@@ -107,7 +120,7 @@ class FileLowering:
             if self.kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
                 self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
                                  f"KFIELD at line {self.kfield_lines[stmt.name]}")
-        self.ops.append(Op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=self.chain_open))
+        self.ops.append(new_op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=self.chain_open))
         self.chain_open, self.last_acc = False, "NONE"
 
     def _kfield(self, stmt: ast.KField) -> None:
@@ -118,20 +131,12 @@ class FileLowering:
         if prev is None or prev.mnemonic not in ("EM", "JP"):
             self.diags.report("E-KF-PLACEMENT", stmt.span,
                              f"KFIELD {stmt.name} must follow an unconditional EM or JP")
-        self.ops.append(Op("KFIELD", "KFIELD", stmt.span, comments=stmt.comments, label=stmt.name))
+        self.ops.append(new_op("KFIELD", "KFIELD", stmt.span, comments=stmt.comments, label=stmt.name))
         self.chain_open, self.last_acc = False, "NONE"
 
     def _instruction(self, instr: ast.Instr) -> None:
+        """An instruction not lowered before in this chain state (run() takes the others from plain_lowered)."""
         m = instr.mnemonic
-        if self.case_open is None:
-            # Most lines repeat an instruction lowered before in the same chain state: its op differs only in span
-            # and comments (no diagnostic, no queued jump, no bracket), so it is not checked and lowered again.
-            known = self.plain_lowered.get((m, instr.operand, self.chain_open, self.last_acc))
-            if known is not None:
-                self.ops.append(new_op(known.code, m, instr.span, known.operand, instr.comments, rel=known.rel,
-                                       nbits=known.nbits, chain_open=self.chain_open))
-                self.chain_open, self.last_acc = known.chain_open, known.last_acc
-                return
         index = len(self.ops)
         info = MNEMONICS[m]
         # (_admitted has nothing to say about a plain instruction outside CASE tables and brackets: most of them)

@@ -98,7 +98,7 @@ class _SrcTransformer(Transformer):
         base, index = items
         if index is None:
             return base
-        return dataclasses.replace(base, indexed=True, text=base.text + "[X]")
+        return base._replace(indexed=True, text=base.text + "[X]")
 
     def bit_op(self, items):
         return _addr_operand(items[0])
