@@ -123,3 +123,19 @@ def test_builder_takes_slotted_quick_init_records_only():
     for cls in (_WithDict, Plain):
         with pytest.raises(TypeError):
             builder(cls)
+
+
+@quick_init
+@dataclasses.dataclass(frozen=True, slots=True)
+class _Single:
+    name: str
+
+
+def test_replaced_changes_the_named_fields_only():
+    record = _Slotted("a", 3, ("x",))
+    assert replaced(record, count=4) == _Slotted("a", 4, ("x",))
+    assert replaced(record, tags=(), name="b") == _Slotted("b", 3, ())
+    assert replaced(record) == record and replaced(_Single("a"), name="b") == _Single("b")
+    assert replaced(_WithDict("a"), count=0) == _WithDict("a", 0)
+    with pytest.raises(TypeError):
+        replaced(record, colour="red")

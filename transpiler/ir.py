@@ -78,6 +78,7 @@ class CallTarget:
         return (self.file, self.index)
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Bracket:
     """Static facts of a bracket: operator, mode (LOGIC/WORD) and whether it is a load bracket (A-04)."""

@@ -16,6 +16,7 @@ class's parameters that builds the same record as the class call, at about half 
 from __future__ import annotations
 
 import dataclasses
+import operator
 from typing import Callable, TypeVar
 
 T = TypeVar("T")
@@ -45,6 +46,8 @@ def quick_init(cls: type[T]) -> type[T]:
         stores.append("    self.__post_init__()")
     init = _compiled("__init__", ["self"] + params, stores, namespace)
     cls._quick_fields = tuple(f.name for f in fields)
+    cls._quick_values = _field_reader(cls._quick_fields)          # (for replaced)
+    cls._quick_position = {name: i for i, name in enumerate(cls._quick_fields)}
     init.__qualname__ = f"{cls.__qualname__}.__init__"
     init.__doc__ = cls.__init__.__doc__
     cls.__init__ = init
@@ -92,6 +95,13 @@ def _fields_only_class(cls: type) -> type:
     return type(f"{cls.__name__}Fields", (), {"__slots__": cls.__slots__})
 
 
+def _field_reader(names: tuple[str, ...]) -> Callable[[object], tuple]:
+    """A function that reads the fields `names` of a record into a tuple, in C when there are several."""
+    if len(names) > 1:
+        return operator.attrgetter(*names)
+    return lambda record: tuple(getattr(record, name) for name in names)    # (attrgetter gives one value bare)
+
+
 def _compiled(name: str, params: list[str], body: list[str], namespace: dict[str, object]) -> Callable:
     source = f"def {name}({', '.join(params)}):\n" + "\n".join(body or ["    pass"]) + "\n"
     exec(source, namespace)     # noqa: S102 - the text is built from the field names only
@@ -103,8 +113,10 @@ def replaced(record: T, **changes: object) -> T:
     fields up again (replace costs several times the constructor; the front end and the back ends use it for
     every patched jump, call and nested block)."""
     cls = type(record)
-    names = cls._quick_fields
-    for name in changes:
-        if name not in names:
+    values = list(cls._quick_values(record))
+    position = cls._quick_position
+    for name, value in changes.items():
+        if name not in position:
             raise TypeError(f"{cls.__name__} has no field {name}")
-    return cls(*[changes[name] if name in changes else getattr(record, name) for name in names])
+        values[position[name]] = value
+    return cls(*values)

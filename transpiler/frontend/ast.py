@@ -33,6 +33,7 @@ class Instr:
 new_instr = builder(Instr)      # Instr(...) for the parser's loop over the lines
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Label:
     name: str

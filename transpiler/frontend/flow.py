@@ -7,14 +7,11 @@ from itertools import chain
 from typing import Iterator, Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.frontend import ast
 from transpiler.frontend.lowering import FileLowering
-from transpiler.frontend.opcodes import STRUCT_ALL
 from transpiler.ir import CallTarget, FileCode, Op, Program
 
 LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
                              "E-FILE-NOT-FOUND", "E-FILE-ESCAPE", "E-FILE-READ", "E-FILE-INCLUDE-CYCLE"})
-_FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
 _BLOCK_ENDS = frozenset({"EM", "JP", "JPT", "JPF", "KFIELD"})
 
 
@@ -24,11 +21,7 @@ def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
     statements = low.src.statements
     if lost_lines and (low.src.path in lost_lines or any(stmt.span.file in lost_lines for stmt in statements)):
         return False
-    # (an op has the mnemonic of the statement it was lowered from: only the control statements' spans are
-    # looked up, instead of hashing the span of every op)
-    lowered = {op.span for op in low.ops if op.mnemonic in _FLOW_MNEMONICS}
-    return all(stmt.span in lowered for stmt in statements
-               if type(stmt) is ast.Instr and stmt.mnemonic in _FLOW_MNEMONICS)
+    return not low.flow_rejected
 
 
 def successors(ops: tuple[Op, ...], i: int) -> list[int]:

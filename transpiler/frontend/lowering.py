@@ -7,7 +7,7 @@ from typing import NamedTuple
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
 from transpiler.frontend.chain import ChainLowering
-from transpiler.frontend.opcodes import CONTROL, STRUCT_ALL
+from transpiler.frontend.opcodes import CONTROL, FLOW, STRUCT_ALL
 from transpiler.frontend.operands import OperandResolver, label_text
 from transpiler.frontend.structure import StructureMatcher
 from transpiler.frontend.symbols import SymTables
@@ -62,6 +62,7 @@ class FileLowering:
         # E-CASE-BODY faults inside the open table, reported at its ENDC: a table that is never closed reports
         # only "CASE without ENDC" (the missing ENDC is the root fault, not every line after it).
         self.case_faults: list[tuple[Span, str]] = []
+        self.flow_rejected = False      # a statement of FLOW gave no op (it was rejected with an error)
 
     def run(self) -> None:
         self._collect_kfields()
@@ -81,7 +82,10 @@ class FileLowering:
                                           rel=known.rel, nbits=known.nbits, chain_open=chain_open))
                         self.chain_open, self.last_acc = known.chain_open, known.last_acc
                         continue
+                count = len(ops)
                 self._instruction(stmt)
+                if len(ops) == count and stmt.mnemonic in FLOW:
+                    self.flow_rejected = True
             elif isinstance(stmt, ast.Global):
                 self.globals.append(stmt)
             elif isinstance(stmt, ast.Extern):
