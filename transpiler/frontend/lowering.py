@@ -102,8 +102,9 @@ class FileLowering:
 
     def _collect_kfields(self) -> None:
         """KFIELD tables are known to the whole file, before the statements are lowered in order."""
+        kfield_type = ast.KField
         for stmt in self.src.statements:
-            if type(stmt) is ast.KField:
+            if type(stmt) is kfield_type:
                 if stmt.name in self.kfields:
                     self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
                 self.kfields[stmt.name] = stmt.values
