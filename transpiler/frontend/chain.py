@@ -71,6 +71,7 @@ class ChainLowering:
         # collector runs, at the latest when the process exits, where it cost ~0.1 s on a 100 000-line project.)
         self._group_of: dict[str, Callable[[ChainLowering, _Step], Lowered | None]] = {}
         self._shapes: dict[tuple[str, str | None, bool, str], _Shape] = {}
+        self.modules_called: set[int] = set()      # the PLC modules of the call ops made (each op made is kept)
 
     def lower(self, instr: ast.Instr, operand: Operand | None, index: int, chain_open: bool, last_acc: str) -> Lowered:
         m = instr.mnemonic
@@ -219,6 +220,7 @@ class ChainLowering:
                 where = "in the module table" if number not in MODULES else f"a module of profile {profile}"
                 self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} is not {where} "
                                   f"(nearest known: {known}; see docs/modules.md)")
+            self.modules_called.add(number)
             return new_op(code, call=CallTarget(module=number), **base), False, "NONE"
         self.pending_calls.append((s.index, label_text(s.instr.operand), span))
         return new_op(code, **base), False, "NONE"

@@ -78,9 +78,9 @@ class FileLowering:
                     chain_open = self.chain_open
                     known = plain_lowered.get((stmt.mnemonic, stmt.operand, chain_open, self.last_acc))
                     if known is not None:
-                        ops.append(new_op(known.code, stmt.mnemonic, stmt.span, known.operand, stmt.comments,
-                                          rel=known.rel, nbits=known.nbits, chain_open=chain_open))
-                        self.chain_open, self.last_acc = known.chain_open, known.last_acc
+                        code, operand, rel, nbits, self.chain_open, self.last_acc = known
+                        ops.append(new_op(code, stmt.mnemonic, stmt.span, operand, stmt.comments, rel=rel,
+                                          nbits=nbits, chain_open=chain_open))
                         continue
                 count = len(ops)
                 self._instruction(stmt)

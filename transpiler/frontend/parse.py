@@ -275,9 +275,13 @@ class SrcParser(_CachedLineParser):
 
     def _name_slot(self, key: str) -> tuple[str, str] | None:
         last = _LAST_NAME.search(key)
-        if last is None or _OPERAND_LIKE.fullmatch(last.group(1)):
+        if last is None:
             return None
-        return key[:last.start(1)] + _PLACEHOLDER + key[last.end(1):], last.group(1)
+        name = last.group(1)
+        if _OPERAND_LIKE.fullmatch(name):
+            return None
+        start = last.start(1)
+        return key[:start] + _PLACEHOLDER + key[start + len(name):], name
 
     def _renamed(self, shape: tuple, name: str) -> tuple | None:
         return ("ok", _with_name(shape[1], name)) if shape[0] == "ok" else None

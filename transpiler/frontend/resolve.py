@@ -43,7 +43,7 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics,
     check_module_starts(files, lowerings, diags)
     routines, depth = call_graph(files, semantics, diags, bodies)
     masks = resolve_masks(project.masks, symbols, semantics, diags)
-    modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
+    modules = sorted(set().union(*(low.chain.modules_called for low in lowerings)))
     return Program(files, symbols.all_symbols(), semantics, routines, depth, tuple(modules), project.files_read,
                    dict(project.defines), project.inactive, tuple(auto), project.line_count, project.config_file,
                    tuple(sorted(overrides.items())), masks, routine_bodies=bodies.worked_out())
