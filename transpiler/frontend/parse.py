@@ -312,12 +312,12 @@ class SrcParser(_CachedLineParser):
         trailing_comments: list[str] = []
         kfield: _PendingKField | None = None
         broken_labels: list[str] = []
-        accepted = self._accepted
+        accepted, new_instr = self._accepted, ast.new_instr
         for code, span, comments in _code_lines(lines, trailing_comments):
             if kfield is None:
                 known = accepted.get(code) or self._accepted_by_shape(code)
                 if known is not None:       # an instruction line (or its shape) met before, accepted without a diagnostic
-                    statements.append(ast.new_instr(known[0], known[1], span, comments))
+                    statements.append(new_instr(known[0], known[1], span, comments))
                     continue
             status, result = self.parse_line(code)
             if status == "range":
