@@ -189,7 +189,8 @@ def test_console_script_ends_one_shot_commands_with_all_their_output(tmp_path, c
         assert (proc.returncode, proc.stdout.replace("out-process", "out-main"), proc.stderr) == \
             _run(in_process, capsys), argv
     written = sorted(p.relative_to(tmp_path / "out-process") for p in (tmp_path / "out-process").rglob("*"))
-    assert written and written == sorted(p.relative_to(tmp_path / "out-main") for p in (tmp_path / "out-main").rglob("*"))
+    in_main = sorted(p.relative_to(tmp_path / "out-main") for p in (tmp_path / "out-main").rglob("*"))
+    assert written and written == in_main
     for name in written:
         if (tmp_path / "out-main" / name).is_file():
             assert (tmp_path / "out-process" / name).read_bytes() == (tmp_path / "out-main" / name).read_bytes()

@@ -88,7 +88,7 @@ def _parameters(cls: type, fields: tuple[dataclasses.Field, ...]) -> tuple[list[
 
 
 def _fields_only_class(cls: type) -> type:
-    """A plain class with the slots of the slotted record `cls`, whose layout the record's class may be switched from."""
+    """A plain class with the slots of the slotted record `cls`: the record's class may be switched from it."""
     if cls.__bases__ != (object,) or "__weakref__" in cls.__slots__:
         raise TypeError(f"{cls.__name__}: quick_init takes a slotted record only without a base class and "
                         "without weakref_slot")
@@ -103,6 +103,7 @@ def _field_reader(names: tuple[str, ...]) -> Callable[[object], tuple]:
 
 
 def _compiled(name: str, params: list[str], body: list[str], namespace: dict[str, object]) -> Callable:
+    """The function `name` with these parameters and body lines, its global names looked up in `namespace`."""
     source = f"def {name}({', '.join(params)}):\n" + "\n".join(body or ["    pass"]) + "\n"
     exec(source, namespace)     # noqa: S102 - the text is built from the field names only
     return namespace[name]

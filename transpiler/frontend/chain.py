@@ -262,7 +262,8 @@ class ChainLowering:
                 and self.semantics["bracket_at_chain_start"] == "load")
         brackets.append(BracketFrame(op, mode, load, index, span))
         new_chain = False if (mode == "LOGIC" or op in COMPARES) else chain_open
-        return new_op("BOPEN", bracket=Bracket(op, mode, load), rel=op if op in COMPARES else "", **base), new_chain, mode
+        return (new_op("BOPEN", bracket=Bracket(op, mode, load), rel=op if op in COMPARES else "", **base), new_chain,
+                mode)
 
     def _close_bracket(self, base: dict, chain_open: bool, last_acc: str) -> Lowered:
         if not self.brackets:

@@ -125,7 +125,8 @@ class FileLowering:
             if self.kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
                 self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
                                  f"KFIELD at line {self.kfield_lines[stmt.name]}")
-        self.ops.append(new_op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=self.chain_open))
+        self.ops.append(new_op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name,
+                               chain_open=self.chain_open))
         self.chain_open, self.last_acc = False, "NONE"
 
     def _kfield(self, stmt: ast.KField) -> None:
