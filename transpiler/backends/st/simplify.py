@@ -158,6 +158,30 @@ def _overwritten(block: Block, reg: str, registers: frozenset[str], start: int =
 
 
 def _without_dead_stores(block: Block, registers: frozenset[str]) -> Block:
-    dead = {i for i, stmt in enumerate(block)
-            if (reg := _register_store(stmt, registers)) is not None and _overwritten(block, reg, registers, i + 1)}
+    # Only a later store can overwrite a register: a store with none after it (nested ones included) is kept
+    # without looking at what the statements after it read (most stores of an error marker have none).
+    dead = set()
+    stored_later: set[str] = set()
+    for i in range(len(block) - 1, -1, -1):
+        stmt = block[i]
+        reg = _register_store(stmt, registers)
+        if reg is not None and reg in stored_later and _overwritten(block, reg, registers, i + 1):
+            dead.add(i)
+        stored_later |= _registers_stored(stmt, registers)
     return tuple(s for i, s in enumerate(block) if i not in dead) if dead else block
+
+
+def _registers_stored(stmt: S.Stmt, registers: frozenset[str]) -> set[str] | frozenset[str]:
+    """The registers `stmt` assigns anywhere (nested statements included, notes or not): a superset of the stores
+    _overwritten can find in it."""
+    if type(stmt) is S.Assign:
+        name = E.unqualified(stmt.target).upper()
+        return frozenset((name,)) if name in registers else _NONE
+    if type(stmt) not in _NESTING:
+        return _NONE
+    return {name for s in S.walk((stmt,)) if type(s) is S.Assign
+            and (name := E.unqualified(s.target).upper()) in registers}
+
+
+_NONE: frozenset[str] = frozenset()
+_NESTING = (S.If, S.Case, S.While, S.Repeat)
