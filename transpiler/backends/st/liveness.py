@@ -95,21 +95,22 @@ class Liveness:
         self.entry_use: dict[tuple[int, int], int] = dict.fromkeys(self.bodies, 0)
         self.exit_live: dict[tuple[int, int], int] = dict.fromkeys(self.bodies, 0)
         self.live_in: dict[tuple[int, int], dict[int, int]] = {}
-        self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
         self.fall_into = self._fall_throughs(roots)
         self._use_def: dict[object, tuple[int, int]] = {}
         self._forward: set[tuple[int, int]] = set()     # routines without a backward jump (see _routine)
+        # The ops of each routine that call routines, in order, with their callees (a few of its steps; _steps
+        # fills it in).
+        self.calls: dict[tuple[int, int], list[tuple[int, tuple[tuple[int, int], ...]]]] = {}
         self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
-        # The ops of each routine that call routines, in order, with their callees (a few of its steps).
-        self.calls = {key: [(i, callees) for i, _, _, _, callees, _ in reversed(steps) if callees]
-                      for key, steps in self.steps.items()}
         self._solve()
 
     def _steps(self, key: tuple[int, int], body: list[int]) -> list[tuple]:
         """What the data-flow rounds read of each op of a body, last op first, worked out once instead of in every
-        round: (index, use, def, successors, entry keys of the routines it calls, whether it ends the routine)."""
+        round: (index, use, def, successors or None when only the next op follows, entry keys of the routines it
+        calls, whether it ends the routine)."""
         ops = self.program.files[key[0]].ops
         out = []
+        calls = []
         forward = True
         for i in reversed(body):
             op = ops[i]
@@ -129,13 +130,18 @@ class Liveness:
             use, d = known
             # (successors and routines_entered, for the ops that neither jump nor call: most of them)
             if code not in _BRANCHES:
-                out.append((i, use, d, (i + 1,), (), code in _ENDS))
+                out.append((i, use, d, None, (), code in _ENDS))
                 continue
             succ = successors(ops, i)
             forward = forward and all(s > i for s in succ)
-            out.append((i, use, d, succ, tuple(c.key for c in routines_entered(op)), code in _ENDS))
+            callees = tuple(c.key for c in routines_entered(op))
+            if callees:
+                calls.append((i, callees))
+            out.append((i, use, d, succ, callees, code in _ENDS))
         if forward:
             self._forward.add(key)
+        calls.reverse()
+        self.calls[key] = calls
         return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
@@ -192,8 +198,11 @@ class Liveness:
             for i, use, d, succ, callees, ends in steps:
                 # use | callees' entry sets | (successors' sets - d)
                 out = exit_live if ends else 0
-                for s in succ:
-                    out |= live.get(s, 0)
+                if succ is None:
+                    out |= live.get(i + 1, 0)
+                else:
+                    for s in succ:
+                        out |= live.get(s, 0)
                 value = out & ~d | use
                 for callee in callees:
                     value |= entry_use.get(callee, 0)
