@@ -12,6 +12,7 @@ from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
                          Task, VarSection)
 from transpiler.ir import CallTarget, DataRow, Operand, Program
+from transpiler.records import replaced
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.flow import RoutineBodies
 from transpiler.backends.st import exprs as E
@@ -739,4 +740,4 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)
                       for area, vars_ in sorted(by_area.items(), key=lambda item: area_order[item[0]]))
-    return dataclasses.replace(pou, sections=pou.sections + externals)
+    return replaced(pou, sections=pou.sections + externals)

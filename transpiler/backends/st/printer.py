@@ -6,10 +6,10 @@ already (exprs.py prints them). The body is unindented: the writers indent it in
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Iterable
 
 from transpiler.backends.iec_model import Pou, st_comment
+from transpiler.records import replaced
 from transpiler.backends.st.stmt import (SIMPLE, Assign, Call, Case, CaseBranch, Comment, Exit, If, Repeat, Return,
                                         Stmt, While)
 
@@ -24,7 +24,7 @@ def body_text(block: Iterable[Stmt]) -> str:
 def with_statements(pou: Pou, block: Iterable[Stmt]) -> Pou:
     """`pou` with `block` as its statement tree and the body printed from it."""
     statements = tuple(block)
-    return dataclasses.replace(pou, statements=statements, body=body_text(statements))
+    return replaced(pou, statements=statements, body=body_text(statements))
 
 
 def lines(block: Iterable[Stmt], depth: int = 0) -> list[str]:
