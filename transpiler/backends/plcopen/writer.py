@@ -162,19 +162,24 @@ def _value(parent: Element, tag: str, literal: str, **attributes: str) -> None:
 
 
 def _type_ref(parent: Element, tag: str, type_name: str) -> None:
-    holder = _sub(parent, tag)
+    parent.children.append(_type_element(tag, type_name))
+
+
+def _type_element(tag: str, type_name: str) -> Element:
+    holder = Element(tag)
     elementary = _ELEMENTARY.get(type_name.upper())
     if elementary is not None:
-        _sub(holder, elementary)
+        holder.sub(elementary)
     else:
         _sub(holder, "derived", name=type_name)
+    return holder
 
 
 class _Shared:
     """The elements of one project tree that stand in many places, each built once and placed under every parent
     that holds it (xmltree prints a shared element once per indent): a global is declared again in the
-    externalVars of every POU that uses it (a large project: 22,000 declarations of 3,800 variables), and those
-    lists carry one of a few titles."""
+    externalVars of every POU that uses it (a large project: 22,000 declarations of 3,800 variables), those
+    lists carry one of a few titles, and the variables' types are a few dozen."""
 
     def __init__(self) -> None:
         self._variables: dict[IecVar, Element] = {}
@@ -182,15 +187,24 @@ class _Shared:
         # hashing the record's fields; the record is kept with its element, so that its id stays its own)
         self._by_identity: dict[int, tuple[IecVar, Element]] = {}
         self._titles: dict[str, Element] = {}
+        self._types: dict[str, Element] = {}
 
     def variable(self, parent: Element, var: IecVar) -> None:
         known = self._by_identity.get(id(var))
         if known is None:
             element = self._variables.get(var)
             if element is None:
-                element = self._variables[var] = _variable(var)
+                element = self._variables[var] = _variable(var, self)
             known = self._by_identity[id(var)] = (var, element)
         parent.children.append(known[1])
+
+    def variable_type(self, parent: Element, type_name: str) -> None:
+        """As _type_ref of a variable's `type`."""
+        element = self._types.get(type_name)
+        if element is None:
+            element = self._types[type_name] = _type_element("type", type_name)
+            element.share()
+        parent.children.append(element)
 
     def documentation(self, parent: Element, text: str | None) -> None:
         """As _documentation."""
@@ -203,13 +217,13 @@ class _Shared:
         parent.children.append(element)
 
 
-def _variable(var: IecVar) -> Element:
+def _variable(var: IecVar, shared: _Shared) -> Element:
     attributes = {"name": var.name}
     if var.address:
         attributes["address"] = var.address
     element = _element("variable", **attributes)
     element.share()
-    _type_ref(element, "type", var.type)
+    shared.variable_type(element, var.type)
     if var.initial is not None:
         _value(element, "initialValue", var.initial)
     _documentation(element, var.comment)
