@@ -172,6 +172,8 @@ class StBackend:
     def _stack_depth_read(self) -> None:
         """A program that reads the data-stack depth (PLC module 9019) keeps every subprogram's stack in the emulated
         stack: with parameters in VAR_INPUTs no stack pointer would hold the depth the control reports."""
+        if modcalls.STACK_DEPTH not in self.program.modules_used:
+            return      # (the program's list of the modules it calls: no pass over every op)
         reads = [op for f in self.program.files for op in f.ops
                  if op.call is not None and op.call.is_module and op.call.module == modcalls.STACK_DEPTH]
         if not reads:
