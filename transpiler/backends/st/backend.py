@@ -301,7 +301,7 @@ class StBackend:
         is_main = key == (0, 0)
         entry = CallTarget(0, 0, "<main>") if is_main else file_entries[key[1]]
         file = program.files[key[0]]
-        body = self.bodies(entry)
+        body = self.bodies(entry)       # (in op order)
         temps: list[tuple[str, str]] = []
 
         def scratch(name: str) -> bool:
@@ -372,7 +372,7 @@ class StBackend:
         self.current_key = key
         structured = True
         try:
-            Structurer(info, executor()).region(min(body) if body else 0, (max(body) + 1) if body else 0)
+            Structurer(info, executor()).region(body[0] if body else 0, (body[-1] + 1) if body else 0)
         except NotStructured as exc:
             structured = False
             self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
@@ -419,8 +419,8 @@ class StBackend:
                     IecVar(n, SLOT_TYPES[k], comment="pulled by the caller (PL)") for n, (_, k) in zip(results, iface.results))))
         if local:
             sections.append(VarSection("VAR", tuple(local)))
-        first = file.ops[min(body)].span.line if body else 1
-        last = file.ops[max(body)].span.line if body else 1
+        first = file.ops[body[0]].span.line if body else 1
+        last = file.ops[body[-1]].span.line if body else 1
         label = "main program" if is_main else f"LBL {entry.label}"
         comment = f"{label} of {file.path}" + ("" if structured else " (irreducible jumps: state machine)")
         comments = list(file.ops[entry.index].comments) if body and not is_main else []
