@@ -23,6 +23,7 @@ from typing import Callable, Mapping
 from transpiler.diagnostics import Span
 from transpiler.ir import CallTarget, FileCode, Op, Program
 from transpiler.frontend.flow import RoutineBodies
+from transpiler.records import quick_init
 
 BIT, VAL = "bit", "val"
 WORDS = MappingProxyType({BIT: 1, VAL: 2})
@@ -38,6 +39,7 @@ _ENDS = frozenset({"EM", "EMT", "EMF"})
 _ENTERING = frozenset({"CALLT", "CALLF", "CASE", *_JOBS})
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Effect:
     """Static stack effect: parameter kinds (p0 = top of the caller's stack first) and result kinds (bottom first)."""
@@ -51,6 +53,7 @@ class Effect:
         return not self.params and not self.results
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class StackInterface:
     """The VAR_INPUT / VAR_OUTPUT of a routine: (name, kind), parameters in the caller's push order, results in
