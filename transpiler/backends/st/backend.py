@@ -435,7 +435,10 @@ class StBackend:
         overwritten = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
         overwritten |= frozenset(n for n in markers if n is not None)
         statements = simplify.simplify(statements, overwritten)
-        return passes.propagate_temporaries(printer.with_statements(pou, statements))
+        pou = printer.with_statements(pou, statements)
+        if not any(name.startswith(TEMP_PREFIX) for name, _ in temps):
+            return pou      # (no temporary to propagate: every name temp() gives starts so)
+        return passes.propagate_temporaries(pou)
 
     def _file_jumps(self, index: int) -> list[int]:
         """The indices of the jumps with a target in file `index`, in order (worked out once per file: every
@@ -659,8 +662,10 @@ class StBackend:
 def _at_most_one_line_of_code(statements: list[S.Stmt]) -> bool:
     """Every statement but the last is a comment (one that names no RETURN), and the last prints as one line."""
     *before, last = statements
-    return all(isinstance(s, S.Comment) and "RETURN" not in s.text + (s.note or "") for s in before) \
-        and printer.one_line(last)
+    for s in before:        # (most bodies: a comment or two, then code)
+        if type(s) is not S.Comment or "RETURN" in s.text + (s.note or ""):
+            return False
+    return printer.one_line(last)
 
 
 def _service_name(start: E.Expr, what: str, fallback: str) -> str:
