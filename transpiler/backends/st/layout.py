@@ -127,7 +127,10 @@ class Layout:
                     if o.indexed:
                         bit_indexed.add(o.kind)
                     n = op.nbits or 1
-                    bits[o.kind].update(range(o.addr, o.addr + n))
+                    if n == 1:      # (most bit ops: one bit)
+                        bits[o.kind].add(o.addr)
+                    else:
+                        bits[o.kind].update(range(o.addr, o.addr + n))
                     if o.kind == "T":
                         for a in range(o.addr, o.addr + n):
                             if prof.timer_start[0] <= a <= prof.timer_start[1]:
