@@ -73,7 +73,7 @@ def _sub(parent: Element, tag: str, **attributes: str) -> Element:
 
 def _formatted(tag: str, text: str) -> Element:
     """A formattedText element: exactly one xhtml:p holding the escaped text."""
-    element = _element(tag)
+    element = Element(tag)
     element.sub("xhtml:p").text = xml_safe(text)
     return element
 
