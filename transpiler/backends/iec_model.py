@@ -12,6 +12,7 @@ PouKind = Literal["PROGRAM", "FUNCTION_BLOCK", "FUNCTION"]
 SectionKind = Literal["VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR_TEMP"]
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class SourceRange:
     """A range of lines in an original HEIDENHAIN file (for source maps and `file:line` tags)."""

@@ -73,7 +73,7 @@ def _sub(parent: Element, tag: str, **attributes: str) -> Element:
 
 def _formatted(tag: str, text: str) -> Element:
     """A formattedText element: exactly one xhtml:p holding the escaped text."""
-    element = _element(tag)
+    element = Element(tag)
     element.sub("xhtml:p").text = xml_safe(text)
     return element
 
@@ -162,28 +162,48 @@ def _value(parent: Element, tag: str, literal: str, **attributes: str) -> None:
 
 
 def _type_ref(parent: Element, tag: str, type_name: str) -> None:
-    holder = _sub(parent, tag)
+    parent.children.append(_type_element(tag, type_name))
+
+
+def _type_element(tag: str, type_name: str) -> Element:
+    holder = Element(tag)
     elementary = _ELEMENTARY.get(type_name.upper())
     if elementary is not None:
-        _sub(holder, elementary)
+        holder.sub(elementary)
     else:
         _sub(holder, "derived", name=type_name)
+    return holder
 
 
 class _Shared:
     """The elements of one project tree that stand in many places, each built once and placed under every parent
     that holds it (xmltree prints a shared element once per indent): a global is declared again in the
-    externalVars of every POU that uses it (a large project: 22,000 declarations of 3,800 variables), and those
-    lists carry one of a few titles."""
+    externalVars of every POU that uses it (a large project: 22,000 declarations of 3,800 variables), those
+    lists carry one of a few titles, and the variables' types are a few dozen."""
 
     def __init__(self) -> None:
         self._variables: dict[IecVar, Element] = {}
+        # (the back end gives a global one declaration record for all its places: found by identity first, without
+        # hashing the record's fields; the record is kept with its element, so that its id stays its own)
+        self._by_identity: dict[int, tuple[IecVar, Element]] = {}
         self._titles: dict[str, Element] = {}
+        self._types: dict[str, Element] = {}
 
     def variable(self, parent: Element, var: IecVar) -> None:
-        element = self._variables.get(var)
+        known = self._by_identity.get(id(var))
+        if known is None:
+            element = self._variables.get(var)
+            if element is None:
+                element = self._variables[var] = _variable(var, self)
+            known = self._by_identity[id(var)] = (var, element)
+        parent.children.append(known[1])
+
+    def variable_type(self, parent: Element, type_name: str) -> None:
+        """As _type_ref of a variable's `type`."""
+        element = self._types.get(type_name)
         if element is None:
-            element = self._variables[var] = _variable(var)
+            element = self._types[type_name] = _type_element("type", type_name)
+            element.share()
         parent.children.append(element)
 
     def documentation(self, parent: Element, text: str | None) -> None:
@@ -197,13 +217,13 @@ class _Shared:
         parent.children.append(element)
 
 
-def _variable(var: IecVar) -> Element:
+def _variable(var: IecVar, shared: _Shared) -> Element:
     attributes = {"name": var.name}
     if var.address:
         attributes["address"] = var.address
     element = _element("variable", **attributes)
     element.share()
-    _type_ref(element, "type", var.type)
+    shared.variable_type(element, var.type)
     if var.initial is not None:
         _value(element, "initialValue", var.initial)
     _documentation(element, var.comment)
@@ -211,12 +231,8 @@ def _variable(var: IecVar) -> Element:
 
 
 def _var_list(parent: Element, section: VarSection, shared: _Shared, tag: str | None = None) -> None:
-    attributes = {}
-    if section.constant:
-        attributes["constant"] = "true"
-    if section.retain:
-        attributes["retain"] = "true"
-    element = _sub(parent, tag or _SECTION_ELEMENT[section.kind], **attributes)
+    attributes = [(name, "true") for name, on in (("constant", section.constant), ("retain", section.retain)) if on]
+    element = parent.sub(tag or _SECTION_ELEMENT[section.kind], attribute_text(attributes) if attributes else "")
     for var in section.vars:
         shared.variable(element, var)
     shared.documentation(element, section.comment)
@@ -237,11 +253,16 @@ def _data_type(parent: Element, data_type: DataType, shared: _Shared) -> None:
     _documentation(element, data_type.comment)
 
 
+# (the attributes every source map has, printed once)
+_SOURCEMAP_DATA_ATTRIBUTES = attribute_text((("name", SOURCEMAP_DATA_NAME), ("handleUnknown", "discard")))
+_SOURCEMAP_ATTRIBUTES = attribute_text((("xmlns:hh", SOURCEMAP_NS),))
+
+
 def _source_map(parent: Element, pou: Pou) -> None:
     if not pou.source_map:
         return
-    data = _sub(_sub(parent, "addData"), "data", name=SOURCEMAP_DATA_NAME, handleUnknown="discard")
-    source_map = data.sub("hh:sourceMap", attribute_text((("xmlns:hh", SOURCEMAP_NS),)))
+    data = parent.sub("addData").sub("data", _SOURCEMAP_DATA_ATTRIBUTES)
+    source_map = data.sub("hh:sourceMap", _SOURCEMAP_ATTRIBUTES)
     for source_range in pou.source_map:
         source_map.sub("hh:range", attribute_text((("file", xml_safe(source_range.file)),
                                                    ("first", str(source_range.first_line)),
@@ -250,12 +271,12 @@ def _source_map(parent: Element, pou: Pou) -> None:
 
 def _pou(parent: Element, pou: Pou, shared: _Shared) -> None:
     element = _sub(parent, "pou", name=pou.name, pouType=_POU_TYPE[pou.kind])
-    interface = _sub(element, "interface")
+    interface = element.sub("interface")
     if pou.return_type:
         _type_ref(interface, "returnType", pou.return_type)
     for section in pou.sections:
         _var_list(interface, section, shared)
-    _formatted_text(_sub(element, "body"), "ST", pou.body)
+    _formatted_text(element.sub("body"), "ST", pou.body)
     _source_map(element, pou)
     _documentation(element, pou.comment)
 

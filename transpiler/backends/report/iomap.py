@@ -8,6 +8,8 @@ import io
 import re
 from typing import Callable, Iterable, Protocol
 
+from transpiler.records import quick_init
+
 BYTES = {"SINT": 1, "INT": 2, "DINT": 4}
 
 
@@ -16,6 +18,7 @@ class StRuntime(Protocol):
     def set(self, path: str, value) -> None: ...
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class MapRow:
     symbol: str

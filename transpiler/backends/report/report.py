@@ -64,8 +64,11 @@ def user_pous(result: StResult) -> list[Pou]:
     return [p for p in result.project.pous if p.name in names]
 
 
-def _target_limits(program: Program) -> list[str]:
-    """What the vendor-neutral ST cannot hold the way the control does, as far as this program needs it."""
+def _target_limits(program: Program, codes: set[str]) -> list[str]:
+    """What the vendor-neutral ST cannot hold the way the control does, as far as this program needs it (`codes`:
+    the op codes of the program)."""
+    if not codes & SA_CODES:
+        return []       # (no string op: no pass over every op to find where)
     string_lines = [f"{f.path}:{op.span.line}" for f in program.files for op in f.ops if op.code in SA_CODES]
     if not string_lines:
         return []
@@ -184,7 +187,8 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, iomap:
     lines += ["", "## Assumptions applied", "", "| id | setting | value | default |", "|---|---|---|---|"]
     for aid, key, value, is_default in program.semantics.describe():
         lines.append(f"| {aid} | {key} | {value} | {'yes' if is_default else '**no**'} |")
-    lines += ["", "## Target limits", ""] + ((limits := _target_limits(program)) or ["none"])
+    codes = {op.code for f in program.files for op in f.ops}
+    lines += ["", "## Target limits", ""] + ((limits := _target_limits(program, codes)) or ["none"])
     lines += ["", "## Auto-assigned operands", ""]
     lines += [f"- `{s.name}` -> {s.operand_text}" for s in program.auto_assigned] or ["none"]
     lines += _names(program, result)
@@ -194,7 +198,7 @@ def render_report(program: Program, result: StResult, diags: Diagnostics, iomap:
     lines += [f"- {r.file}:{r.first_line}-{r.last_line} (`{r.condition}`)" for r in program.inactive_regions] or ["none"]
     lines += ["", "## Warnings", ""]
     lines += [f"- {d.render()}" for d in diags.warnings] or ["none"]
-    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file, bool(limits))
+    lines += ["", "## Next steps", ""] + _next_steps(program, result, mp_file, bool(limits), codes)
     return "\n".join(lines) + "\n"
 
 
@@ -225,15 +229,15 @@ def _data_tables(result: StResult) -> list[str]:
     return lines
 
 
-def _next_steps(program: Program, result: StResult, mp_file: str | None, limited: bool) -> list[str]:
+def _next_steps(program: Program, result: StResult, mp_file: str | None, limited: bool, codes: set[str]
+                ) -> list[str]:
     """What a porting engineer does with this output: wire the I/O, provide the NC interface and the PLC task,
     confirm the assumptions the program depends on, and what is still open (`limited`: the program meets a
-    target limit)."""
+    target limit; `codes`: the op codes of the program)."""
     rows = result.layout.rows
     inputs = sum(1 for r in rows if r.operand[0] == "I")
     outputs = sum(1 for r in rows if r.operand[0] == "O")
     nc = [r for r in rows if r.direction in ("nc_to_plc", "plc_to_nc")]
-    codes = {op.code for f in program.files for op in f.ops}
     used = {"timers": bool(result.timers), "counters": bool(result.counters), "CASE": "CASE" in codes,
             "arithmetic": bool(codes & {"ADD", "SUB", "MUL", "DIV", "MOD"}),
             "word loads and stores": bool(codes & {"WLD", "WST"})}

@@ -12,6 +12,7 @@ from transpiler.diagnostics import Diagnostics, Span
 from transpiler.backends.iec_model import (ArrayDim, Configuration, DataType, IecProject, IecVar, Pou, ProgramInstance, SourceRange,
                          Task, VarSection)
 from transpiler.ir import CallTarget, DataRow, Operand, Program
+from transpiler.records import replaced
 from transpiler.language.presets import COUNTER_MP, TIMER_MP, load_presets
 from transpiler.frontend.flow import RoutineBodies
 from transpiler.backends.st import exprs as E
@@ -171,6 +172,8 @@ class StBackend:
     def _stack_depth_read(self) -> None:
         """A program that reads the data-stack depth (PLC module 9019) keeps every subprogram's stack in the emulated
         stack: with parameters in VAR_INPUTs no stack pointer would hold the depth the control reports."""
+        if modcalls.STACK_DEPTH not in self.program.modules_used:
+            return      # (the program's list of the modules it calls: no pass over every op)
         reads = [op for f in self.program.files for op in f.ops
                  if op.call is not None and op.call.is_module and op.call.module == modcalls.STACK_DEPTH]
         if not reads:
@@ -298,7 +301,7 @@ class StBackend:
         is_main = key == (0, 0)
         entry = CallTarget(0, 0, "<main>") if is_main else file_entries[key[1]]
         file = program.files[key[0]]
-        body = self.bodies(entry)
+        body = self.bodies(entry)       # (in op order)
         temps: list[tuple[str, str]] = []
 
         def scratch(name: str) -> bool:
@@ -369,7 +372,7 @@ class StBackend:
         self.current_key = key
         structured = True
         try:
-            Structurer(info, executor()).region(min(body) if body else 0, (max(body) + 1) if body else 0)
+            Structurer(info, executor()).region(body[0] if body else 0, (body[-1] + 1) if body else 0)
         except NotStructured as exc:
             structured = False
             self.fallbacks.append(Fallback(pou_name, exc.reason, file.ops[exc.index].span))
@@ -416,8 +419,8 @@ class StBackend:
                     IecVar(n, SLOT_TYPES[k], comment="pulled by the caller (PL)") for n, (_, k) in zip(results, iface.results))))
         if local:
             sections.append(VarSection("VAR", tuple(local)))
-        first = file.ops[min(body)].span.line if body else 1
-        last = file.ops[max(body)].span.line if body else 1
+        first = file.ops[body[0]].span.line if body else 1
+        last = file.ops[body[-1]].span.line if body else 1
         label = "main program" if is_main else f"LBL {entry.label}"
         comment = f"{label} of {file.path}" + ("" if structured else " (irreducible jumps: state machine)")
         comments = list(file.ops[entry.index].comments) if body and not is_main else []
@@ -432,7 +435,10 @@ class StBackend:
         overwritten = frozenset(n for r in REG_TYPES if (n := self.names.get(f"reg:{r}")) is not None)
         overwritten |= frozenset(n for n in markers if n is not None)
         statements = simplify.simplify(statements, overwritten)
-        return passes.propagate_temporaries(printer.with_statements(pou, statements))
+        pou = printer.with_statements(pou, statements)
+        if not any(name.startswith(TEMP_PREFIX) for name, _ in temps):
+            return pou      # (no temporary to propagate: every name temp() gives starts so)
+        return passes.propagate_temporaries(pou)
 
     def _file_jumps(self, index: int) -> list[int]:
         """The indices of the jumps with a target in file `index`, in order (worked out once per file: every
@@ -656,8 +662,10 @@ class StBackend:
 def _at_most_one_line_of_code(statements: list[S.Stmt]) -> bool:
     """Every statement but the last is a comment (one that names no RETURN), and the last prints as one line."""
     *before, last = statements
-    return all(isinstance(s, S.Comment) and "RETURN" not in s.text + (s.note or "") for s in before) \
-        and printer.one_line(last)
+    for s in before:        # (most bodies: a comment or two, then code)
+        if type(s) is not S.Comment or "RETURN" in s.text + (s.note or ""):
+            return False
+    return printer.one_line(last)
 
 
 def _service_name(start: E.Expr, what: str, fallback: str) -> str:
@@ -739,4 +747,4 @@ def _with_externals(pou: Pou, globals_by_upper: Mapping[str, tuple[IecVar, str |
         return pou
     externals = tuple(VarSection("VAR_EXTERNAL", tuple(vars_), comment=area)
                       for area, vars_ in sorted(by_area.items(), key=lambda item: area_order[item[0]]))
-    return dataclasses.replace(pou, sections=pou.sections + externals)
+    return replaced(pou, sections=pou.sections + externals)

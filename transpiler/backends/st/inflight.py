@@ -86,7 +86,12 @@ class InFlightMixin(ExecutorPart):
     def store(self, target: Callable[[], Expr], value: Callable[[], Expr], keep: frozenset[str]) -> Expr:
         """Emit `target := value`; both are built after in-flight values that read the target were saved."""
         t = target()
-        deferred = self.prepare_write(E.written_name(t), keep)
+        written = E.written_name(t)
+        if not self._dependents(written):
+            # (most stores: no value in flight reads the target, nothing is saved, the target stays as built)
+            self.ctx.out.add(S.Assign(t.text, value()))
+            return t
+        deferred = self.prepare_write(written, keep)
         t = target()
         v = value()
         self.ctx.out.add(S.Assign(t.text, v))

@@ -23,6 +23,7 @@ from typing import Callable, Mapping
 from transpiler.diagnostics import Span
 from transpiler.ir import CallTarget, FileCode, Op, Program
 from transpiler.frontend.flow import RoutineBodies
+from transpiler.records import quick_init
 
 BIT, VAL = "bit", "val"
 WORDS = MappingProxyType({BIT: 1, VAL: 2})
@@ -38,6 +39,7 @@ _ENDS = frozenset({"EM", "EMT", "EMF"})
 _ENTERING = frozenset({"CALLT", "CALLF", "CASE", *_JOBS})
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class Effect:
     """Static stack effect: parameter kinds (p0 = top of the caller's stack first) and result kinds (bottom first)."""
@@ -51,6 +53,7 @@ class Effect:
         return not self.params and not self.results
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class StackInterface:
     """The VAR_INPUT / VAR_OUTPUT of a routine: (name, kind), parameters in the caller's push order, results in
@@ -116,7 +119,9 @@ class StackAnalysis:
         for r in program.routines:
             self._by_file.setdefault(r.file, {})[r.index] = r
         self.interfaces: dict[tuple[int, int], StackInterface] = {}
-        self._stack_ops: dict[int, list[int]] = {}     # file -> indices of its ops in _STACK_CODES, in order
+        # file -> indices of its ops in _STACK_CODES, and of those that may enter a routine other than by CM or
+        # start one, in order (see _scan)
+        self._scanned: dict[int, tuple[list[int], list[int]]] = {}
         self._starts: dict[int, list[int]] = {}        # file -> indices of its routine entries, in order
         self._run()
 
@@ -142,7 +147,10 @@ class StackAnalysis:
             u = len(effect.params)
             # (most ops of a routine share one state: each distinct one is worked out once)
             kinds = {s: tuple(self._kind(walk, x) for x in _lift(s, u)) for s in set(walk.states.values())}
-            stack_at = dict(zip(walk.states, map(kinds.__getitem__, walk.states.values())))
+            if len(kinds) == 1:     # (most routines: one state at every op)
+                stack_at = dict.fromkeys(walk.states, *kinds.values())
+            else:
+                stack_at = dict(zip(walk.states, map(kinds.__getitem__, walk.states.values())))
             self.interfaces[key] = StackInterface(
                 tuple(zip(self._param_names(key, u), reversed(effect.params))),
                 tuple(zip(self._result_names(key, effect), effect.results)), MappingProxyType(stack_at))
@@ -164,16 +172,12 @@ class StackAnalysis:
 
         # Per file, the ops that may enter a routine other than by CM, in order: each routine looks only at those
         # of its body (the bodies cover every op; most ops are none of these).
-        entering: dict[int, list[int]] = {}
         for key, entry in self._entries.items():
             file = self.program.files[entry.file]
-            if entry.file not in entering:
-                starts = self._by_file.get(entry.file, {})
-                entering[entry.file] = [i for i, op in enumerate(file.ops) if op.code in _ENTERING or i in starts]
             body = self.bodies(entry)
             if not body:
                 continue
-            candidates = entering[entry.file]
+            candidates = self._scan(entry.file)[1]
             inside = set(body)
             for i in candidates[bisect.bisect_left(candidates, body[0]):bisect.bisect_right(candidates, body[-1])]:
                 if i not in inside:
@@ -280,10 +284,7 @@ class StackAnalysis:
         if not ordered:
             return True
         lo, hi = ordered[0], ordered[-1]
-        stack_ops = self._stack_ops.get(entry.file)
-        if stack_ops is None:
-            ops = self.program.files[entry.file].ops
-            stack_ops = self._stack_ops[entry.file] = [i for i, op in enumerate(ops) if op.code in _STACK_CODES]
+        stack_ops = self._scan(entry.file)[0]
         if any(i in body for i in stack_ops[bisect.bisect_left(stack_ops, lo):bisect.bisect_right(stack_ops, hi)]):
             return False
         if key == MAIN:
@@ -293,6 +294,23 @@ class StackAnalysis:
             starts = self._starts[entry.file] = sorted(self._by_file.get(entry.file, {}))
         return not any(i in body and i != entry.index
                        for i in starts[bisect.bisect_left(starts, lo):bisect.bisect_right(starts, hi)])
+
+    def _scan(self, file_index: int) -> tuple[list[int], list[int]]:
+        """The indices of the file's ops in _STACK_CODES and of those in _ENTERING or at a routine's entry, in order
+        (one pass over the file's ops for both, the first time a routine of the file asks)."""
+        known = self._scanned.get(file_index)
+        if known is None:
+            starts = self._by_file.get(file_index, {})
+            stack_ops: list[int] = []
+            entering: list[int] = []
+            for i, op in enumerate(self.program.files[file_index].ops):
+                code = op.code
+                if code in _STACK_CODES:
+                    stack_ops.append(i)
+                if code in _ENTERING or i in starts:
+                    entering.append(i)
+            known = self._scanned[file_index] = (stack_ops, entering)
+        return known
 
     def _step(self, walk: _Walk, state: tuple[int, tuple], op: Op) -> tuple[int, tuple]:
         code = op.code

@@ -9,6 +9,7 @@ from types import MappingProxyType
 
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Operand, Program
+from transpiler.records import quick_init
 from transpiler.backends.st import exprs as E
 from transpiler.backends.st.marker_groups import MarkerGroup, Refusal, SymbolicOperand, nonvolatile_ranges, plan_groups
 from transpiler.backends.st.dialect import DEFAULT_TARGET, TARGETS, Dialect
@@ -30,6 +31,7 @@ BIT_ARRAY_TYPE = "T_HH_BITS_{kind}"
 STRING_ARRAY_TYPE = "T_HH_STRINGS"
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class GlobalVar:
     name: str
@@ -40,6 +42,7 @@ class GlobalVar:
     comment: str | None = None
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class OperandVar:
     """Where one HEIDENHAIN operand lives in the IEC program (a row of io_map.csv)."""
@@ -124,7 +127,10 @@ class Layout:
                     if o.indexed:
                         bit_indexed.add(o.kind)
                     n = op.nbits or 1
-                    bits[o.kind].update(range(o.addr, o.addr + n))
+                    if n == 1:      # (most bit ops: one bit)
+                        bits[o.kind].add(o.addr)
+                    else:
+                        bits[o.kind].update(range(o.addr, o.addr + n))
                     if o.kind == "T":
                         for a in range(o.addr, o.addr + n):
                             if prof.timer_start[0] <= a <= prof.timer_start[1]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 from transpiler.ir import CallTarget, Op, Program
 from transpiler.frontend.flow import RoutineBodies, routines_entered, successors
 
@@ -18,6 +20,11 @@ _SA_DEF = frozenset({"SLD", "SCAT"})
 SA_CODES = _SA_USE | _SA_DEF        # the only ops that read or write the string accumulator
 _ENDS = frozenset({"EM", "EMT", "EMF"})
 _ALL_REGS = frozenset(REGS)
+# The data-flow rounds keep a set of registers as a bit mask (one bit per register, in REGS order): a union or
+# difference of masks makes no object, and a routine's rounds make one per op and round.
+_BIT = MappingProxyType({reg: 1 << n for n, reg in enumerate(REGS)})
+_SET_OF_MASK = tuple(frozenset(reg for reg in REGS if mask & _BIT[reg]) for mask in range(1 << len(REGS)))
+_ALL_MASK = (1 << len(REGS)) - 1
 # The ops whose successors are not just the next op, or that enter routines (flow.successors, routines_entered).
 _BRANCHES = frozenset({"EM", "JP", "JPT", "JPF", "CALL", "CALLT", "CALLF", "CASE"})
 
@@ -66,8 +73,16 @@ def use_def(op: Op) -> tuple[frozenset[str], frozenset[str]]:
     return frozenset(use), frozenset(d)
 
 
+def _mask(regs: frozenset[str]) -> int:
+    mask = 0
+    for reg in regs:
+        mask |= _BIT[reg]
+    return mask
+
+
 class Liveness:
-    """live_in[(routine key, op index)] for every routine body; exit sets solved to a fixed point."""
+    """The registers live before each op of every routine body (`at`), and at each routine's exit; exit sets solved
+    to a fixed point."""
 
     def __init__(self, program: Program, bodies: RoutineBodies | None = None):
         self.program = program
@@ -76,24 +91,26 @@ class Liveness:
         roots = [self.main] + list(program.routines)
         self.bodies = {r.key: bodies(r) for r in roots}
         self.routines = {r.key: r for r in roots}
-        self.entry_use: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
-        self.exit_live: dict[tuple[int, int], frozenset[str]] = {k: frozenset() for k in self.bodies}
-        self.live_in: dict[tuple[int, int], dict[int, frozenset[str]]] = {}
-        self.jobs = {op.call.key for f in program.files for op in f.ops if op.code == "SUBM" and op.call and op.call.file >= 0}
+        # (register sets as masks, see _BIT)
+        self.entry_use: dict[tuple[int, int], int] = dict.fromkeys(self.bodies, 0)
+        self.exit_live: dict[tuple[int, int], int] = dict.fromkeys(self.bodies, 0)
+        self.live_in: dict[tuple[int, int], dict[int, int]] = {}
         self.fall_into = self._fall_throughs(roots)
-        self._use_def: dict[object, tuple[frozenset[str], frozenset[str]]] = {}
+        self._use_def: dict[object, tuple[int, int]] = {}
         self._forward: set[tuple[int, int]] = set()     # routines without a backward jump (see _routine)
+        # The ops of each routine that call routines, in order, with their callees (a few of its steps; _steps
+        # fills it in).
+        self.calls: dict[tuple[int, int], list[tuple[int, tuple[tuple[int, int], ...]]]] = {}
         self.steps = {key: self._steps(key, body) for key, body in self.bodies.items()}
-        # The ops of each routine that call routines, in order, with their callees (a few of its steps).
-        self.calls = {key: [(i, callees) for i, _, _, _, callees, _ in reversed(steps) if callees]
-                      for key, steps in self.steps.items()}
         self._solve()
 
     def _steps(self, key: tuple[int, int], body: list[int]) -> list[tuple]:
         """What the data-flow rounds read of each op of a body, last op first, worked out once instead of in every
-        round: (index, use, def, successors, entry keys of the routines it calls, whether it ends the routine)."""
+        round: (index, use, def, successors or None when only the next op follows, entry keys of the routines it
+        calls, whether it ends the routine)."""
         ops = self.program.files[key[0]].ops
         out = []
+        calls = []
         forward = True
         for i in reversed(body):
             op = ops[i]
@@ -104,20 +121,27 @@ class Liveness:
             if op.bracket is None and (o is None or not o.indexed and o.kind != "X" and o.kind != "KF"):
                 facts = code
             else:
-                facts = (code, op.bracket, None if o is None else (o.kind, o.indexed))
+                b = op.bracket
+                facts = (code, None if b is None else (b.op, b.mode), None if o is None else (o.kind, o.indexed))
             known = self._use_def.get(facts)
             if known is None:
-                known = self._use_def[facts] = use_def(op)
+                use, d = use_def(op)
+                known = self._use_def[facts] = (_mask(use), _mask(d))
             use, d = known
             # (successors and routines_entered, for the ops that neither jump nor call: most of them)
             if code not in _BRANCHES:
-                out.append((i, use, d, (i + 1,), (), code in _ENDS))
+                out.append((i, use, d, None, (), code in _ENDS))
                 continue
             succ = successors(ops, i)
             forward = forward and all(s > i for s in succ)
-            out.append((i, use, d, succ, tuple(c.key for c in routines_entered(op)), code in _ENDS))
+            callees = tuple(c.key for c in routines_entered(op))
+            if callees:
+                calls.append((i, callees))
+            out.append((i, use, d, succ, callees, code in _ENDS))
         if forward:
             self._forward.add(key)
+        calls.reverse()
+        self.calls[key] = calls
         return out
 
     def _fall_throughs(self, roots: list[CallTarget]) -> dict[tuple[int, int], list[tuple[int, int]]]:
@@ -137,18 +161,18 @@ class Liveness:
         # routine's entry or exit set at least: the lattice height bounds the rounds.
         for _ in range(2 * len(self.bodies) * len(REGS) + 2):
             changed = False
-            new_exit = {k: frozenset() for k in self.bodies}
+            new_exit = dict.fromkeys(self.bodies, 0)
             for key, body in self.bodies.items():
                 live = self._routine(key, body)
                 self.live_in[key] = live
-                entry = live.get(self.routines[key].index, frozenset())
+                entry = live.get(self.routines[key].index, 0)
                 if entry != self.entry_use[key]:
                     self.entry_use[key] = entry
                     changed = True
                 n_ops = len(self.program.files[key[0]].ops)
                 for i, callees in self.calls[key]:
                     for callee in callees:
-                        after = live.get(i + 1, frozenset()) if i + 1 < n_ops else frozenset()
+                        after = live.get(i + 1, 0) if i + 1 < n_ops else 0
                         if callee in new_exit:
                             new_exit[callee] = new_exit[callee] | after
                 # The structured translation turns a fall-through into another routine's label into a call of that
@@ -163,30 +187,25 @@ class Liveness:
             if not changed:
                 return
 
-    def _routine(self, key: tuple[int, int], body: list[int]) -> dict[int, frozenset[str]]:
+    def _routine(self, key: tuple[int, int], body: list[int]) -> dict[int, int]:
         exit_live = self.exit_live[key]
-        empty: frozenset[str] = frozenset()
-        live: dict[int, frozenset[str]] = {i: empty for i in body}
+        live: dict[int, int] = dict.fromkeys(body, 0)
         entry_use = self.entry_use
         steps = self.steps[key]
         # Without a backward jump, one pass over the ops, last first, sees every successor's final set already.
         for _ in range(1 if key in self._forward else len(body) + 2):
             changed = False
             for i, use, d, succ, callees, ends in steps:
-                # (the same sets as `use | callees' entry sets | (successors' sets - d)`, without making a new set
-                # for each empty operand: most are empty)
-                out = exit_live if ends else empty
-                for s in succ:
-                    after = live.get(s, empty)
-                    if after:
-                        out = out | after if out else after
-                value = out - d if out and d else out
+                # use | callees' entry sets | (successors' sets - d)
+                out = exit_live if ends else 0
+                if succ is None:
+                    out |= live.get(i + 1, 0)
+                else:
+                    for s in succ:
+                        out |= live.get(s, 0)
+                value = out & ~d | use
                 for callee in callees:
-                    entry = entry_use.get(callee, empty)
-                    if entry:
-                        value = value | entry
-                if use:
-                    value = use | value if value else use
+                    value |= entry_use.get(callee, 0)
                 if value != live[i]:
                     live[i] = value
                     changed = True
@@ -196,7 +215,7 @@ class Liveness:
 
     def at(self, routine: tuple[int, int], index: int) -> frozenset[str]:
         live = self.live_in.get(routine)
-        return _ALL_REGS if live is None else live.get(index, _ALL_REGS)
+        return _ALL_REGS if live is None else _SET_OF_MASK[live.get(index, _ALL_MASK)]
 
     def exit(self, routine: tuple[int, int]) -> frozenset[str]:
-        return self.exit_live.get(routine, frozenset(REGS))
+        return _SET_OF_MASK[self.exit_live.get(routine, _ALL_MASK)]

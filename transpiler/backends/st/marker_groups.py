@@ -32,6 +32,7 @@ from collections import defaultdict
 from typing import Callable, Iterable
 
 from transpiler.backends.st.names import MAX_LEN, RESERVED, legalise
+from transpiler.records import quick_init
 
 # Two markers share a prefix by accident about as often as by design (ML_spindle_turning, ML_spindle_turning_mem);
 # from three on, the prefix names a group worth a type of its own.
@@ -40,6 +41,7 @@ PREFIX_PARTS = 2
 TYPE_PREFIX = "T_"
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True)
 class SymbolicOperand:
     """An operand the ST declares with a symbol; `role` says why it cannot be a member (None: a plain marker)."""

@@ -7,6 +7,10 @@ from transpiler.backends.st import exprs as E
 from transpiler.backends.st import stmt as S
 from transpiler.backends.st.routine import ExecutorPart
 
+# The registers a bit store keeps symbolic while it is emitted (made once: a program stores thousands of bits).
+_LA_AND_X = frozenset(["LA", "X"])
+_X = frozenset(["X"])
+
 
 class LogicOpsMixin(ExecutorPart):
     """op_* handlers of the logic accumulator LA."""
@@ -32,12 +36,12 @@ class LogicOpsMixin(ExecutorPart):
         self.s.set("LA", E.b_not(self.s.reg("LA")))
 
     def op_ST(self, op: Op) -> None:
-        target = self.bit_store(op.operand, lambda: self.s.reg("LA"), frozenset(["LA", "X"]))
+        target = self.bit_store(op.operand, lambda: self.s.reg("LA"), _LA_AND_X)
         if target is not None:
             self.s.set("LA", target)
 
     def op_STN(self, op: Op) -> None:
-        self.bit_store(op.operand, lambda: E.b_not(self.s.reg("LA")), frozenset(["LA", "X"]))
+        self.bit_store(op.operand, lambda: E.b_not(self.s.reg("LA")), _LA_AND_X)
 
     def _conditional_bit(self, op: Op, when: bool, value: bool) -> None:
         if op.operand.indexed:
@@ -49,15 +53,15 @@ class LogicOpsMixin(ExecutorPart):
                 la = self.s.reg("LA")
                 cond = la if when else E.b_not(la)
                 return E.b_or(cond, old) if value else E.b_and(E.b_not(cond), old)
-            self.bit_store(op.operand, new, frozenset(["LA", "X"]))
+            self.bit_store(op.operand, new, _LA_AND_X)
             return
         la = self.s.reg("LA")
         target = self.bit(op.operand)
         if la.bool_const is not None:
             if la.bool_const == when:
-                self.bit_store(op.operand, lambda: E.bool_const(value), frozenset(["X"]))
+                self.bit_store(op.operand, lambda: E.bool_const(value), _X)
             return
-        deferred = self.prepare_write(E.written_name(target), frozenset(["LA", "X"]))
+        deferred = self.prepare_write(E.written_name(target), _LA_AND_X)
         target = self.bit(op.operand)
         la = self.s.reg("LA")
         cond = la if when else E.b_not(la)

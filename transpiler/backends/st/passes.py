@@ -160,7 +160,9 @@ def _propagate_in(root: list[S.Stmt], block: tuple[S.Stmt, ...] | list[S.Stmt]) 
     """_propagate_one within `block`, a block of `root`. (A function of its own, not a closure: a closure that calls
     itself is a reference cycle, which kept each POU's statements alive until the process exited.)"""
     for i, stmt in enumerate(block):
-        if isinstance(stmt, S.Assign) and stmt.note is None and _TEMP.fullmatch(stmt.target):
+        if type(stmt) is S.Assign:
+            if stmt.note is not None or not stmt.target.startswith(TEMP_PREFIX) or not _TEMP.fullmatch(stmt.target):
+                continue        # (most statements: an assignment of no temporary, nothing nested)
             word = _word(stmt.target)
             j = next((k for k in range(i + 1, len(block)) if S.is_code(block[k])), None)
             if j is not None and _uses(root, word, stmt.target) == 2 \

@@ -6,10 +6,10 @@ already (exprs.py prints them). The body is unindented: the writers indent it in
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Iterable
 
 from transpiler.backends.iec_model import Pou, st_comment
+from transpiler.records import replaced
 from transpiler.backends.st.stmt import (SIMPLE, Assign, Call, Case, CaseBranch, Comment, Exit, If, Repeat, Return,
                                         Stmt, While)
 
@@ -24,7 +24,7 @@ def body_text(block: Iterable[Stmt]) -> str:
 def with_statements(pou: Pou, block: Iterable[Stmt]) -> Pou:
     """`pou` with `block` as its statement tree and the body printed from it."""
     statements = tuple(block)
-    return dataclasses.replace(pou, statements=statements, body=body_text(statements))
+    return replaced(pou, statements=statements, body=body_text(statements))
 
 
 def lines(block: Iterable[Stmt], depth: int = 0) -> list[str]:
@@ -36,7 +36,10 @@ def lines(block: Iterable[Stmt], depth: int = 0) -> list[str]:
 
 def one_line(stmt: Stmt) -> bool:
     """The statement prints as a single line."""
-    return isinstance(stmt, (Comment, *SIMPLE)) or isinstance(stmt, If) and stmt.inline
+    return type(stmt) in _ONE_LINE or type(stmt) is If and stmt.inline
+
+
+_ONE_LINE = frozenset({Comment, *SIMPLE})
 
 
 def _note(note: str | None) -> str:
@@ -44,7 +47,9 @@ def _note(note: str | None) -> str:
 
 
 def _simple(stmt: Stmt) -> str:
-    if isinstance(stmt, Assign):
+    if type(stmt) is Assign:        # (most statements)
+        if stmt.note is None:
+            return f"{stmt.target} := {stmt.value.text};"
         return f"{stmt.target} := {stmt.value.text};{_note(stmt.note)}"
     if isinstance(stmt, Call):
         args = ", ".join(f"{name} := {value.text}" for name, value in stmt.args)

@@ -38,23 +38,28 @@ def _block(block: Block, registers: frozenset[str]) -> Block:
     kept = _without_dead_stores(block, registers)
     changed = kept is not block
     for stmt in kept:
+        if type(stmt) not in _NESTING:     # (most statements: no block inside, no IF)
+            out.append(stmt)
+            continue
         inner_blocks = S.blocks(stmt)
-        if inner_blocks:
-            new = [_block(inner, registers) for inner in inner_blocks]
-            if any(n is not inner for n, inner in zip(new, inner_blocks)):
-                stmt = S.with_blocks(stmt, new)
+        new = [_block(inner, registers) for inner in inner_blocks]
+        if any(n is not inner for n, inner in zip(new, inner_blocks)):
+            stmt = S.with_blocks(stmt, new)
+            changed = True
         if isinstance(stmt, S.If):
             if not S.has_code(stmt.then) and not S.has_code(stmt.orelse):
                 out.extend(stmt.then + stmt.orelse)
+                changed = True
                 continue
-            stmt = _flag_from_condition(stmt)
+            simpler = _flag_from_condition(stmt)
+            changed = changed or simpler is not stmt
+            stmt = simpler
             if out and isinstance(stmt, S.If) and isinstance(out[-1], S.If) and _same_condition(out[-1], stmt):
                 out[-1] = _joined(out[-1], stmt)
+                changed = True
                 continue
         out.append(stmt)
-    if not changed and len(out) == len(kept) and all(a is b for a, b in zip(out, kept)):
-        return block
-    return tuple(out)
+    return tuple(out) if changed else block
 
 
 def _same_condition(first: S.If, second: S.If) -> bool:
@@ -158,6 +163,29 @@ def _overwritten(block: Block, reg: str, registers: frozenset[str], start: int =
 
 
 def _without_dead_stores(block: Block, registers: frozenset[str]) -> Block:
-    dead = {i for i, stmt in enumerate(block)
-            if (reg := _register_store(stmt, registers)) is not None and _overwritten(block, reg, registers, i + 1)}
+    # Only a later store can overwrite a register: a store with none after it (nested ones included) is kept
+    # without looking at what the statements after it read (most stores of an error marker have none).
+    dead = set()
+    stored_later: set[str] = set()
+    for i in range(len(block) - 1, -1, -1):
+        stmt = block[i]
+        if type(stmt) is S.Assign:
+            # (_register_store, and the register this assignment stores whatever its note)
+            name = E.unqualified(stmt.target).upper()
+            if name in registers:
+                if stmt.note is None and name in stored_later and _overwritten(block, name, registers, i + 1):
+                    dead.add(i)
+                stored_later.add(name)
+        elif type(stmt) in _NESTING:
+            stored_later |= _registers_stored(stmt, registers)
     return tuple(s for i, s in enumerate(block) if i not in dead) if dead else block
+
+
+def _registers_stored(stmt: S.Stmt, registers: frozenset[str]) -> set[str]:
+    """The registers the compound statement `stmt` assigns anywhere inside (notes or not): a superset of the stores
+    _overwritten can find in it."""
+    return {name for s in S.walk((stmt,)) if type(s) is S.Assign
+            and (name := E.unqualified(s.target).upper()) in registers}
+
+
+_NESTING = frozenset({S.If, S.Case, S.While, S.Repeat})

@@ -132,6 +132,7 @@ class Structurer:
     def region(self, lo: int, hi: int) -> None:
         i = lo
         body, ops, jumps_to, other_entries = self.body, self.ops, self.jumps_to, self.info.other_entries
+        run = self.ex.run
         while i < hi:
             if i not in body:
                 i += 1
@@ -139,7 +140,7 @@ class Structurer:
             op = ops[i]
             if op.code not in _CONTROL and i not in jumps_to and i not in other_entries:
                 # (most ops: straight-line code for the executor)
-                self.ex.run(op, i)
+                run(op, i)
                 i += 1
                 continue
             if i != self.info.entry.index and i in other_entries:
