@@ -450,6 +450,75 @@ def test_a_count_stepped_down_or_not_set_first_gets_no_bound(tmp_path: Path) -> 
     assert _bound_at(unset, 13) is None
 
 
+# W8 is the first set marker's number or -1: it becomes X (>= 0) in the pass whose INC raises the count W6, and it is
+# read only under M50 = (W6 > 0): there it is never -1.
+FIRST_BESIDE_COUNT = """L     K0
+=     X
+=     W6
+L     K-1
+=     W8
+LBL Scan
+L     M100[X]
+IFT
+INC   W6
+L     W8
+<     K0
+IFT
+{set_first}ENDI
+ENDI
+INCX
+L     X
+<     K8
+JPT   Scan
+L     W6
+>     K0
+=     M50
+{between}L     M50
+IFT
+L     W8
+==    K0
+=     O1
+ENDI
+EM
+"""
+
+
+def test_a_word_set_with_a_count_is_known_where_the_count_is_not_zero(tmp_path: Path) -> None:
+    # Catches: the implication "W6 >= 1 => W8 >= 0" not formed where the two ways of the IFT join, lost over the
+    # indexed bit reads and writes, not applied where the marker assigned from W6 > 0 is read, or a claim a run
+    # contradicts (random markers, none set).
+    text = FIRST_BESIDE_COUNT.format(set_first="L     X\n=     W8\n", between="")
+    program = _program(tmp_path, text)
+    assert _bound_at(program, 27) == (0, 7)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(4)
+    for cycle in range(40):
+        for bit in range(8):
+            machine.state.write("M", 100 + bit, 0 if cycle % 3 == 0 else rng.randrange(2))
+        machine.run_cycle(cycle, [])
+    assert _bounds_inside(program, [machine.coverage]) > 0
+    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
+    item = items["boundary W8 == K0: W8 = c-1 (-1)"]
+    assert item.status == "infeasible" and item.reason.startswith("W8 holds only 0..7 here, not -1"), item
+
+
+@pytest.mark.parametrize("set_first, between, why", [
+    ("L     I2\nIFT\nL     X\n=     W8\nENDI\n", "", "the word not set in every counting pass"),
+    ("L     X\n=     W8\n", "L     I1\n=     M50\n", "the marker written again"),
+    ("L     X\n=     W8\n", "L     K-1\n=     W8\n", "the word written after the marker"),
+    ("L     X\n=     W8\n", "L     K0\n=     W6\n", "the count written after the marker"),
+    ("L     X\n=     W8\n", "L     K1\n=     M48[X]\n", "a marker written through X"),
+])
+def test_no_bound_is_implied_where_the_count_and_the_word_may_part(tmp_path: Path, set_first: str, between: str,
+                                                                   why: str) -> None:
+    # Catches: an implication formed where one way of the join neither sets the word nor denies the count, kept over
+    # a write of either, or a marker fact kept over a write of the marker or of its compare's word.
+    program = _program(tmp_path, FIRST_BESIDE_COUNT.format(set_first=set_first, between=between))
+    line = 27 + set_first.count("\n") - 2 + between.count("\n")
+    bound = _bound_at(program, line)
+    assert bound is None or bound[0] <= -1, (why, bound)
+
+
 TABLE_READ = "PS    K0\nPS    W20\nPS    K1\nCM    9093\n{pulls}L     W40\n==    K0\n=     O1\nEM\n"
 
 

@@ -28,7 +28,8 @@ where every run of the chain begins, through its calls and CASE entries, words a
 a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
 preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
 (word_values.py; for X, index_range's interval and congruence; for a compare of two words, the differences
-word_relations.py allows). Only these reasons are claimed; a condition that is merely hard
+word_relations.py allows, and for a word compared with a constant, the bounds its differences with X, 0 and other
+words give it there). Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -841,8 +842,10 @@ def _bounded(cmp: Compare, item: BoundaryItem, bounds: Mapping[tuple[int, int], 
     return dataclasses.replace(item, status="infeasible", reason=(
         f"{cmp.left} holds only {found[0]}..{found[1]} here, not {value}: its differences with X, 0 and the other "
         "words it is compared with or copied from, set by its stores, moved by its steps (INC, DEC, + and - of a "
-        "constant, each shown not to wrap) and by X's, and narrowed by the compares the jumps before it went on, "
-        "on every path to it, with X's interval there, keep it in that range"))
+        "constant, each shown not to wrap) and by X's, and narrowed by the compares the jumps before it went on (also "
+        "through a marker assigned from a compare, and through a bound of another word where every way into a join "
+        "either sets this word's bound or denies that one), on every path to it, with X's interval there, keep it in "
+        "that range"))
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:

@@ -18,10 +18,16 @@ loaded), X and the constant 0 (so `A - 0 <= k` bounds A). It learns them:
 - at a store of a constant that the cell holds exactly (`L K0` `= X` `= W6`: each equals 0, and so W6 - X = 0),
   and at a store of a cell's value into another of a width that holds it exactly (`L X` `= W8`: W8 = X, with what
   was known of X);
-and keeps them over a step of one cell by a constant (`L A` `+ K1` `= A`, +/- of constants and INCW/DECW on the
+(and, through a marker assigned from such a compare, `L W6` `> K0` `= M50` ... `L M50` `IFT`, where the marker is
+read before it or the compared cells are written again) and keeps them over a step of one cell by a constant (`L A` `+ K1` `= A`, +/- of constants and INCW/DECW on the
 way; INC and DEC of a word; INCX and DECX) where the bounds the facts give it (with X's interval from index_range
 and each cell's type range) show the step cannot wrap: a fact about the cell moves with it (A - B <= k becomes
-k + d). Anything else that writes a cell drops every fact about it (a store of another value, a pull, a store of
+k + d). Beside the facts it keeps implications between bounds by 0 (`W6 >= 1 => W8 >= 0`): formed where two ways join
+and one has the first bound with the second while the other denies the first (the IFT that INCs the count and sets
+the word, joined with the way that does neither, at whose start the implication held or the count was 0), kept at
+a join where each way has it, has the second bound or denies the first, carried over a copy of one of the words,
+applied where a jump learns the first bound, dropped at any write of either word. Anything else that writes a cell
+drops every fact about it (a store of another value, a pull, a store of
 another width over its bytes, PLX, a store into X of a value not followed); a call, a CASE, a job submission, a PLC
 module or a store through the index register drops every fact. Paths join keeping the facts both have (the weaker
 bound); a bound still moving after a few visits is dropped. Nothing is carried from one run of the code to the
@@ -37,6 +43,7 @@ import dataclasses
 from typing import Mapping
 
 from transpiler.exec.interp.gen_exprs import int32
+from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program
 from transpiler.verify.index_range import index_ranges
 
@@ -51,6 +58,7 @@ _WIDEN_AFTER = 4                    # visits of an op before bounds that keep mo
 _MAX_STEP = 1 << 16                 # constants added to WA on the way from a load to a store, at most (no 32-bit wrap)
 _MEM_WRITERS = frozenset({"WST", "INC", "DEC", "POP"})
 _BARRIERS = frozenset({"CALL", "CALLT", "CALLF", "CASE", "SUBM", "KFIELD"})
+_BIT_WRITERS = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN", "POP", "INC", "DEC", "STBITS"})
 # ops after which WA is what it was (the logic ones: not under the shared accumulator, where no claim is made)
 _KEEP_WA = frozenset({"WST", "NOP", "LBL", "JP", "JPT", "JPF", "CMP", "LD", "LDN", "AND", "ANDN", "OR", "ORN",
                       "XOR", "XORN", "ST", "STN", "SET", "RES", "SETN", "RESN", "NOTL"})
@@ -61,16 +69,49 @@ _LEARNED = {"<": (((True, -1),), ((False, 0),)), "<=": (((True, 0),), ((False, -
             "==": (((True, 0), (False, 0)), ()), "<>": ((), ((True, 0), (False, 0)))}
 
 
+Atom = tuple[tuple[Cell, Cell], int]    # ((A, B), k): load(A) - load(B) <= k
+Compared = tuple[Cell, Cell, str, int]  # (A, B, rel, c): load(A) rel load(B) + c
+_NEGATED = {"<": ">=", ">=": "<", ">": "<=", "<=": ">", "==": "<>", "<>": "=="}
+
+
 @dataclasses.dataclass(frozen=True)
 class _State:
     facts: Facts
     wa: tuple[Cell, int] | None         # WA = load(cell) + d (ZERO: WA = d)
-    la: tuple[Cell, Cell, str, int] | None  # LA = load(A) rel load(B) + c, neither written since
+    la: Compared | None                 # LA is that compare, neither cell written since
+    implied: frozenset = frozenset()    # (P, Q) atoms: where P holds, Q holds (both bounds of a cell by 0)
+    marks: frozenset = frozenset()      # (marker, Compared, same): the marker is the compare's result (same) or
+                                        # its negation, neither the marker nor the cells written since
+
+
+def _entails(facts: Facts, atom: Atom) -> bool:
+    pair, k = atom
+    return pair in facts and facts[pair] <= k
+
+
+def _negation(atom: Atom) -> Atom:
+    """A - B <= k is false exactly where B - A <= -k - 1."""
+    (a, b), k = atom
+    return (b, a), -k - 1
+
+
+def _holds(s: _State, rule: tuple[Atom, Atom]) -> bool:
+    p, q = rule
+    return rule in s.implied or _entails(s.facts, q) or _entails(s.facts, _negation(p))
 
 
 def _join(a: _State, b: _State) -> _State:
     facts = {pair: max(k, b.facts[pair]) for pair, k in a.facts.items() if pair in b.facts}
-    return _State(facts, a.wa if a.wa == b.wa else None, a.la if a.la == b.la else None)
+    implied = {rule for rule in a.implied | b.implied if _holds(a, rule) and _holds(b, rule)}
+    # a bound by 0 one side has and the other's facts deny: where it holds, what that side knows holds too
+    for one, other in ((a, b), (b, a)):
+        bounds = [(pair, k) for pair, k in one.facts.items() if ZERO in pair]
+        for p in bounds:
+            if not _entails(other.facts, _negation(p)):
+                continue
+            implied.update((p, q) for q in bounds if q[0] != p[0] and not _entails(facts, q))
+    marks = a.marks & b.marks
+    return _State(facts, a.wa if a.wa == b.wa else None, a.la if a.la == b.la else None, frozenset(implied), marks)
 
 
 class _Analysis:
@@ -79,6 +120,8 @@ class _Analysis:
         self.ops = program.files[f].ops
         self.entries = entries
         self.xs = xs
+        self.interface = program.semantics.profile.interface
+        self.flag = program.semantics["add_overflow"] == "flag"
         bits = 16 if int(program.semantics["index_register_width"]) == 16 else 32
         self.x_full = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
 
@@ -104,7 +147,8 @@ class _Analysis:
                     continue
                 visits[j] = visits.get(j, 0) + 1
                 if old is not None and visits[j] > _WIDEN_AFTER:
-                    new = dataclasses.replace(new, facts={p: k for p, k in new.facts.items() if old.facts.get(p) == k})
+                    new = dataclasses.replace(new, facts={p: k for p, k in new.facts.items() if old.facts.get(p) == k},
+                                              implied=new.implied & old.implied)
                 before[j] = new
                 pending.add(j)
         return before
@@ -134,6 +178,10 @@ class _Analysis:
             # load(A) - load(B) - shift rel 0: A - B <= k + shift, B - A <= k - shift
             pair, bound = ((a, b), k + shift) if a_first else ((b, a), k - shift)
             facts[pair] = min(bound, facts.get(pair, bound))
+        for _ in range(2):
+            for p, (pair, k) in s.implied:
+                if _entails(facts, p):
+                    facts[pair] = min(k, facts.get(pair, k))
         return dataclasses.replace(s, facts=facts)
 
     # ------------------------------------------------------------------------------------------- bounds
@@ -174,6 +222,58 @@ class _Analysis:
     # ------------------------------------------------------------------------------------------- one op
 
     def step(self, i: int, op: Op, s: _State) -> _State:
+        """The state after op i: facts, WA and LA (facts_step), the implications and marker facts that survive it."""
+        after = self.facts_step(i, op, s)
+        c = op.code
+        o = op.operand
+        if c in _BARRIERS or (op.call is not None and op.call.is_module) or o is not None and o.indexed and \
+                c in _MEM_WRITERS and not o.is_bit:
+            return dataclasses.replace(after, implied=frozenset(), marks=frozenset())
+        if o is not None and o.indexed and c in _BIT_WRITERS and o.is_bit:
+            # a bit written through X: any marker of its kind may be the one
+            return dataclasses.replace(after, implied=s.implied, marks=frozenset(m for m in s.marks
+                                                                                 if m[0][0] != o.kind))
+        written: set[Cell] = set()
+        if c in ("INCX", "DECX", "PLX") or c in _MEM_WRITERS and o is not None and o.kind == "X":
+            written.add(X_CELL)
+        elif c in _MEM_WRITERS and o is not None and o.kind in _BITS:
+            written.add((o.kind, o.addr))
+        implied = {rule for rule in s.implied
+                   if not any(self.touches(cell, w) for w in written for atom in rule for cell in atom[0])}
+        if c == "WST" and s.wa is not None and written and s.wa[0] != next(iter(written)) and \
+                after.facts.get((next(iter(written)), s.wa[0])) == s.wa[1]:
+            # a copy the facts follow (copied): what held of the source holds of the copy
+            implied |= {self.substituted(rule, s.wa[0], next(iter(written)), s.wa[1]) for rule in implied
+                        if any(s.wa[0] in atom[0] for atom in rule)}
+        bits = set(implicit_writes(op, self.interface, self.flag))
+        if c in _BIT_WRITERS and o is not None and o.is_bit:
+            width = max(op.nbits, 1) if c == "STBITS" else 1
+            bits |= {(o.kind, a) for a in range(o.addr, o.addr + width)}
+        marks = {m for m in s.marks if m[0] not in bits and not any(self.touches(cell, w) for w in written
+                                                                      for cell in m[1][:2])}
+        if c in ("ST", "STN") and o is not None and o.kind == "M" and not o.indexed and s.la is not None:
+            marks.add(((o.kind, o.addr), s.la, c == "ST"))
+        la = after.la
+        if c in ("LD", "LDN") and o is not None and not o.indexed:
+            for marker, compared, same in marks:
+                if marker == (o.kind, o.addr):
+                    a, b, rel, k = compared
+                    la = compared if same == (c == "LD") else (a, b, _NEGATED[rel], k)
+        return dataclasses.replace(after, la=la, implied=frozenset(implied), marks=frozenset(marks))
+
+    @staticmethod
+    def substituted(rule: tuple[Atom, Atom], source: Cell, cell: Cell, d: int) -> tuple[Atom, Atom]:
+        """`rule` about `cell` = load(source) + d instead of source."""
+        def atom(one: Atom) -> Atom:
+            (a, b), k = one
+            if a == source:
+                return (cell, b), k + d
+            if b == source:
+                return (a, cell), k - d
+            return one
+        return atom(rule[0]), atom(rule[1])
+
+    def facts_step(self, i: int, op: Op, s: _State) -> _State:
         c = op.code
         o = op.operand
         if c in _BARRIERS or (op.call is not None and op.call.is_module):
