@@ -22,7 +22,7 @@ from transpiler.verify.index_range import index_values
 from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import build_machine, project_names, run_scenario
-from transpiler.verify.word_relations import word_relations
+from transpiler.verify.word_relations import word_bounds, word_relations
 from transpiler.verify.word_values import word_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -193,6 +193,7 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
     values = word_values(program, table.compares, set(driven), set(power_on))
     xs = index_values(program)
     relations = word_relations(program)
+    ranges = word_bounds(program)
     checked = 0
     for cmp in table.compares:
         if cmp.constant is None:
@@ -211,6 +212,10 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
         word = ops[cmp.index].operand if cmp.constant_left else ops[cmp.index - 1].operand
         for difference in reached:
             value = cmp.constant + (-difference if cmp.constant_left else difference)
+            if cmp.key in ranges and not cmp.constant_left:
+                low, high = ranges[cmp.key]
+                assert low <= value <= high, (str(cmp.op.span), value, (low, high))
+                checked += 1
             if held is not None:
                 assert value in held.values, (str(cmp.op.span), value, sorted(held.values))
                 checked += 1
@@ -370,6 +375,148 @@ def test_no_difference_is_claimed_where_the_loop_may_break_it(tmp_path: Path, bo
     # Catches: a fact kept over a write that changes one of the words, or a step that may pass the limit.
     program = _program(tmp_path, COUNTING.format(body=body, step=step, routines=routines))
     assert _relation(program, 10 + body.count("\n"))[1] is None, why
+
+
+# W6 counts the set markers among M100..M107: set to 0 with X, INC'd at most once per pass of the loop over X; after
+# the loop W6 is 0..8 (W6 - X <= 0 and X = 8 there), so its compare with K0 never sees -1.
+COUNT_BESIDE_X = """{before}L     K0
+=     X
+=     W6
+LBL Scan
+L     M100[X]
+IFT
+INC   W6
+{body}ENDI
+INCX
+L     X
+<     K8
+JPT   Scan
+L     W6
+>     K0
+=     O1
+EM
+{routines}"""
+
+
+def _bound_at(program, line: int) -> tuple[int, int] | None:
+    cmp = next(c for c in decision_table(program).compares if c.op.span.line == line)
+    return word_bounds(program).get(cmp.key)
+
+
+def test_a_count_kept_beside_x_stays_within_the_loop_s_passes(tmp_path: Path) -> None:
+    # Catches: the fact W6 - X lost over INC or INCX (no claim), the INC counted as possibly wrapping, the bound of
+    # X at the loop's exit not used, or a claim a run contradicts (random markers, all set, none set).
+    program = _program(tmp_path, COUNT_BESIDE_X.format(before="", body="", routines=""))
+    assert _bound_at(program, 14) == (0, 8)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(3)
+    for cycle in range(40):
+        for bit in range(8):
+            machine.state.write("M", 100 + bit, 1 if cycle == 1 else 0 if cycle == 2 else rng.randrange(2))
+        machine.run_cycle(cycle, [])
+    assert _bounds_inside(program, [machine.coverage]) > 0
+    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 14)
+    assert machine.coverage.bounds[cmp.key] == {0, 1}     # c and c+1 reached, c-1 not
+    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
+    item = items["boundary W6 > K0: W6 = c-1 (-1)"]
+    assert item.status == "infeasible" and item.reason.startswith("W6 holds only 0..8 here, not -1"), item
+
+
+@pytest.mark.parametrize("before, body, routines, why", [
+    ("", "INC   W6\n", "", "two INCs in one pass: the count can pass X"),
+    ("", "L     W20\n=     W6\n", "", "another write of the count"),
+    ("", "CM    Sub\n", "LBL Sub\nL     K-5\n=     W6\nEM\n", "a call in the loop"),
+    ("", "L     W20\n=     X\n", "", "X written in the loop"),
+    ("", "PLX\n", "", "X pulled in the loop"),
+    ("", "L     K-9\n=     W4[X]\n", "", "a store through the index register that can reach the count"),
+    ("", "L     K-1\n=     B7\n", "", "a store of a byte of the count"),
+    ("L     I1\nJPT   Scan\n", "", "", "the loop entered from elsewhere"),
+])
+def test_no_count_bound_is_claimed_where_the_loop_may_break_it(tmp_path: Path, before: str, body: str,
+                                                             routines: str, why: str) -> None:
+    # Catches: a fact kept over a write of the count or of X, a call, an indexed store, or a way into the loop that
+    # skips the stores that set the count and X together.
+    program = _program(tmp_path, COUNT_BESIDE_X.format(before=before, body=body, routines=routines))
+    line = 14 + before.count("\n") + body.count("\n")
+    assert _bound_at(program, line) is None, why
+
+
+def test_a_count_stepped_down_or_not_set_first_gets_no_bound(tmp_path: Path) -> None:
+    # DEC can wrap below once the lower bound is lost; without `= W6` the count starts from what the last cycle (or
+    # a scenario) left. Catches: a lower bound kept over DEC, a fact from the constant store of X alone.
+    down = _program(tmp_path, COUNT_BESIDE_X.format(before="", body="", routines="").replace("INC   W6", "DEC   W6"))
+    assert _bound_at(down, 14) is None
+    unset = _program(tmp_path, COUNT_BESIDE_X.format(before="", body="", routines="").replace("=     W6\n", "", 1))
+    assert _bound_at(unset, 13) is None
+
+
+# W8 is the first set marker's number or -1: it becomes X (>= 0) in the pass whose INC raises the count W6, and it is
+# read only under M50 = (W6 > 0): there it is never -1.
+FIRST_BESIDE_COUNT = """L     K0
+=     X
+=     W6
+L     K-1
+=     W8
+LBL Scan
+L     M100[X]
+IFT
+INC   W6
+L     W8
+<     K0
+IFT
+{set_first}ENDI
+ENDI
+INCX
+L     X
+<     K8
+JPT   Scan
+L     W6
+>     K0
+=     M50
+{between}L     M50
+IFT
+L     W8
+==    K0
+=     O1
+ENDI
+EM
+"""
+
+
+def test_a_word_set_with_a_count_is_known_where_the_count_is_not_zero(tmp_path: Path) -> None:
+    # Catches: the implication "W6 >= 1 => W8 >= 0" not formed where the two ways of the IFT join, lost over the
+    # indexed bit reads and writes, not applied where the marker assigned from W6 > 0 is read, or a claim a run
+    # contradicts (random markers, none set).
+    text = FIRST_BESIDE_COUNT.format(set_first="L     X\n=     W8\n", between="")
+    program = _program(tmp_path, text)
+    assert _bound_at(program, 27) == (0, 7)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    rng = random.Random(4)
+    for cycle in range(40):
+        for bit in range(8):
+            machine.state.write("M", 100 + bit, 0 if cycle % 3 == 0 else rng.randrange(2))
+        machine.run_cycle(cycle, [])
+    assert _bounds_inside(program, [machine.coverage]) > 0
+    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
+    item = items["boundary W8 == K0: W8 = c-1 (-1)"]
+    assert item.status == "infeasible" and item.reason.startswith("W8 holds only 0..7 here, not -1"), item
+
+
+@pytest.mark.parametrize("set_first, between, why", [
+    ("L     I2\nIFT\nL     X\n=     W8\nENDI\n", "", "the word not set in every counting pass"),
+    ("L     X\n=     W8\n", "L     I1\n=     M50\n", "the marker written again"),
+    ("L     X\n=     W8\n", "L     K-1\n=     W8\n", "the word written after the marker"),
+    ("L     X\n=     W8\n", "L     K0\n=     W6\n", "the count written after the marker"),
+    ("L     X\n=     W8\n", "L     K1\n=     M48[X]\n", "a marker written through X"),
+])
+def test_no_bound_is_implied_where_the_count_and_the_word_may_part(tmp_path: Path, set_first: str, between: str,
+                                                                   why: str) -> None:
+    # Catches: an implication formed where one way of the join neither sets the word nor denies the count, kept over
+    # a write of either, or a marker fact kept over a write of the marker or of its compare's word.
+    program = _program(tmp_path, FIRST_BESIDE_COUNT.format(set_first=set_first, between=between))
+    line = 27 + set_first.count("\n") - 2 + between.count("\n")
+    bound = _bound_at(program, line)
+    assert bound is None or bound[0] <= -1, (why, bound)
 
 
 TABLE_READ = "PS    K0\nPS    W20\nPS    K1\nCM    9093\n{pulls}L     W40\n==    K0\n=     O1\nEM\n"

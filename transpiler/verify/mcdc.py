@@ -28,7 +28,8 @@ where every run of the chain begins, through its calls and CASE entries, words a
 a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
 preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
 (word_values.py; for X, index_range's interval and congruence; for a compare of two words, the differences
-word_relations.py allows). Only these reasons are claimed; a condition that is merely hard
+word_relations.py allows, and for a word compared with a constant, the bounds its differences with X, 0 and other
+words give it there). Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_
 from transpiler.verify.cycle_paths import Runner, Seen, seen_vectors, start_name
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
-from transpiler.verify.word_relations import word_relations
+from transpiler.verify.word_relations import word_bounds, word_relations
 from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -724,6 +725,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     xs: dict[tuple[int, int], XValues] | None = None
     ranges: dict[tuple[str, int], NcFact] = {}
     relations: dict[tuple[int, int], tuple[int | None, int | None]] | None = None
+    word_range: dict[tuple[int, int], tuple[int, int]] | None = None
     for cmp in table.compares:
         items = _boundary_items(cmp, bounds.get(cmp.key, set()))
         if explain_missing and any(i.status == "missing" for i in items):
@@ -736,6 +738,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             if cmp.constant is None:
                 relations = word_relations(program) if relations is None else relations
                 items = [_related(cmp, item, relations) if item.status == "missing" else item for item in items]
+            elif any(i.status == "missing" for i in items):
+                word_range = word_bounds(program) if word_range is None else word_range
+                items = [_bounded(cmp, item, word_range) if item.status == "missing" else item for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
@@ -822,6 +827,25 @@ def _related(cmp: Compare, item: BoundaryItem,
     return dataclasses.replace(item, status="infeasible", reason=(
         f"{bound} here, never {offset:+d}: the compares of the two words the jumps before it went on, and the steps "
         "of one of them by a constant since, on every path to it, keep the difference there"))
+
+
+def _bounded(cmp: Compare, item: BoundaryItem, bounds: Mapping[tuple[int, int], tuple[int, int]]) -> BoundaryItem:
+    """`item` (missing, of a compare of a word loaded right before it with a constant) as infeasible where the
+    bounds its differences with X, 0 and other words give it there (word_relations.word_bounds) leave its value
+    out."""
+    found = bounds.get(cmp.key)
+    if found is None or cmp.constant_left:
+        return item
+    value = cmp.constant + item.offset
+    if found[0] <= value <= found[1]:
+        return item
+    return dataclasses.replace(item, status="infeasible", reason=(
+        f"{cmp.left} holds only {found[0]}..{found[1]} here, not {value}: its differences with X, 0 and the other "
+        "words it is compared with or copied from, set by its stores, moved by its steps (INC, DEC, + and - of a "
+        "constant, each shown not to wrap) and by X's, and narrowed by the compares the jumps before it went on (also "
+        "through a marker assigned from a compare, and through a bound of another word where every way into a join "
+        "either sets this word's bound or denies that one), on every path to it, with X's interval there, keep it in "
+        "that range"))
 
 
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
