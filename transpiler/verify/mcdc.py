@@ -40,7 +40,7 @@ from transpiler.ir import BYTES, Program, sext
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors
-from transpiler.verify.cycle_paths import Runner, Seen, seen_vectors, start_name
+from transpiler.verify.cycle_paths import Runner, Seen, StartRelation, seen_vectors, start_name, start_relations
 from transpiler.verify.index_range import index_ranges
 from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
@@ -706,6 +706,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     # what is still missing may be ruled out by the paths that come to its chain (cycle_paths)
     if explain_missing:
         _explain_by_paths(program, conditions)
+        # and by what holds at the start of every cycle but the first (operands set after power-on break it)
+        if any(item.status == "missing" for item in conditions):
+            relations = start_relations(program, set(driven) - set(power_on))
+            if relations:
+                _explain_by_paths(program, conditions, relations)
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
     xs: dict[tuple[int, int], tuple[int, int]] | None = None
@@ -723,8 +728,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
 
-def _explain_by_paths(program: Program, conditions: list[ConditionItem]) -> None:
-    """Marks the missing conditions the paths that come to their chain never show (cycle_paths) as infeasible."""
+def _explain_by_paths(program: Program, conditions: list[ConditionItem],
+                      relations: Sequence[StartRelation] = ()) -> None:
+    """Marks the missing conditions the paths that come to their chain never show (cycle_paths) as infeasible; with
+    `relations` (cycle_paths.start_relations), runs from the main program's start assume them in every cycle but
+    the first, and the reason names those the claim rests on."""
     runner: Runner | None = None
     found: dict[tuple[int, int], Seen | None] = {}
     for k, item in enumerate(conditions):
@@ -732,16 +740,23 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem]) -> None
             continue
         decision = item.decision
         if decision.key not in found:
-            runner = runner or Runner(program)
+            runner = runner or Runner(program, relations)
             found[decision.key] = seen_vectors(runner, decision)
         seen = found[decision.key]
         if seen is None or not seen.vectors or _showable(decision, item.number, item.masking, seen.vectors):
             continue
+        used = list(relations) if seen.start == (0, 0) else []
+        for rel in list(used):
+            trial = Runner(program, [r for r in used if r is not rel])
+            again = trial.seen(decision, seen.start)
+            if again is not None and again and not _showable(decision, item.number, item.masking, again):
+                used.remove(rel)
         ties = _ties(decision, item.number, Tied(seen.vectors, seen.start[1], ()))
+        assumed = "".join(f"; {rel.text()}" for rel in used)
         reason = (f"{item.condition.text} cannot change the outcome on its own here: "
                   f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain, "
                   f"followed from {start_name(program, seen.start)} through the calls and CASE entries on the way, "
-                  "with the values the compares, jumps and stores on each path leave its markers and words)")
+                  f"with the values the compares, jumps and stores on each path leave its markers and words{assumed})")
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
