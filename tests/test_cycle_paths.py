@@ -422,3 +422,41 @@ def test_a_loop_in_a_joined_subprogram_forgets_only_what_it_writes(tmp_path: Pat
     program = _program(tmp_path, text)
     assert (_items(program)[("O1", "O2")].status == "infeasible") == claimed
     assert _check_recorded(program, _random_memory_runs(program, 6, 20, 4)) > 0
+
+
+def test_recorded_vectors_of_the_sample_runs_are_among_the_ones_found_with_the_relations() -> None:
+    # Every scenario of the sample (power-on states mid tool change, restarts, late first cycles) and a generated
+    # search: each vector a step chain's decision recorded is among those the run from the sample's relations finds
+    # (operands scenarios set after power-on break a relation, as in equiv). Catches: an unsound relation or start.
+    from transpiler import api
+    from transpiler.diagnostics import Diagnostics
+    from transpiler.verify.guided import generate
+    from transpiler.verify.mcdc import driven_operands, power_on_operands
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import build_machine, project_names, run_scenario
+    sample = ROOT / "samples" / "basic_program"
+    program = api.load_project(api.project_options(sample / "Main_PGM.src")).program
+    names = project_names(program)
+    compiled = compile_program(program, coverage=True)
+    scenarios = [load_scenario(p, names) for p in sorted((sample / "scenarios").glob("*.yaml"))]
+    scenarios += generate(program, names, 600, seed=6, seeds=scenarios, machine_parameters=sample / "MP_data.mp")
+    relations = start_relations(program, driven_operands(scenarios, names) - power_on_operands(scenarios, names))
+    assert any(r.names[0] == "MG_tc_active" for r in relations)
+    recorded: dict = {}
+    for scenario in scenarios:
+        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for key, found in run_scenario(program, scenario, names, machine=machine).machine.coverage.vectors.items():
+            recorded.setdefault(key, set()).update(found)
+    runner = Runner(program, relations)
+    checked = 0
+    for decision in decision_table(program).decisions:
+        if Path(program.files[decision.file].path).name not in ("Toolaut1.src", "Toolmag1.src"):
+            continue
+        seen = seen_vectors(runner, decision)
+        if seen is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        got = {v & mask for v in recorded.get(decision.key, ())}
+        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
+        checked += bool(got)
+    assert checked > 20
