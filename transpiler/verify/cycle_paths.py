@@ -17,13 +17,20 @@ logic (unknown AND 0 is 0); B=/W=/D= of a known WA, the data stack (PS/PL, PSL/P
 an unknown bottom) and word stores of known values are followed too. A subprogram the decision cannot be reached
 from is run with its paths joined where they meet (its inner paths do not matter, only the state it returns with);
 where it reads a bit of the chain whose value at the start is not known yet, the path calling it forks on that bit
-first; where it jumps back, what it and its callees may write is unknown. Anything else not followed exactly makes
+first; where it jumps back, it is run again from the loop's head, from the state the head was entered with less
+what the ops from the head on and their callees may write (a state every pass starts from), and a later jump back
+to that head adds nothing. Anything else not followed exactly makes
 what it may write unknown: a PLC module its error marker and code word (all of memory where it writes to an
 address it is given), a write through the index register the operands index_range lets it reach, an op of a kind
 not modelled all of memory. A path that ends the start subprogram ends, and so does one that can no longer come to
 the chain. The run gives up (no claim) at a jump back on the way to the chain (a loop), deep calls, or when the
 paths or steps exceed their limits, and for semantics in which words or LA are not followed so (shared
 accumulator, zero extension, unsigned compares, dynamic chains).
+
+A run from the main program's start may assume what holds when every cycle but the first begins (start_relations:
+a marker a step chain works out from its step word at the end of every cycle, nothing writing either after it):
+it starts from one state per outcome of those relations, and from any state with the first-cycle marker 1 for the
+first cycle.
 
 Where every run of the decision starts: the subprogram whose code reaches the chain without a call between (its
 entry: the main program's start, a called or CASE-entered label, a submitted job); where all the calls of that
@@ -325,13 +332,16 @@ class Runner:
                     p.words[rel.word] = word
                     grown.append(p)
             paths = grown
+        marker = self.first_cycle_marker()
+        return paths + [_Path({} if marker is None else {marker: 1}, {})]
+
+    def first_cycle_marker(self) -> Key | None:
+        """The first-cycle marker, where the program never writes it (the NC's 1 in the first cycle stands)."""
         marker = self.program.semantics["first_cycle_marker"]
-        first: dict[Key, int] = {}
-        if marker is not None and not any(
-                _may_write(self.program, f, i, op, ("M", int(marker)), None, self.ranges)
-                for f, code in enumerate(self.program.files) for i, op in enumerate(code.ops)):
-            first[("M", int(marker))] = 1
-        return paths + [_Path(first, {})]
+        if marker is None or any(_may_write(self.program, f, i, op, ("M", int(marker)), None, self.ranges)
+                                 for f, code in enumerate(self.program.files) for i, op in enumerate(code.ops)):
+            return None
+        return ("M", int(marker))
 
     def count(self) -> None:
         self.steps += 1
@@ -350,7 +360,7 @@ class Runner:
         returned: list[_Path] = []
         heads = {op.target for op in ops if op.code in ("JPT", "JPF", "JP") and op.target is not None}
         entered: dict[int, _Path] = {}          # the state a loop head was last run from
-        widened: set[tuple[int, int]] = set()   # loops (head, jump back) run from a state that covers every pass
+        widened: set[int] = set()               # loop heads run from a state that covers every pass
         self.joining += 1
         try:
             while pending:
@@ -375,17 +385,19 @@ class Runner:
                     if g != f or j not in entered and j <= i:
                         raise _NotJoined
                     if j <= i:
-                        # a jump back: the loop j..i again from the state it was entered with, what its ops and
-                        # their callees may write unknown (every pass starts from such a state); a jump back to a
-                        # loop run so already adds nothing
-                        if (j, i) in widened:
+                        # a jump back: the subprogram again from the loop's head, from the state it was entered with
+                        # less what the ops from the head on (any path may come back to it through them) and their
+                        # callees may write: every pass starts from such a state, so a later jump back to a head run
+                        # so adds nothing (until a head before it is run again so)
+                        if j in widened:
                             continue
-                        widened = {(a, b) for a, b in widened if not j <= a <= b <= i} | {(j, i)}
+                        widened = {a for a in widened if a < j} | {j}
+                        later = [(g, k) for g, k in sorted(self.reach((f, entry))) if k >= j]
                         q = entered[j].copy()
-                        self.forget(q, self.collect([(f, k) for k in range(j, i + 1)]))
+                        self.forget(q, self.collect(later))
                         q.la, q.frames = None, []
                         if any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE")
-                               for k in range(j, i + 1)):
+                               for _, k in later):
                             q.stack = [_DEEP]
                     pending[j] = q if j not in pending else _join(pending[j], q)
         finally:

@@ -24,7 +24,9 @@ cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that con
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
 it), a condition no path of the cycle that comes to its chain lets decide alone (cycle_paths.py: the code run from
-where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them),
+where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them;
+from the main program's start also under what holds at the start of every cycle but the first, with the first cycle
+run from any memory and the first-cycle marker 1),
 and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
@@ -752,7 +754,10 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
             if again is not None and again and not _showable(decision, item.number, item.masking, again):
                 used.remove(rel)
         ties = _ties(decision, item.number, Tied(seen.vectors, seen.start[1], ()))
-        assumed = "".join(f"; {rel.text()}" for rel in used)
+        marker = runner.first_cycle_marker() if used and runner is not None else None
+        assumed = "".join(f"; {rel.text()}" for rel in used) + (
+            "; the first cycle followed from any memory" + (f" with the first-cycle marker M{marker[1]} = 1"
+                                                            if marker is not None else "") if used else "")
         reason = (f"{item.condition.text} cannot change the outcome on its own here: "
                   f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain, "
                   f"followed from {start_name(program, seen.start)} through the calls and CASE entries on the way, "
