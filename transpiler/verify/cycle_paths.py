@@ -986,10 +986,12 @@ def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation,
                     key[0] in ("B", "W", "D") and key[1] < span.stop and span.start < key[1] + BYTES[key[0]]
                     for key in (*outside, *tables, *NC_MODEL_OWNED)):
                 continue
+            if (f, i - 1) in targets or (f, i - 1) in entries:
+                continue                    # the compare entered from elsewhere: WA there need not be the word
             j = i
             while j < len(ops) and ops[j].code in ("ST", "STN"):
                 o = ops[j].operand
-                if (f, j) in targets or (f, j) in entries or (f, i - 1) in targets or (f, i - 1) in entries:
+                if (f, j) in targets or (f, j) in entries:
                     break
                 if o is not None and o.is_bit and not o.indexed and o.kind in ("M", "O"):
                     flag = (o.kind, o.addr)
