@@ -174,6 +174,28 @@ def test_console_script_never_shows_a_traceback(tmp_path):
         assert all(DIAGNOSTIC_LINE.match(line) for line in proc.stderr.splitlines()), proc.stderr
 
 
+def test_console_script_ends_one_shot_commands_with_all_their_output(tmp_path, capsys, monkeypatch):
+    """check and transpile end the hh2iec process themselves (without the interpreter's clean-up): what they print
+    and write, and their exit code, are those of the same command run through main()."""
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "0")        # (the XML files' creation time; the subprocess inherits it)
+    write_project(tmp_path, PROJECT)
+    write_project(tmp_path / "bad", {"main.src": "L I1\nJP nowhere\nEM\n", "OEM.cfg": ""})
+    monkeypatch.delenv("PYTHONUNBUFFERED", raising=False)   # (its output is buffered, as a user's usually is)
+    runner = [sys.executable, "-c", "from transpiler.cli import entry; entry()"]
+    for argv in (["check", tmp_path / "Main.src", "--json"], ["check", tmp_path / "bad" / "main.src"],
+                 ["transpile", tmp_path / "Main.src", "--out", tmp_path / "out-process"]):
+        proc = subprocess.run(runner + [str(a) for a in argv], capture_output=True, text=True, cwd=ROOT, timeout=60)
+        in_process = [str(a).replace("out-process", "out-main") for a in argv]
+        assert (proc.returncode, proc.stdout.replace("out-process", "out-main"), proc.stderr) == \
+            _run(in_process, capsys), argv
+    written = sorted(p.relative_to(tmp_path / "out-process") for p in (tmp_path / "out-process").rglob("*"))
+    in_main = sorted(p.relative_to(tmp_path / "out-main") for p in (tmp_path / "out-main").rglob("*"))
+    assert written and written == in_main
+    for name in written:
+        if (tmp_path / "out-main" / name).is_file():
+            assert (tmp_path / "out-process" / name).read_bytes() == (tmp_path / "out-main" / name).read_bytes()
+
+
 @pytest.mark.skipif(not SAMPLE.exists(), reason="the sample project is not there yet")
 @pytest.mark.parametrize("cfg", ["OEM.cfg", "OEM_variant_B.cfg", "OEM_variant_C.cfg"])
 def test_the_sample_project_checks_clean(capsys, cfg):

@@ -10,7 +10,7 @@ from transpiler.exec.interp import Machine, compile_program
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import index_ranges, index_values
 
 FULL = (-(1 << 31), (1 << 31) - 1)
 
@@ -88,3 +88,39 @@ def test_16_bit_index_register_and_unsigned_compares(tmp_path: Path) -> None:
     assert _at(_program(tmp_path, "L W4\n= X\nL I1\n= M100[X]\nEM\n", index_register_width=16),
                "=", "M100[X]") == (-32768, 32767)
     assert _at(_program(tmp_path, text, compare_signedness="unsigned"), "=", "M100[X]")[1] > 4
+
+
+def _congruence(program, mnemonic: str, operand: str) -> tuple[int, int]:
+    """(modulus, residue) of X before the first op written `mnemonic operand`."""
+    values = index_values(program)
+    key = next((f, i) for f, code in enumerate(program.files) for i, op in enumerate(code.ops)
+               if op.mnemonic == mnemonic and op.operand is not None and op.operand.display() == operand)
+    return values[key].modulus, values[key].residue
+
+
+def test_steps_by_two_or_four_keep_x_to_one_residue(tmp_path: Path) -> None:
+    # INCX INCX from 0 (a word table): X is even in the loop and at its test; `L X` `+ K4` `= X` from 2: X is 2
+    # modulo 4. The run shows every value X takes there. Catches: a join or a step that loses or shifts the residue.
+    program = _program(tmp_path, "L K0\n= X\nLBL Next\nL I1\n= M100[X]\nINCX\nINCX\nL X\n< K18\nJPT Next\n"
+                                 "L K2\n= X\nLBL Four\nL I1\n= M300[X]\nL X\n+ K4\n= X\nL X\n< K40\nJPT Four\nEM\n")
+    assert _congruence(program, "=", "M100[X]") == (2, 0)
+    assert _congruence(program, "<", "K18") == (2, 0)
+    assert _congruence(program, "=", "M300[X]") == (4, 2)
+    values = index_values(program)
+    test = values[next(k for k in values if program.files[k[0]].ops[k[1]].mnemonic == "<")]
+    assert test.holds(18) and not test.holds(17) and not test.holds(19)
+    machine = Machine(program, compiled=compile_program(program))
+    machine.run_cycle(0, [("I", 1, 1)])
+    marked = [a for a in range(100, 400) if machine.state.bits("M")[a]]
+    assert marked == list(range(100, 117, 2)) + list(range(302, 339, 4))
+
+
+def test_a_residue_is_claimed_only_where_every_path_keeps_it(tmp_path: Path) -> None:
+    # One INCX under an input, X loaded from a word, X after a call, and a step that may wrap the 16-bit register:
+    # nothing is known of X's residue. Catches: a residue kept over a path that breaks it.
+    program = _program(tmp_path, "L K0\n= X\nLBL A\nINCX\nINCX\nL I1\nIFT\nINCX\nENDI\nL I2\n= M100[X]\nL X\n< K20\n"
+                                 "JPT A\nL W4\nA K-2\n= X\nL I1\n= M200[X]\nL K0\n= X\nCM Sub\nL I1\n= M300[X]\n"
+                                 "L K0\n= X\nLBL B\nINCX\nINCX\nL I1\n= M400[X]\nL I2\nJPT B\nEM\nLBL Sub\nEM\n",
+                       index_register_width=16)
+    for operand in ("M100[X]", "M200[X]", "M300[X]", "M400[X]"):
+        assert _congruence(program, "=", operand)[0] == 1, operand

@@ -748,3 +748,60 @@ def test_a_compare_of_a_computed_wa_is_no_compare_of_the_operand_before_it(tmp_p
     # (100 - X is 100 or 97 there: only 97 of the three values can occur, and it does)
     expected = {-1, 0, 1} if runs is not None else {0}
     assert {b.offset for b in reached.boundaries if b.status == "reached"} == expected
+
+
+def test_a_string_compare_the_code_before_it_fixes_is_constant(tmp_path: Path) -> None:
+    # "AB" + "CD" stored in S0 and loaded again: == "ABCD" is always 1, < "ABCE" always 1, > "ABCE" always 0; an error
+    # text reference stored and compared likewise. The run agrees. Catches: the rule missing, a wrong order of the
+    # appends, a store of another string operand taken for S0's.
+    program = _program(tmp_path, 'L S"AB"\n+ S"CD"\n= S0\nL S"XY"\n= S1\nL S0\n== S"ABCD"\n= O1\nL S0\n< S"ABCE"\n'
+                                 '= O2\nL S0\n> S"ABCE"\n= O3\nL S#E12\n= S3\nL S3\n== S"E0012"\n= O4\nEM\n')
+    machine = _run(program, [{}, {}])
+    assert [machine.state.bits("O")[a] for a in (1, 2, 3, 4)] == [1, 1, 0, 1]
+    items, cov = _status(program, [machine])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 4
+    reason = items[('SA == S"ABCD"', "O1", 0)].reason
+    assert reason.startswith('SA == S"ABCD" is always 1: SA holds "ABCD"'), reason
+    assert items[('SA > S"ABCE"', "O3", 0)].reason.startswith('SA > S"ABCE" is always 0')
+
+
+@pytest.mark.parametrize("between", [
+    "L I1\nJPF Skip\nL S\"ZZ\"\n= S0\nLBL Skip\n",       # a store on one path only: the compare is entered by a jump
+    "CM Sub\n",                                          # a call (it may store S0)
+    "L K0\n= X\nL S\"ZZ\"\n= S0[X]\n",                     # a store through the index register
+])
+def test_a_string_compare_is_not_fixed_where_something_else_can_reach_it(tmp_path: Path, between: str) -> None:
+    # Catches: a string operand or the accumulator taken as known across a join, a call or an indexed store.
+    program = _program(tmp_path, f'L S"AB"\n= S0\n{between}L S0\n== S"AB"\n= O1\nEM\nLBL Sub\nL S"ZZ"\n= S0\nEM\n')
+    items, cov = _status(program, [])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 0, cov.summary()["mcdc"]
+    machine = _run(program, [{"I1": 1}, {"I1": 0}])
+    items, cov = _status(program, [machine])
+    assert cov.summary()["mcdc"]["conditions_infeasible"] == 0
+
+
+def _timed(program, mp: dict, rows: list[dict[str, int]]) -> Machine:
+    machine = Machine(program, mp, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, row in enumerate(rows):
+        machine.run_cycle(cycle, [("I", int(name[1:]), value) for name, value in row.items()])
+    return machine
+
+
+def test_the_running_bit_of_a_timer_with_preset_0_in_every_run_is_always_0(tmp_path: Path) -> None:
+    # MP4110.3 = 0: T51 never runs however I1 starts T3, so its condition cannot be shown. A run with a preset of
+    # 3 cycles shows it; a write of T51 by the program or a scenario, or no run at all, leaves it missing.
+    # Catches: the claim made without looking at the runs' presets, or over a write of the bit.
+    rows = [{"I1": 1}, {"I1": 0}, {}, {}, {"I1": 1}, {}]
+    program = _program(tmp_path, "L I1\n= T3\nL T51\n= O4\nEM\n")
+    idle = _timed(program, {"4110.3": 0}, rows)
+    assert idle.coverage.idle_timers >= {51} and 51 not in _timed(program, {"4110.3": 0.06}, rows).coverage.idle_timers
+    items, _ = _status(program, [idle])
+    t51 = items[("T51", "O4", 0)]
+    assert t51.status == "infeasible" and "MP4110.3" in t51.reason and "is 0 in every run" in t51.reason, t51
+    items, _ = _status(program, [idle, _timed(program, {"4110.3": 0.06}, rows)])
+    assert items[("T51", "O4", 0)].status == "shown"
+    assert _status(program, [idle], driven={("T", 51)})[0][("T51", "O4", 0)].status == "missing"
+    assert _status(program, [])[0][("T51", "O4", 0)].status == "missing"
+    written = _program(tmp_path, "L I1\n= T3\nL I2\n= T51\nL T51\n= O4\nEM\n")
+    items, _ = _status(written, [_timed(written, {"4110.3": 0}, rows)])
+    assert items[("T51", "O4", 0)].status != "infeasible"

@@ -8,6 +8,7 @@ from test_frontend_support import Found, compile_files, errors, program_ops, war
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend.preprocess import (PPParser, Preprocessor, initial_defines, parse_define_value, read_config,
                                    split_comment)
+from transpiler.frontend.sources import split_lines
 
 
 def _run(text: str, defines: dict | None = None, fixed: dict | None = None) -> tuple[list, Diagnostics, Preprocessor]:
@@ -185,6 +186,13 @@ def test_line_endings_and_latin1_bytes(tmp_path):
     ops = program_ops(result)
     assert [(op.code, op.span.line) for op in ops] == [("LD", 1), ("ST", 2), ("LD", 3), ("ST", 4), ("EM", 5)]
     assert ops[0].comments == ("\xe4\xf6\xfc",)
+
+
+def test_lines_end_at_cr_lf_cr_or_lf_only():
+    # a form feed, NEL or Unicode line separator inside a line (a comment may hold one) does not end it
+    text = "L I1\r\n= O1\rA I2 ;\x0c\x85\u2028x\n\r\nEM"
+    assert split_lines(text) == ["L I1", "= O1", "A I2 ;\x0c\x85\u2028x", "", "EM"]
+    assert split_lines("") == [""] and split_lines("EM\n") == ["EM", ""]
 
 
 # ---------------------------------------------------------------------------------- whole projects

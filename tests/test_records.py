@@ -1,5 +1,5 @@
 """transpiler.records: quick_init records behave as the frozen dataclasses they are (fields, defaults, equality,
-frozenness, replace, pickling), slotted or not."""
+frozenness, replace, pickling), slotted or not; a builder makes the same records as the class call."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 
 from transpiler.ir import Op, Operand
 from transpiler.diagnostics import Span
-from transpiler.records import quick_init, replaced
+from transpiler.records import builder, quick_init, replaced
 
 
 @quick_init
@@ -87,3 +87,55 @@ def test_quick_init_refuses_a_slotted_layout_it_cannot_switch():
     for cls in (Derived, Weak):
         with pytest.raises(TypeError, match="quick_init takes a slotted record only"):
             quick_init(cls)
+
+
+@quick_init
+@dataclasses.dataclass(frozen=True, slots=True)
+class _Checked:
+    low: int
+    high: int = 10
+
+    def __post_init__(self):
+        if self.low > self.high:
+            raise ValueError("low above high")
+
+
+def test_builder_makes_the_records_of_the_class_call():
+    build = builder(_Slotted)
+    for args, kwargs in [(("a",), {}), (("a", 5), {}), (("a",), {"tags": ("x",)}), ((), {"name": "b", "count": 0})]:
+        record = build(*args, **kwargs)
+        assert type(record) is _Slotted and record == _Slotted(*args, **kwargs)
+        assert repr(record) == repr(_Slotted(*args, **kwargs))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        build("a").name = "b"
+    with pytest.raises(TypeError):
+        build()                         # the class's own signature: a required field stays required
+    assert builder(_Checked)(3).high == 10
+    with pytest.raises(ValueError):     # __post_init__ runs as under the class call
+        builder(_Checked)(11)
+
+
+def test_builder_takes_slotted_quick_init_records_only():
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Plain:
+        name: str
+
+    for cls in (_WithDict, Plain):
+        with pytest.raises(TypeError):
+            builder(cls)
+
+
+@quick_init
+@dataclasses.dataclass(frozen=True, slots=True)
+class _Single:
+    name: str
+
+
+def test_replaced_changes_the_named_fields_only():
+    record = _Slotted("a", 3, ("x",))
+    assert replaced(record, count=4) == _Slotted("a", 4, ("x",))
+    assert replaced(record, tags=(), name="b") == _Slotted("b", 3, ())
+    assert replaced(record) == record and replaced(_Single("a"), name="b") == _Single("b")
+    assert replaced(_WithDict("a"), count=0) == _WithDict("a", 0)
+    with pytest.raises(TypeError):
+        replaced(record, colour="red")

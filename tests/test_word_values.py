@@ -18,10 +18,11 @@ from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
 from transpiler.verify.guided import generate
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import index_values
 from transpiler.verify.mcdc import decision_coverage, driven_operands, power_on_operands
 from transpiler.verify.scenario import load_scenario
 from transpiler.verify.simulate import build_machine, project_names, run_scenario
+from transpiler.verify.word_relations import word_relations
 from transpiler.verify.word_values import word_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -190,10 +191,17 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
     how many reached values were checked against a claim."""
     table = decision_table(program)
     values = word_values(program, table.compares, set(driven), set(power_on))
-    xs = index_ranges(program)
+    xs = index_values(program)
+    relations = word_relations(program)
     checked = 0
     for cmp in table.compares:
         if cmp.constant is None:
+            low, high = relations.get(cmp.key, (None, None))
+            for cov in coverage_sets:
+                for difference in cov.bounds.get(cmp.key, ()):
+                    assert (low is None or difference >= low) and (high is None or difference <= high), \
+                        (str(cmp.op.span), difference, (low, high))
+                    checked += 1
             continue
         reached = set()
         for cov in coverage_sets:
@@ -207,8 +215,8 @@ def _bounds_inside(program, coverage_sets, driven=frozenset(), power_on=frozense
                 assert value in held.values, (str(cmp.op.span), value, sorted(held.values))
                 checked += 1
             if word is not None and word.kind == "X" and cmp.key in xs:
-                lo, hi = xs[cmp.key]
-                assert lo <= value <= hi or lo < 0, (str(cmp.op.span), value, (lo, hi))
+                x = xs[cmp.key]
+                assert x.holds(value) or x.lo < 0, (str(cmp.op.span), value, x)
     return checked
 
 
@@ -274,6 +282,94 @@ def test_unsigned_compares_get_no_claim(tmp_path: Path) -> None:
     # nothing about it. Catches: a claim made on the wrong reading of the word.
     held = _held(_steps(tmp_path, compare_signedness="unsigned"))
     assert set(held.values()) == {None}
+
+
+def test_products_and_quotients_by_a_constant_are_followed(tmp_path: Path) -> None:
+    # A doubling loop from 1 until 100 leaves only powers of two at its test (never 99, 100, 101); MOD and / of a
+    # constant work the values out; a product by a word the analysis does not know leaves WA any. Catches: a
+    # product taken as any value (no claim), or a product by an unknown word taken as known.
+    text = ("L K1\n= W10\nREPEAT\nL W10\nx K2\n= W10\nL W10\n>= K100\nUNTILT\n"
+            "L K7\n= W20\nL W20\nMOD K4\n== K3\n= O1\nL W20\n/ K-2\n== K-3\n= O2\n"
+            "L W20\nx W30\n== K14\n= O3\nEM\n")
+    program = _program(tmp_path, text)
+    held = _held(program)
+    assert held[(8, ">=", 100)] == {2, 4, 8, 16, 32, 64, 128}
+    assert held[(14, "==", 3)] == {3}
+    assert held[(18, "==", -3)] == {-3}
+    assert held[(22, "==", 14)] is None
+    # the whole coverage: the three values around 100 are infeasible with the stores named
+    table = decision_table(program)
+    items = {i.what(): i for i in decision_coverage(program, [], table=table).boundaries}
+    item = items["boundary W10 >= K100: W10 = c (100)"]
+    assert item.status == "infeasible" and "2, 4, 8, 16, 32, 64, 128" in item.reason, item.reason
+
+
+@pytest.mark.parametrize("semantics, value", [({}, 0), ({"mul_overflow_result": "unchanged"}, 65536)])
+def test_an_overflowing_product_follows_the_assumption(tmp_path: Path, semantics: dict, value: int) -> None:
+    # A-10: 65536 x 65536 overflows; the low bits (0) or WA unchanged (65536). Catches: one rule for both choices.
+    held = _held(_program(tmp_path, "L K65536\nx K65536\n== K0\n= O1\nEM\n", **semantics))
+    assert held[(3, "==", 0)] == {value}
+
+
+def test_rply_gives_running_only_in_code_a_job_reaches(tmp_path: Path) -> None:
+    # The main program's RPLY sees 0 or 2 (no job runs while it does); the job's own RPLY, and one in a routine the
+    # job calls (also called from the main program), may see 1. Catches: 1 left out where a job can run the RPLY,
+    # or RPLY's answer taken as any value.
+    text = ("RPLY W12\n== K0\n= O1\nL I1\nCMT Ask\nL M4172\nJPF Done\nSUBM Job\n= W12\nLBL Done\nEM\n"
+            "LBL Job\nRPLY W12\n== K1\n= O2\nCM Ask\nEM\n"
+            "LBL Ask\nRPLY W12\n== K2\n= O3\nEM\n")
+    program = _program(tmp_path, text)
+    held = _held(program)
+    assert held[(2, "==", 0)] == {0, 2}
+    assert held[(14, "==", 1)] == {0, 1, 2}
+    assert held[(20, "==", 2)] == {0, 1, 2}
+    table = decision_table(program)
+    items = {i.what(): i for i in decision_coverage(program, [], table=table).boundaries}
+    item = items["boundary WA == K0: WA = c+1 (1)"]
+    assert item.status == "infeasible" and "only inside the job it asks about" in item.reason, item.reason
+    assert items["boundary WA == K1: WA = c (1)"].status == "missing"
+
+
+COUNTING = "L K0\n= W6\nL W6\n< W30\nWHILET\n{body}L W6\n{step}= W6\nL W6\n< W30\nENDW\nEM\n{routines}"
+
+
+def _relation(program, line: int) -> tuple:
+    table = decision_table(program)
+    cmp = next(c for c in table.compares if c.op.span.line == line)
+    return word_relations(program).get(cmp.key, (None, None))
+
+
+def test_a_counting_loop_never_passes_its_limit_at_its_test(tmp_path: Path) -> None:
+    # The body runs with W6 < W30 and adds 1: at the test at its end W6 - W30 <= 0, so +1 is infeasible; runs with
+    # limits -1..40 reach -1 and 0 only. Catches: the fact lost over the step (no claim), or the step not counted.
+    program = _program(tmp_path, COUNTING.format(body="", step="+ K1\n", routines=""))
+    assert _relation(program, 10) == (None, 0)
+    assert _relation(program, 4) == (None, None)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle, limit in enumerate(range(-1, 40)):
+        machine.state.write("W", 30, limit)
+        machine.run_cycle(cycle, [])
+    _bounds_inside(program, [machine.coverage])
+    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 10)
+    assert machine.coverage.bounds[cmp.key] == {-1, 0}
+    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
+    item = items["boundary W6 < W30: W6 - W30 = +1"]
+    assert item.status == "infeasible" and item.reason.startswith("W6 - W30 is at most 0 here, never +1"), item
+
+
+@pytest.mark.parametrize("body, step, routines, why", [
+    ("", "+ K2\n", "", "a step of 2 can pass the limit by one"),
+    ("L W6\n= W30\n", "+ K1\n", "", "the limit written in the body"),
+    ("CM Sub\n", "+ K1\n", "LBL Sub\nL K9\n= W30\nEM\n", "a call in the body"),
+    ("L K-1\n= B7\n", "+ K1\n", "", "a store of a byte of W6"),
+    ("L K0\n= X\nL K5\n= W6[X]\n", "+ K1\n", "", "a store through the index register"),
+    ("", "- K1\n", "", "a step down"),
+])
+def test_no_difference_is_claimed_where_the_loop_may_break_it(tmp_path: Path, body: str, step: str, routines: str,
+                                                               why: str) -> None:
+    # Catches: a fact kept over a write that changes one of the words, or a step that may pass the limit.
+    program = _program(tmp_path, COUNTING.format(body=body, step=step, routines=routines))
+    assert _relation(program, 10 + body.count("\n"))[1] is None, why
 
 
 TABLE_READ = "PS    K0\nPS    W20\nPS    K1\nCM    9093\n{pulls}L     W40\n==    K0\n=     O1\nEM\n"

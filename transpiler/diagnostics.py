@@ -6,7 +6,7 @@ import dataclasses
 import enum
 from typing import Iterable
 
-from transpiler.records import quick_init
+from transpiler.records import builder, quick_init
 
 
 class Severity(enum.Enum):
@@ -16,7 +16,7 @@ class Severity(enum.Enum):
 
 
 @quick_init
-@dataclasses.dataclass(frozen=True, order=True)
+@dataclasses.dataclass(frozen=True, order=True, slots=True)
 class Span:
     """A position in an original source file (1-based line and column)."""
 
@@ -31,6 +31,7 @@ class Span:
 
 
 NO_SPAN = Span("<command line>", 1, 1)
+new_span = builder(Span)        # Span(...) for the preprocessor's loop over the lines
 
 
 @dataclasses.dataclass(frozen=True)

@@ -7,7 +7,7 @@ from typing import Mapping
 
 from transpiler.diagnostics import Span
 from transpiler.language.semantics import Semantics
-from transpiler.records import quick_init
+from transpiler.records import builder, quick_init
 
 BIT_KINDS = frozenset("MIOTC")
 MEM_KINDS = frozenset("BWD")
@@ -78,6 +78,7 @@ class CallTarget:
         return (self.file, self.index)
 
 
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Bracket:
     """Static facts of a bracket: operator, mode (LOGIC/WORD) and whether it is a load bracket (A-04)."""
@@ -106,6 +107,9 @@ class Op:
     nbits: int = 0                          # LB/LW/LD and B=/W=/D=
     label: str = ""                         # LBL name
     chain_open: bool = False                # static chain state before this op (A-03)
+
+
+new_op = builder(Op)        # Op(...) for the front end's loop over the lines
 
 
 @dataclasses.dataclass(frozen=True)

@@ -11,7 +11,7 @@ from typing import Sequence
 from transpiler import __version__, api
 from transpiler.cli import equiv, merge, mutate, simulate, transpile
 from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, ArgumentParser, UsageError, add_project_arguments,
-                                   diagnostics_json, one_shot, options_from_args, print_diagnostics,
+                                   diagnostics_json, finish_one_shot, one_shot, options_from_args, print_diagnostics,
                                    semantics_from_args)
 from transpiler.diagnostics import CODES, NO_SPAN, CompileFailed, explain
 from transpiler.frontend.pipeline import CompileResult
@@ -74,7 +74,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             print(f"  {'plc modules':<14} {', '.join(map(str, data['plc_modules']))}")
         if data.get("masks"):
             print(f"  {'screen masks':<14} {', '.join(data['masks'])}")
-    return EXIT_BAD_INPUT if result.diagnostics.has_errors() else EXIT_OK
+    return finish_one_shot(args, EXIT_BAD_INPUT if result.diagnostics.has_errors() else EXIT_OK)
 
 
 class _VersionAction(argparse.Action):
@@ -158,7 +158,9 @@ def cmd_assumptions(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, *, own_process: bool = False) -> int:
+    """Run one command; `own_process` when this is the `hh2iec` process itself (`entry`), whose one-shot commands
+    then end the process at once (common.finish_one_shot)."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -167,6 +169,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except SystemExit as exc:
         return EXIT_BAD_INPUT if exc.code not in (0, None) else EXIT_OK
+    args.own_process = own_process
     try:
         return args.handler(args)
     except UsageError as exc:
@@ -190,7 +193,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry() -> None:
-    sys.exit(main())
+    sys.exit(main(own_process=True))
 
 
 if __name__ == "__main__":

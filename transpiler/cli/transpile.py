@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from transpiler import api
-from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, UsageError, one_shot, print_diagnostics,
-                                   project_from_args)
+from transpiler.cli.common import (EXIT_BAD_INPUT, EXIT_OK, UsageError, finish_one_shot, one_shot,
+                                   print_diagnostics, project_from_args)
 from transpiler.diagnostics import NO_SPAN
 
 
@@ -50,7 +50,7 @@ def cmd_transpile(args: argparse.Namespace) -> int:
     print(f"hh2iec transpile: wrote {', '.join(_written(out.files))} for {args.target} to {args.out} "
           f"({out.pou_count} POUs, {len(out.result.fallbacks)} state-machine fallbacks, "
           f"{len(out.result.untranslated)} not translated)")
-    return EXIT_OK
+    return finish_one_shot(args, EXIT_OK)
 
 
 def _written(files) -> list[str]:

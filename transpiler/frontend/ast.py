@@ -3,26 +3,22 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Union
+from typing import NamedTuple, Union
 
 from transpiler.diagnostics import Span
-from transpiler.records import quick_init
+from transpiler.records import builder, quick_init
 
 
-@quick_init
-@dataclasses.dataclass(frozen=True, slots=True)
-class OperandSyntax:
-    """An operand as written. kind: M I O T C B W D K S SREF SIMM KF X NUM SYM."""
+class OperandSyntax(NamedTuple):
+    """An operand as written. kind: M I O T C B W D K S SREF SIMM KF X NUM SYM.
+
+    A typed named tuple rather than a frozen dataclass: the lowering looks each line's operand up in its caches,
+    and a tuple is hashed and compared in C (the dataclass's hash was a Python call per lookup)."""
 
     kind: str
     value: Union[int, str]
     indexed: bool
     text: str
-
-    def __hash__(self) -> int:
-        # (the text as written, normalised, tells the operands apart; the dataclass's hash of all four fields made
-        # the lowering's per-line cache lookups cost more than the rest of a repeated line's lowering)
-        return hash(self.text)
 
 
 @quick_init
@@ -34,6 +30,10 @@ class Instr:
     comments: tuple[str, ...] = ()
 
 
+new_instr = builder(Instr)      # Instr(...) for the parser's loop over the lines
+
+
+@quick_init
 @dataclasses.dataclass(frozen=True, slots=True)
 class Label:
     name: str

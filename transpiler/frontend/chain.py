@@ -11,7 +11,7 @@ from transpiler.frontend.opcodes import (ARITH, BIT_GROUPS, COMPARES, GATE_AS_LO
                                          WORD_GATES)
 from transpiler.frontend.operands import label_text
 from transpiler.frontend.structure import StructureMatcher
-from transpiler.ir import Bracket, CallTarget, Op, Operand
+from transpiler.ir import Bracket, CallTarget, Op, Operand, new_op
 from transpiler.language.modules import MODULES, nearest
 from transpiler.language.semantics import Semantics
 
@@ -71,14 +71,15 @@ class ChainLowering:
         # collector runs, at the latest when the process exits, where it cost ~0.1 s on a 100 000-line project.)
         self._group_of: dict[str, Callable[[ChainLowering, _Step], Lowered | None]] = {}
         self._shapes: dict[tuple[str, str | None, bool, str], _Shape] = {}
+        self.modules_called: set[int] = set()      # the PLC modules of the call ops made (each op made is kept)
 
     def lower(self, instr: ast.Instr, operand: Operand | None, index: int, chain_open: bool, last_acc: str) -> Lowered:
         m = instr.mnemonic
         shape_key = (m, operand.kind if operand is not None else None, chain_open, last_acc)
         shape = self._shapes.get(shape_key)
         if shape is not None:
-            return (Op(shape.code, m, instr.span, operand, instr.comments, rel=shape.rel, nbits=shape.nbits,
-                       chain_open=chain_open), shape.chain_open, shape.last_acc)
+            return (new_op(shape.code, m, instr.span, operand, instr.comments, rel=shape.rel, nbits=shape.nbits,
+                           chain_open=chain_open), shape.chain_open, shape.last_acc)
         base = dict(mnemonic=m, span=instr.span, operand=operand, comments=instr.comments, chain_open=chain_open)
         is_bit = operand is not None and operand.is_bit
         is_str = operand is not None and operand.kind in ("S", "STR")
@@ -119,23 +120,23 @@ class ChainLowering:
         m, base, chain_open = s.m, s.base, s.chain_open
         if m in ("L", "LN"):
             if s.is_bit:
-                return Op("LD" if m == "L" else "LDN", **base), True, "LOGIC"
+                return new_op("LD" if m == "L" else "LDN", **base), True, "LOGIC"
             if s.is_str:
-                return Op("SLD", **base), chain_open, "STRING"
-            return Op("WLD" if m == "L" else "WLDN", **base), chain_open, "WORD"
+                return new_op("SLD", **base), chain_open, "STRING"
+            return new_op("WLD" if m == "L" else "WLDN", **base), chain_open, "WORD"
         if m == "L-":
-            return Op("WNEG", **base), chain_open, "WORD"
+            return new_op("WNEG", **base), chain_open, "WORD"
         if m in ("LB", "LW", "LD"):
-            return Op("LDBITS", nbits=BIT_GROUPS[m], **base), chain_open, "WORD"
+            return new_op("LDBITS", nbits=BIT_GROUPS[m], **base), chain_open, "WORD"
         if m in ("=", "=N", "S", "R", "SN", "RN"):
             if s.is_bit:
                 code = {"=": "ST", "=N": "STN", "S": "SET", "R": "RES", "SN": "SETN", "RN": "RESN"}[m]
-                return Op(code, **base), False, "LOGIC"
+                return new_op(code, **base), False, "LOGIC"
             if s.operand.kind == "S":
-                return Op("SST", **base), False, "STRING"
-            return Op("WST", **base), False, "WORD"
+                return new_op("SST", **base), False, "STRING"
+            return new_op("WST", **base), False, "WORD"
         if m in ("B=", "W=", "D="):
-            return Op("STBITS", nbits=BIT_GROUPS[m], **base), False, "WORD"
+            return new_op("STBITS", nbits=BIT_GROUPS[m], **base), False, "WORD"
         return None
 
     def _logic_word(self, s: _Step) -> Lowered | None:
@@ -143,23 +144,23 @@ class ChainLowering:
         if m in LOGIC_GATES:
             if s.is_bit:
                 if chain_open or self.semantics["chain_model"] == "dynamic":
-                    return Op(LOGIC_GATES[m], **base), True, "LOGIC"
-                return Op(GATE_AS_LOAD[m], **base), True, "LOGIC"
+                    return new_op(LOGIC_GATES[m], **base), True, "LOGIC"
+                return new_op(GATE_AS_LOAD[m], **base), True, "LOGIC"
             if not chain_open and self.semantics["word_gate_at_chain_start"] == "load":
-                return Op("WLD" if GATE_AS_LOAD[m] == "LD" else "WLDN", **base), chain_open, "WORD"
-            return Op(WORD_GATES[m], **base), chain_open, "WORD"
+                return new_op("WLD" if GATE_AS_LOAD[m] == "LD" else "WLDN", **base), chain_open, "WORD"
+            return new_op(WORD_GATES[m], **base), chain_open, "WORD"
         if m in ARITH:
             if s.is_str and m == "+":
-                return Op("SCAT", **base), chain_open, "STRING"
-            return Op(ARITH[m], **base), chain_open, "WORD"
+                return new_op("SCAT", **base), chain_open, "STRING"
+            return new_op(ARITH[m], **base), chain_open, "WORD"
         if m in COMPARES:
-            return Op("SCMP" if s.is_str else "CMP", rel=m, **base), True, "LOGIC"
+            return new_op("SCMP" if s.is_str else "CMP", rel=m, **base), True, "LOGIC"
         if m in ("<<", ">>"):
-            return Op("SHL" if m == "<<" else "SHR", **base), chain_open, "WORD"
+            return new_op("SHL" if m == "<<" else "SHR", **base), chain_open, "WORD"
         if m in ("BS", "BC"):
-            return Op(m, **base), chain_open, "WORD"
+            return new_op(m, **base), chain_open, "WORD"
         if m == "BT":
-            return Op("BT", **base), True, "LOGIC"
+            return new_op("BT", **base), True, "LOGIC"
         return None
 
     def _bracket_stack(self, s: _Step) -> Lowered | None:
@@ -169,15 +170,15 @@ class ChainLowering:
         if m == "]":
             return self._close_bracket(base, chain_open, s.last_acc)
         if m == "PS":
-            return Op("PUSH", **base), chain_open, "NONE"
+            return new_op("PUSH", **base), chain_open, "NONE"
         if m == "PL":
-            return Op("POP", **base), chain_open, "NONE"
+            return new_op("POP", **base), chain_open, "NONE"
         if m in ("PSW", "PLW", "PSX", "PLX"):
-            return Op(m, **base), chain_open, "WORD"
+            return new_op(m, **base), chain_open, "WORD"
         if m == "PSL":
-            return Op("PSL", **base), chain_open, "LOGIC"
+            return new_op("PSL", **base), chain_open, "LOGIC"
         if m == "PLL":
-            return Op("PLL", **base), True, "LOGIC"
+            return new_op("PLL", **base), True, "LOGIC"
         return None
 
     def _control(self, s: _Step) -> Lowered | None:
@@ -185,20 +186,20 @@ class ChainLowering:
         span = base["span"]
         if m in ("JP", "JPT", "JPF"):
             self.pending_jumps.append((s.index, label_text(s.instr.operand), span))
-            return Op(m, **base), False, "NONE"
+            return new_op(m, **base), False, "NONE"
         if m in ("CM", "CMT", "CMF"):
             return self._call(s)
         if m == "SUBM":
             self.pending_calls.append((s.index, label_text(s.instr.operand), span))
-            return Op("SUBM", **base), False, "WORD"
+            return new_op("SUBM", **base), False, "WORD"
         if m in ("RPLY", "CAN"):
-            return Op(m, **base), chain_open, "WORD" if m == "RPLY" else "NONE"
+            return new_op(m, **base), chain_open, "WORD" if m == "RPLY" else "NONE"
         if m in ("EM", "EMT", "EMF"):
-            return Op(m, **base), False, "NONE"
+            return new_op(m, **base), False, "NONE"
         if m == "CASE":
-            return Op("CASE", **base), False, "NONE"
+            return new_op("CASE", **base), False, "NONE"
         if m == "ENDC":
-            return Op("NOP", **base), False, "NONE"
+            return new_op("NOP", **base), False, "NONE"
         if m in STRUCT_ALL:
             return self.structure.lower(m, base, s.index), False, "NONE"
         return None
@@ -219,18 +220,19 @@ class ChainLowering:
                 where = "in the module table" if number not in MODULES else f"a module of profile {profile}"
                 self.diags.report("E-MODULE-UNKNOWN", span, f"PLC module {number} is not {where} "
                                   f"(nearest known: {known}; see docs/modules.md)")
-            return Op(code, call=CallTarget(module=number), **base), False, "NONE"
+            self.modules_called.add(number)
+            return new_op(code, call=CallTarget(module=number), **base), False, "NONE"
         self.pending_calls.append((s.index, label_text(s.instr.operand), span))
-        return Op(code, **base), False, "NONE"
+        return new_op(code, **base), False, "NONE"
 
     def _extended(self, s: _Step) -> Lowered | None:
         m, base, chain_open = s.m, s.base, s.chain_open
         if m in ("INC", "DEC"):
-            return Op(m, **base), chain_open, "LOGIC" if s.is_bit else "NONE"
+            return new_op(m, **base), chain_open, "LOGIC" if s.is_bit else "NONE"
         if m == "NOTL":
-            return Op("NOTL", **base), True, "LOGIC"
+            return new_op("NOTL", **base), True, "LOGIC"
         if m in ("INCW", "DECW", "INCX", "DECX", "NOTW", "TWOC"):
-            return Op(m, **base), chain_open, "WORD"
+            return new_op(m, **base), chain_open, "WORD"
         return None
 
     # ---- brackets
@@ -260,7 +262,8 @@ class ChainLowering:
                 and self.semantics["bracket_at_chain_start"] == "load")
         brackets.append(BracketFrame(op, mode, load, index, span))
         new_chain = False if (mode == "LOGIC" or op in COMPARES) else chain_open
-        return Op("BOPEN", bracket=Bracket(op, mode, load), rel=op if op in COMPARES else "", **base), new_chain, mode
+        return (new_op("BOPEN", bracket=Bracket(op, mode, load), rel=op if op in COMPARES else "", **base), new_chain,
+                mode)
 
     def _close_bracket(self, base: dict, chain_open: bool, last_acc: str) -> Lowered:
         if not self.brackets:
@@ -271,7 +274,7 @@ class ChainLowering:
             self.diags.report("E-BRACKET-SPAN", fault_span, message)
         bracket = Bracket(frame.op, frame.mode, frame.load)
         logic_result = (frame.op in LOGIC_GATES and frame.mode == "LOGIC") or frame.op in COMPARES
-        return (Op("BCLOSE", bracket=bracket, rel=frame.op if frame.op in COMPARES else "", **base),
+        return (new_op("BCLOSE", bracket=bracket, rel=frame.op if frame.op in COMPARES else "", **base),
                 True if logic_result else chain_open, "LOGIC" if logic_result else "WORD")
 
 

@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Mapping
+from bisect import bisect_left
+from itertools import chain
+from typing import Iterator, Mapping
 
 from transpiler.diagnostics import Diagnostics, Span
-from transpiler.frontend import ast
 from transpiler.frontend.lowering import FileLowering
-from transpiler.frontend.opcodes import STRUCT_ALL
 from transpiler.ir import CallTarget, FileCode, Op, Program
 
 LOST_LINE_CODES = frozenset({"E-SYNTAX", "E-UNSUPPORTED", "E-LIT-RANGE", "E-PP-NEST", "E-PP-SYNTAX",
                              "E-FILE-NOT-FOUND", "E-FILE-ESCAPE", "E-FILE-READ", "E-FILE-INCLUDE-CYCLE"})
-_FLOW_MNEMONICS = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
+_BLOCK_ENDS = frozenset({"EM", "JP", "JPT", "JPF", "KFIELD"})
 
 
 def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
@@ -21,11 +21,7 @@ def flow_is_complete(low: FileLowering, lost_lines: set[str]) -> bool:
     statements = low.src.statements
     if lost_lines and (low.src.path in lost_lines or any(stmt.span.file in lost_lines for stmt in statements)):
         return False
-    # (an op has the mnemonic of the statement it was lowered from: only the control statements' spans are
-    # looked up, instead of hashing the span of every op)
-    lowered = {op.span for op in low.ops if op.mnemonic in _FLOW_MNEMONICS}
-    return all(stmt.span in lowered for stmt in statements
-               if type(stmt) is ast.Instr and stmt.mnemonic in _FLOW_MNEMONICS)
+    return not low.flow_rejected
 
 
 def successors(ops: tuple[Op, ...], i: int) -> list[int]:
@@ -40,36 +36,45 @@ def successors(ops: tuple[Op, ...], i: int) -> list[int]:
     return [i + 1]
 
 
-def check_flow(file_index: int, f: FileCode, diags: Diagnostics) -> None:
+def block_ends(ops: tuple[Op, ...]) -> list[int]:
+    """The indices, in order, of the ops after which control does not simply go on with the next op (EM, jumps,
+    KFIELD): the walks below go over the ops in between a block at a time, most ops being none of these."""
+    return [i for i, op in enumerate(ops) if op.code in _BLOCK_ENDS]
+
+
+def check_flow(file_index: int, f: FileCode, diags: Diagnostics, ends: list[int] | None = None) -> None:
+    """E-FALL-OFF-END when a path from the file's entries reaches its end without EM; `ends` are the file's
+    block_ends when the caller has them."""
     ops = f.ops
-    entries = [0] if file_index == 0 else []
-    entries += list(f.labels.values())
-    seen: set[int] = set()
     n = len(ops)
-    stack = [e for e in entries if e < n]
+    ends = block_ends(ops) if ends is None else ends
+    starts = [0] if file_index == 0 else []
+    starts += [e for e in f.labels.values() if e < n]
+    followed: set[int] = set()          # the block ends whose successors are taken
     falls_off = file_index == 0 and not ops
-    while stack:
-        i = stack.pop()
-        if i in seen:
+    while starts:
+        k = bisect_left(ends, starts.pop())
+        if k == len(ends):              # no EM, jump or table after it: straight on past the last op
+            falls_off = True
             continue
-        seen.add(i)
-        # successors(ops, i), inlined: this walk visits every op of the program
-        op = ops[i]
+        last = ends[k]
+        if last in followed:
+            continue
+        followed.add(last)
+        op = ops[last]
         code = op.code
         if code == "KFIELD" or code == "EM":      # (EM: no successor)
             continue
-        if code == "JP" or code == "JPT" or code == "JPF":
-            if op.target is not None:
-                if op.target >= n:
-                    falls_off = True
-                elif op.target not in seen:
-                    stack.append(op.target)
-            if code == "JP":
-                continue
-        if i + 1 >= n:
-            falls_off = True
-        elif i + 1 not in seen:
-            stack.append(i + 1)
+        if op.target is not None:
+            if op.target >= n:
+                falls_off = True
+            else:
+                starts.append(op.target)
+        if code != "JP":                # JPT, JPF: the next op when the jump is not taken
+            if last + 1 >= n:
+                falls_off = True
+            else:
+                starts.append(last + 1)
     if falls_off:
         diags.report("E-FALL-OFF-END", Span(f.path, max(1, f.line_count), 1),
                     "a path reaches the end of the file without EM")
@@ -85,29 +90,44 @@ def routines_entered(op: Op) -> list[CallTarget]:
     return []
 
 
-def routine_body(files: tuple[FileCode, ...], entry: CallTarget) -> list[int]:
-    """Op indices reachable from an entry until EM (the body of a subprogram)."""
-    ops = files[entry.file].ops
+def routine_body(files: tuple[FileCode, ...], entry: CallTarget, ends: list[int] | None = None) -> list[int]:
+    """Op indices reachable from an entry until EM (the body of a subprogram), in order; `ends` are the file's
+    block_ends when the caller has them."""
+    return list(_expanded(_body_blocks(files[entry.file].ops, entry.index,
+                                       block_ends(files[entry.file].ops) if ends is None else ends)))
+
+
+def _body_blocks(ops: tuple[Op, ...], entry: int, ends: list[int]) -> dict[int, int]:
+    """The body from `entry` as blocks of consecutive ops: the last op of each block -> its first op."""
     n = len(ops)
-    seen: set[int] = set()
-    stack = [entry.index]
-    while stack:
-        i = stack.pop()
-        if i in seen or i >= n:
+    first: dict[int, int] = {}
+    starts = [entry]
+    while starts:
+        start = starts.pop()
+        if start >= n:
             continue
-        seen.add(i)
-        # successors(ops, i), inlined: this walk runs for every routine in several stages
-        op = ops[i]
+        k = bisect_left(ends, start)
+        last = ends[k] if k < len(ends) else n - 1
+        if last in first:               # the block was reached before: only its start may move up
+            first[last] = min(first[last], start)
+            continue
+        first[last] = start
+        if k == len(ends):              # runs off the end of the file
+            continue
+        op = ops[last]
         code = op.code
         if code == "EM":
             continue
-        if code == "JP" or code == "JPT" or code == "JPF":
-            if op.target is not None and op.target not in seen:
-                stack.append(op.target)
-            if code == "JP":
-                continue
-        stack.append(i + 1)
-    return sorted(seen)
+        if code != "KFIELD" and op.target is not None:
+            starts.append(op.target)
+        if code != "JP":
+            starts.append(last + 1)
+    return first
+
+
+def _expanded(blocks: dict[int, int]) -> Iterator[int]:
+    """The op indices of blocks (last op -> first op), in order."""
+    return chain.from_iterable(range(first, last + 1) for last, first in sorted(blocks.items()))
 
 
 class RoutineBodies:
@@ -118,6 +138,7 @@ class RoutineBodies:
     def __init__(self, files: tuple[FileCode, ...], known: Mapping[tuple[int, int], tuple[int, ...]] | None = None):
         self.files = files
         self._bodies: dict[tuple[int, int], tuple[int, ...]] = dict(known or {})
+        self._ends: dict[int, list[int]] = {}          # file index -> its block_ends
 
     @classmethod
     def of(cls, program: Program) -> RoutineBodies:
@@ -128,11 +149,19 @@ class RoutineBodies:
         """A copy of the bodies asked for so far, by entry key."""
         return dict(self._bodies)
 
+    def ends(self, file_index: int) -> list[int]:
+        """block_ends of one file's ops."""
+        ends = self._ends.get(file_index)
+        if ends is None:
+            ends = self._ends[file_index] = block_ends(self.files[file_index].ops)
+        return ends
+
     def __call__(self, entry: CallTarget) -> tuple[int, ...]:
         key = (entry.file, entry.index)
         body = self._bodies.get(key)
         if body is None:
-            body = self._bodies[key] = tuple(routine_body(self.files, entry))
+            blocks = _body_blocks(self.files[entry.file].ops, entry.index, self.ends(entry.file))
+            body = self._bodies[key] = tuple(_expanded(blocks))
         return body
 
 

@@ -192,6 +192,7 @@ class _Loader:
         Python's recursion limit, and the order is exactly that of the recursive walk (a module's own
         #define and USES lines are taken when its USES line is reached)."""
         stack: list[tuple[Path, str, Iterator[ast.Statement]]] = []
+        requests = (ast.DefineFile, ast.Uses)
 
         def enter(path: Path, at: Span) -> None:
             if path in seen:
@@ -204,7 +205,7 @@ class _Loader:
             parsed = self.parsers.src.parse_file(text.display, self._preprocess(text), len(text.lines), self.diags)
             out.append(parsed)
             # (only these two statements matter here: the walk below skips the rest of the file at once)
-            wanted = [s for s in parsed.statements if type(s) is ast.DefineFile or type(s) is ast.Uses]
+            wanted = [s for s in parsed.statements if type(s) in requests]
             stack.append((path, parsed.path, iter(wanted)))
 
         enter(main, NO_SPAN)

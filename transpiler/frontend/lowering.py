@@ -7,11 +7,11 @@ from typing import NamedTuple
 from transpiler.diagnostics import Diagnostics, Span
 from transpiler.frontend import ast
 from transpiler.frontend.chain import ChainLowering
-from transpiler.frontend.opcodes import CONTROL, STRUCT_ALL
+from transpiler.frontend.opcodes import CONTROL, FLOW, STRUCT_ALL
 from transpiler.frontend.operands import OperandResolver, label_text
 from transpiler.frontend.structure import StructureMatcher
 from transpiler.frontend.symbols import SymTables
-from transpiler.ir import Op, Operand
+from transpiler.ir import Op, Operand, new_op
 from transpiler.language.mnemonics import MNEMONICS
 from transpiler.language.semantics import Semantics
 from transpiler.records import replaced
@@ -62,13 +62,30 @@ class FileLowering:
         # E-CASE-BODY faults inside the open table, reported at its ENDC: a table that is never closed reports
         # only "CASE without ENDC" (the missing ENDC is the root fault, not every line after it).
         self.case_faults: list[tuple[Span, str]] = []
+        self.flow_rejected = False      # a statement of FLOW gave no op (it was rejected with an error)
 
     def run(self) -> None:
         self._collect_kfields()
         instr_type = ast.Instr
+        plain_lowered = self.plain_lowered
+        ops = self.ops
         for stmt in self.src.statements:
             if type(stmt) is instr_type:         # (nine lines in ten: tested first)
+                if self.case_open is None:
+                    # Most lines repeat an instruction lowered before in the same chain state: its op differs only
+                    # in span and comments (no diagnostic, no queued jump, no bracket), so it is not checked and
+                    # lowered again.
+                    chain_open = self.chain_open
+                    known = plain_lowered.get((stmt.mnemonic, stmt.operand, chain_open, self.last_acc))
+                    if known is not None:
+                        code, operand, rel, nbits, self.chain_open, self.last_acc = known
+                        ops.append(new_op(code, stmt.mnemonic, stmt.span, operand, stmt.comments, rel=rel,
+                                          nbits=nbits, chain_open=chain_open))
+                        continue
+                count = len(ops)
                 self._instruction(stmt)
+                if len(ops) == count and stmt.mnemonic in FLOW:
+                    self.flow_rejected = True
             elif isinstance(stmt, ast.Global):
                 self.globals.append(stmt)
             elif isinstance(stmt, ast.Extern):
@@ -85,8 +102,9 @@ class FileLowering:
 
     def _collect_kfields(self) -> None:
         """KFIELD tables are known to the whole file, before the statements are lowered in order."""
+        kfield_type = ast.KField
         for stmt in self.src.statements:
-            if type(stmt) is ast.KField:
+            if type(stmt) is kfield_type:
                 if stmt.name in self.kfields:
                     self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"KFIELD {stmt.name} is defined twice")
                 self.kfields[stmt.name] = stmt.values
@@ -107,7 +125,8 @@ class FileLowering:
             if self.kfield_lines.get(stmt.name, stmt.span.line) < stmt.span.line:
                 self.diags.report("E-SYM-DUP-LABEL", stmt.span, f"label {stmt.name} has the name of the "
                                  f"KFIELD at line {self.kfield_lines[stmt.name]}")
-        self.ops.append(Op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name, chain_open=self.chain_open))
+        self.ops.append(new_op("LBL", "LBL", stmt.span, comments=stmt.comments, label=stmt.name,
+                               chain_open=self.chain_open))
         self.chain_open, self.last_acc = False, "NONE"
 
     def _kfield(self, stmt: ast.KField) -> None:
@@ -118,20 +137,12 @@ class FileLowering:
         if prev is None or prev.mnemonic not in ("EM", "JP"):
             self.diags.report("E-KF-PLACEMENT", stmt.span,
                              f"KFIELD {stmt.name} must follow an unconditional EM or JP")
-        self.ops.append(Op("KFIELD", "KFIELD", stmt.span, comments=stmt.comments, label=stmt.name))
+        self.ops.append(new_op("KFIELD", "KFIELD", stmt.span, comments=stmt.comments, label=stmt.name))
         self.chain_open, self.last_acc = False, "NONE"
 
     def _instruction(self, instr: ast.Instr) -> None:
+        """An instruction not lowered before in this chain state (run() takes the others from plain_lowered)."""
         m = instr.mnemonic
-        if self.case_open is None:
-            # Most lines repeat an instruction lowered before in the same chain state: its op differs only in span
-            # and comments (no diagnostic, no queued jump, no bracket), so it is not checked and lowered again.
-            known = self.plain_lowered.get((m, instr.operand, self.chain_open, self.last_acc))
-            if known is not None:
-                self.ops.append(Op(known.code, m, instr.span, known.operand, instr.comments, rel=known.rel,
-                                   nbits=known.nbits, chain_open=self.chain_open))
-                self.chain_open, self.last_acc = known.chain_open, known.last_acc
-                return
         index = len(self.ops)
         info = MNEMONICS[m]
         # (_admitted has nothing to say about a plain instruction outside CASE tables and brackets: most of them)

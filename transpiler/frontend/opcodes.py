@@ -9,6 +9,8 @@ ARITH = {"+": "ADD", "-": "SUB", "x": "MUL", "/": "DIV", "MOD": "MOD"}
 COMPARES = ("==", "<", ">", "<=", ">=", "<>")
 STRUCT_OPEN = {"IFT", "IFF", "WHILET", "WHILEF", "REPEAT"}
 STRUCT_ALL = STRUCT_OPEN | {"ELSE", "ENDI", "ENDW", "UNTILT", "UNTILF"}
+# the statements that decide where control goes (a file's flow can be checked only when none of them was rejected)
+FLOW = frozenset({"EM", "EMT", "EMF", "JP", "JPT", "JPF", "CASE", "ENDC"}) | STRUCT_ALL
 CONTROL = {"JP", "JPT", "JPF", "CM", "CMT", "CMF", "EM", "EMT", "EMF", "CASE", "ENDC", "SUBM"} | STRUCT_ALL
 BIT_GROUPS = {"LB": 8, "LW": 16, "LD": 32, "B=": 8, "W=": 16, "D=": 32}   # bits read/written from the operand on
 MAX_NESTING = 16

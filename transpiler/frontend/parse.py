@@ -98,7 +98,7 @@ class _SrcTransformer(Transformer):
         base, index = items
         if index is None:
             return base
-        return dataclasses.replace(base, indexed=True, text=base.text + "[X]")
+        return base._replace(indexed=True, text=base.text + "[X]")
 
     def bit_op(self, items):
         return _addr_operand(items[0])
@@ -275,9 +275,13 @@ class SrcParser(_CachedLineParser):
 
     def _name_slot(self, key: str) -> tuple[str, str] | None:
         last = _LAST_NAME.search(key)
-        if last is None or _OPERAND_LIKE.fullmatch(last.group(1)):
+        if last is None:
             return None
-        return key[:last.start(1)] + _PLACEHOLDER + key[last.end(1):], last.group(1)
+        name = last.group(1)
+        if _OPERAND_LIKE.fullmatch(name):
+            return None
+        start = last.start(1)
+        return key[:start] + _PLACEHOLDER + key[start + len(name):], name
 
     def _renamed(self, shape: tuple, name: str) -> tuple | None:
         return ("ok", _with_name(shape[1], name)) if shape[0] == "ok" else None
@@ -308,12 +312,12 @@ class SrcParser(_CachedLineParser):
         trailing_comments: list[str] = []
         kfield: _PendingKField | None = None
         broken_labels: list[str] = []
-        accepted = self._accepted
+        accepted, new_instr = self._accepted, ast.new_instr
         for code, span, comments in _code_lines(lines, trailing_comments):
             if kfield is None:
                 known = accepted.get(code) or self._accepted_by_shape(code)
                 if known is not None:       # an instruction line (or its shape) met before, accepted without a diagnostic
-                    statements.append(ast.Instr(known[0], known[1], span, comments))
+                    statements.append(new_instr(known[0], known[1], span, comments))
                     continue
             status, result = self.parse_line(code)
             if status == "range":

@@ -10,7 +10,7 @@ from typing import Callable, Mapping, NamedTuple, Union
 
 from lark import LarkError, Transformer
 
-from transpiler.diagnostics import Diagnostics, Span
+from transpiler.diagnostics import Diagnostics, Span, new_span
 from transpiler.frontend.grammars import lalr_parser
 
 DefineValue = Union[int, str]
@@ -233,7 +233,7 @@ class Preprocessor:
             # (_code_line handles every other line, and this one in the same way).
             if first != "*" and first not in "Ii#" and '"' not in text:
                 cut = text.find(";")
-                span = Span(display, lineno, len(text) - len(stripped) + 1)
+                span = new_span(display, lineno, len(text) - len(stripped) + 1)
                 append(_new_line(Line, (text, None, span) if cut < 0 else (text[:cut], text[cut + 1:], span)))
                 continue
             self._code_line(display, lineno, text, out, include, star_comments, chain)

@@ -36,14 +36,14 @@ def resolve(project: ParsedProject, semantics: Semantics, diags: Diagnostics,
         link(low, lowerings, exports, diags, project.labels_incomplete)
     files = tuple(FileCode(low.src.path, tuple(low.ops), dict(low.labels), low.src.line_count) for low in lowerings)
     lost_lines = {d.span.file for d in diags.errors if d.code in LOST_LINE_CODES}
+    bodies = RoutineBodies(files)
     for i, (f, low) in enumerate(zip(files, lowerings)):
         if flow_is_complete(low, lost_lines):
-            check_flow(i, f, diags)
+            check_flow(i, f, diags, bodies.ends(i))
     check_module_starts(files, lowerings, diags)
-    bodies = RoutineBodies(files)
     routines, depth = call_graph(files, semantics, diags, bodies)
     masks = resolve_masks(project.masks, symbols, semantics, diags)
-    modules = sorted({op.call.module for f in files for op in f.ops if op.call is not None and op.call.is_module})
+    modules = sorted(set().union(*(low.chain.modules_called for low in lowerings)))
     return Program(files, symbols.all_symbols(), semantics, routines, depth, tuple(modules), project.files_read,
                    dict(project.defines), project.inactive, tuple(auto), project.line_count, project.config_file,
                    tuple(sorted(overrides.items())), masks, routine_bodies=bodies.worked_out())

@@ -11,7 +11,6 @@ from types import MappingProxyType
 
 from transpiler.diagnostics import Diagnostics, Span
 
-_LINE_SPLIT = re.compile(r"\r\n|\r|\n")
 MAX_FILE_BYTES = 64 * 1024 * 1024
 
 
@@ -126,10 +125,18 @@ def read_source(path: Path, folders: ProjectFolders, at: Span, diags: Diagnostic
         diags.report("E-ENCODING", Span(display, line, col), f"byte 0x{data[exc.start]:02X} is not valid {encoding} "
                      "(drop --encoding to detect each file's encoding)")
         return None
-    lines = _LINE_SPLIT.split(text)
+    lines = split_lines(text)
     if lines and lines[-1] == "":
         lines.pop()
     return SourceText(path, display, tuple(lines))
+
+
+def split_lines(text: str) -> list[str]:
+    """The text split at each CR LF, CR or LF (and at nothing else: str.splitlines also splits at form feeds and
+    Unicode line separators)."""
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    return text.split("\n")     # (several times as fast as a regular expression split on a large file)
 
 
 def decode_text(data: bytes, encoding: str | None = None) -> str:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from transpiler.diagnostics import Diagnostics
 from transpiler.frontend.opcodes import CONTROL, MAX_NESTING, STRUCT_OPEN
-from transpiler.ir import Op
+from transpiler.ir import Op, new_op
 from transpiler.language.semantics import Semantics
 from transpiler.records import replaced
 
@@ -26,7 +26,7 @@ class StructureMatcher:
                 self.diags.report("E-STRUCT-NEST", span, f"structured statements nested deeper than {MAX_NESTING}")
             structs.append([m, index, None])
             code = {"IFT": "JPF", "IFF": "JPT", "WHILET": "JPF", "WHILEF": "JPT", "REPEAT": "NOP"}[m]
-            return Op(code, **base)
+            return new_op(code, **base)
         expected = {"ELSE": ("IFT", "IFF"), "ENDI": ("IFT", "IFF"), "ENDW": ("WHILET", "WHILEF"),
                     "UNTILT": ("REPEAT",), "UNTILF": ("REPEAT",)}[m]
         if not structs or structs[-1][0] not in expected or (m == "ELSE" and structs[-1][2] is not None):
@@ -44,7 +44,7 @@ class StructureMatcher:
                 if structs[k][0] in expected:
                     del structs[k]
                     break
-        return Op("NOP", **base)
+        return new_op("NOP", **base)
 
     def _close(self, m: str, base: dict, index: int) -> Op:
         """ELSE, ENDI, ENDW, UNTILT or UNTILF that matches the innermost open structure."""
@@ -52,7 +52,7 @@ class StructureMatcher:
         if m == "ELSE":
             frame[2] = index
             self._patch(frame[1], index + 1)
-            return Op("JP", **base)          # target patched at ENDI
+            return new_op("JP", **base)          # target patched at ENDI
         self.structs.pop()
         opener_index = frame[1]
         if m == "ENDI":
@@ -60,14 +60,14 @@ class StructureMatcher:
                 self._patch(frame[2], index)
             else:
                 self._patch(opener_index, index)
-            return Op("NOP", **base)
+            return new_op("NOP", **base)
         if m == "ENDW":
             self._patch(opener_index, index + 1)
             back = opener_index
             if self.semantics["while_retest"] == "chain":
                 back = self._chain_start(opener_index)
-            return Op("JP", target=back, **base)
-        return Op("JPF" if m == "UNTILT" else "JPT", target=opener_index, **base)
+            return new_op("JP", target=back, **base)
+        return new_op("JPF" if m == "UNTILT" else "JPT", target=opener_index, **base)
 
     def report_unclosed(self) -> None:
         for frame in self.structs:

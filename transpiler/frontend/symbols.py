@@ -14,6 +14,7 @@ from transpiler.frontend.opcodes import BIT_GROUPS
 from transpiler.ir import BIT_KINDS, BYTES, MEM_KINDS, Symbol
 from transpiler.language.semantics import Semantics
 
+_ADDRESSED = BIT_KINDS | MEM_KINDS | {"S"}       # the operand kinds written with an address
 _RESERVED = re.compile(r"^(?:[MIOTCBWDS][0-9]+|K[0-9]+|X|KF|S#[ED][0-9]+)$", re.IGNORECASE)
 
 
@@ -86,10 +87,11 @@ class _Allocator:
 def _explicit_addresses(project: ParsedProject) -> tuple[dict[str, set[int]], set[int]]:
     bits: dict[str, set[int]] = {}
     mem: set[int] = set()
+    instr_type = ast.Instr
     for src in project.src_files:
         for stmt in src.statements:
-            if isinstance(stmt, ast.Instr) and stmt.operand is not None:
-                op = stmt.operand
+            op = stmt.operand if type(stmt) is instr_type else None
+            if op is not None and op.kind in _ADDRESSED:
                 if op.kind in BIT_KINDS or op.kind == "S":
                     count = BIT_GROUPS.get(stmt.mnemonic, 1)
                     bits.setdefault(op.kind, set()).update(range(int(op.value), int(op.value) + count))

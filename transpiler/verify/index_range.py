@@ -14,6 +14,11 @@ and any op it does not model forget X, a write of a word forgets what was learne
 write through an index: of every word). With A-05 shared_bit7 (LA is bit 7 of WA) it learns nothing from compares.
 Loops end by widening a bound that keeps moving to the next constant the file compares with (or the type's limit).
 
+Beside each interval, X and WA carry a congruence (index_values): the value is r modulo m (m = 0: exactly r;
+m = 1: nothing known), so that a loop stepping X by 2 or 4 (`INCX` `INCX`, `L X` `+ K4` `= X`) from an even start
+is known never to hold an odd value. Constants, loads of X, `+`/`-` of a constant and INCX/DECX keep it (a step that
+may wrap forgets it); a join keeps the largest modulus both sides share.
+
 Sound, not complete: an op it finds no path to gets no range (a caller treats X there as unknown), and an unknown X
 is the full range of the register."""
 
@@ -21,7 +26,8 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
-from typing import Mapping
+import math
+from typing import Mapping, NamedTuple
 
 from transpiler.exec.interp.decisions import BRACKET_GATES
 from transpiler.ir import FileCode, Op, Program
@@ -42,6 +48,37 @@ _WIDEN_AFTER = 3            # visits of an op before its changing bounds are wid
 
 
 Facts = Mapping[object, Interval]    # "X" or a memory word (kind, byte address) -> the interval it lies in
+Congruence = tuple[int, int]         # (m, r): the value is r modulo m; m = 0: exactly r; (1, 0): nothing known
+_ANY_MOD: Congruence = (1, 0)
+
+
+class XValues(NamedTuple):
+    """What X can hold before an op: lo..hi, and only values that are `residue` modulo `modulus` (0: exactly
+    `residue`; 1: any)."""
+
+    lo: int
+    hi: int
+    modulus: int
+    residue: int
+
+    def holds(self, value: int) -> bool:
+        if not self.lo <= value <= self.hi:
+            return False
+        return value == self.residue if self.modulus == 0 else (value - self.residue) % self.modulus == 0
+
+
+def _exactly(interval: Interval) -> Congruence:
+    """The congruence an interval alone gives: its value where it holds one."""
+    return (0, interval[0]) if interval[0] == interval[1] else _ANY_MOD
+
+
+def _join_mod(a: Congruence, b: Congruence) -> Congruence:
+    m = math.gcd(a[0], b[0], a[1] - b[1])
+    return (0, a[1]) if m == 0 else (m, a[1] % m)
+
+
+def _shift(a: Congruence, d: int) -> Congruence:
+    return (0, a[1] + d) if a[0] == 0 else (a[0], (a[1] + d) % a[0])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,6 +103,8 @@ class _State:
     la: _LA
     words: Facts
     frames: tuple                   # per open bracket: (saved LA, gate, load) or None (a word bracket)
+    mod: Congruence = _ANY_MOD      # of X
+    wa_mod: Congruence = _ANY_MOD   # of WA
 
 
 def _hull(a: Interval, b: Interval) -> Interval:
@@ -131,7 +170,7 @@ class _Analysis:
 
     # ------------------------------------------------------------------------------------------- the fixpoint
 
-    def run(self) -> dict[int, Interval]:
+    def run(self) -> dict[int, _State]:
         before: dict[int, _State] = {}
         visits: dict[int, int] = {}
         work = sorted(self.entries)
@@ -156,13 +195,13 @@ class _Analysis:
                         new = self.widen(old, new)
                     before[j] = new
                     pending.add(j)
-        return {i: s.x for i, s in before.items()}
+        return before
 
     def join(self, a: _State, b: _State) -> _State:
         frames = a.frames if a.frames == b.frames else tuple(None for _ in a.frames)
         return _State(_hull(a.x, b.x), _hull(a.wa, b.wa), a.source if a.source == b.source else None,
                       _LA(_either(a.la.true, b.la.true), _either(a.la.false, b.la.false)),
-                      _either(a.words, b.words), frames)
+                      _either(a.words, b.words), frames, _join_mod(a.mod, b.mod), _join_mod(a.wa_mod, b.wa_mod))
 
     def widen(self, old: _State, new: _State) -> _State:
         def w(a: Interval, b: Interval) -> Interval:
@@ -173,8 +212,9 @@ class _Analysis:
 
         def wf(a: Facts, b: Facts) -> dict:
             return {k: w(a[k], b[k]) for k in a.keys() & b.keys()}
+        # (the congruences need no widening: a modulus only ever shrinks to a divisor of itself)
         return _State(w(old.x, new.x), w(old.wa, new.wa), new.source, _LA(wf(old.la.true, new.la.true),
-                      wf(old.la.false, new.la.false)), wf(old.words, new.words), new.frames)
+                      wf(old.la.false, new.la.false)), wf(old.words, new.words), new.frames, new.mod, new.wa_mod)
 
     # ------------------------------------------------------------------------------------------- one op
 
@@ -209,9 +249,11 @@ class _Analysis:
             return [(i + 1, self.apply(s, s.la.false if c == "EMT" else s.la.true))]
         return [(i + 1, self.step(op, s))]
 
-    def forget_x(self, s: _State, x: Interval) -> _State:
+    def forget_x(self, s: _State, x: Interval, mod: Congruence | None = None) -> _State:
+        """X set to a value in `x` (congruent as `mod` says; None: as `x` alone says)."""
         la = _LA({k: v for k, v in s.la.true.items() if k != "X"}, {k: v for k, v in s.la.false.items() if k != "X"})
-        return dataclasses.replace(s, x=x, la=la, source=None if s.source == "X" else s.source)
+        return dataclasses.replace(s, x=x, la=la, source=None if s.source == "X" else s.source,
+                                   mod=_exactly(x) if mod is None else mod)
 
     def forget_word(self, s: _State, kind: str, addr: int | None) -> _State:
         """A write of kind<addr> (None: through an index, any address)."""
@@ -234,11 +276,11 @@ class _Analysis:
             return self.unknown()
         if self.shared and (c in _LOGIC_LOADS or c in _GATES_AND | _GATES_OR | _GATES_XOR
                             or c in ("CMP", "NOTL", "BCLOSE", "BOPEN")):
-            s = dataclasses.replace(s, wa=_INT32, source=None)      # LA is bit 7 of WA
+            s = dataclasses.replace(s, wa=_INT32, source=None, wa_mod=_ANY_MOD)      # LA is bit 7 of WA
         if c in ("WST", "INC", "DEC", "POP") and o is not None:
             if o.kind == "X":
                 if c == "WST" and _meet(s.wa, self.x_full) == s.wa:
-                    return dataclasses.replace(self.forget_x(s, s.wa), source="X")
+                    return dataclasses.replace(self.forget_x(s, s.wa, s.wa_mod), source="X")
                 return self.forget_x(s, self.x_full)
             if o.kind in _MEM:
                 written = self.forget_word(s, o.kind, None if o.indexed else o.addr)
@@ -254,23 +296,28 @@ class _Analysis:
         if c in ("INCX", "DECX"):
             step = 1 if c == "INCX" else -1
             x = (s.x[0] + step, s.x[1] + step)
-            return self.forget_x(s, x if _meet(x, self.x_full) == x else self.x_full)
+            if _meet(x, self.x_full) != x:
+                return self.forget_x(s, self.x_full, _ANY_MOD)
+            return self.forget_x(s, x, _shift(s.mod, step))
         if c == "PLX":
             return self.forget_x(s, self.x_full)
         if c == "WLD":
             wa, source = self.load(o, s)
-            return dataclasses.replace(s, wa=wa, source=source)
+            wa_mod = s.mod if source == "X" else _exactly(wa)
+            return dataclasses.replace(s, wa=wa, source=source, wa_mod=wa_mod)
         if c in ("ADD", "SUB", "INCW", "DECW"):
             if c in ("INCW", "DECW"):
                 d = 1 if c == "INCW" else -1
             elif o is not None and o.kind == "K":
                 d = o.addr if c == "ADD" else -o.addr
             else:
-                return dataclasses.replace(s, wa=_INT32, source=None)
+                return dataclasses.replace(s, wa=_INT32, source=None, wa_mod=_ANY_MOD)
             wa = (s.wa[0] + d, s.wa[1] + d)
-            return dataclasses.replace(s, wa=wa if _meet(wa, _INT32) == wa else _INT32, source=None)
+            if _meet(wa, _INT32) != wa:
+                return dataclasses.replace(s, wa=_INT32, source=None, wa_mod=_ANY_MOD)
+            return dataclasses.replace(s, wa=wa, source=None, wa_mod=_shift(s.wa_mod, d))
         if c in _WA_WRITERS:
-            return dataclasses.replace(s, wa=_INT32, source=None)
+            return dataclasses.replace(s, wa=_INT32, source=None, wa_mod=_ANY_MOD)
         if c == "CMP":
             return dataclasses.replace(s, la=self.compare(op, s))
         if c in _LOGIC_LOADS or c in _GATES_XOR:
@@ -324,7 +371,7 @@ class _Analysis:
         br = op.bracket
         if frame is None or br is None or br.mode != "LOGIC":
             # a word or compare bracket: its result in WA (and LA) is not followed
-            return dataclasses.replace(s, wa=_INT32, source=None, la=_NOTHING)
+            return dataclasses.replace(s, wa=_INT32, source=None, la=_NOTHING, wa_mod=_ANY_MOD)
         saved, gate, load = frame
         inner = s.la.negated() if br.op in ("AN", "ON", "XON") else s.la
         if load:
@@ -340,16 +387,22 @@ class _Analysis:
 
 def index_ranges(program: Program) -> dict[tuple[int, int], Interval]:
     """(file, op index) -> the interval X lies in before that op, for every op the analysis reaches."""
+    return {key: (v.lo, v.hi) for key, v in index_values(program).items()}
+
+
+def index_values(program: Program) -> dict[tuple[int, int], XValues]:
+    """(file, op index) -> what X can hold before that op (interval and congruence), for every op the analysis
+    reaches."""
     entries: dict[int, set[int]] = {f: {0} for f in range(len(program.files))}
     for code in program.files:
         for op in code.ops:
             for target in (op.call, *op.case_targets):
                 if target is not None and not target.is_module and target.file >= 0:
                     entries.setdefault(target.file, set()).add(target.index)
-    out: dict[tuple[int, int], Interval] = {}
+    out: dict[tuple[int, int], XValues] = {}
     for f, code in enumerate(program.files):
         if not code.ops:
             continue
         found = _Analysis(program, code, entries[f]).run()
-        out.update({(f, i): x for i, x in found.items()})
+        out.update({(f, i): XValues(*s.x, *s.mod) for i, s in found.items()})
     return out

@@ -27,7 +27,10 @@ it), a condition no path of the cycle that comes to its chain lets decide alone 
 where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them;
 from the main program's start also under what holds at the start of every cycle but the first, with the first cycle
 run from any memory and the first-cycle marker 1),
-and a boundary value the word cannot hold. Only these reasons are claimed; a condition that is merely hard
+a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
+preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
+(word_values.py; for X, index_range's interval and congruence; for a compare of two words, the differences
+word_relations.py allows). Only these reasons are claimed; a condition that is merely hard
 to reach stays missing."""
 
 from __future__ import annotations
@@ -39,11 +42,14 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Program, sext
+from transpiler.language.presets import TIMER_MP
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
-    inductive_invariants, program_entries, tied_vectors
+    inductive_invariants, program_entries, tied_vectors, write_sites
 from transpiler.verify.cycle_paths import Runner, Seen, StartRelation, seen_vectors, start_name, start_relations
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import XValues, index_ranges, index_values
+from transpiler.verify.string_values import StringCompares
+from transpiler.verify.word_relations import word_relations
 from transpiler.verify.word_values import OVERRIDDEN_MODULE, WordValues, word_values
 
 MODE = "unique-cause; masking where a condition's operand appears more than once in its chain"
@@ -675,6 +681,8 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             bounds.setdefault(key, set()).update(found)
     state: _Values | None = None
     implications: _Implications | None = None
+    strings: StringCompares | None = None
+    idle: dict[tuple[str, int], str] = {}
     conditions: list[ConditionItem] = []
     for decision in table.decisions:
         recorded = vectors.get(decision.key, set())
@@ -693,8 +701,13 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 state = constant_bits(program, table, set(driven))
                 implications = _Implications(program, state, consumed_start_zero(program, set(driven)),
                                              applicable_facts(program, set(driven)), table)
+            if strings is None:
+                strings = StringCompares(program)
+                idle = _idle_timers(program, sets, driven)
             reason = (_infeasible_reason(decision, number, coupled, state)
-                      or _tied_reason(implications, decision, number, coupled))
+                      or _tied_reason(implications, decision, number, coupled)
+                      or _constant_string_reason(strings, decision, number)
+                      or _idle_timer_reason(decision, number, idle))
             conditions.append(ConditionItem(decision, number, coupled, "infeasible" if reason else "missing", reason))
     # what is still missing may be explained by a relation that holds across cycles (implication.Invariant)
     missing = [k for k, item in enumerate(conditions) if item.status == "missing"]
@@ -710,22 +723,26 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
         _explain_by_paths(program, conditions)
         # and by what holds at the start of every cycle but the first (operands set after power-on break it)
         if any(item.status == "missing" for item in conditions):
-            relations = start_relations(program, set(driven) - set(power_on))
-            if relations:
-                _explain_by_paths(program, conditions, relations)
+            at_start = start_relations(program, set(driven) - set(power_on))
+            if at_start:
+                _explain_by_paths(program, conditions, at_start)
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
-    xs: dict[tuple[int, int], tuple[int, int]] | None = None
+    xs: dict[tuple[int, int], XValues] | None = None
     ranges: dict[tuple[str, int], NcFact] = {}
+    relations: dict[tuple[int, int], tuple[int | None, int | None]] | None = None
     for cmp in table.compares:
         items = _boundary_items(cmp, bounds.get(cmp.key, set()))
         if explain_missing and any(i.status == "missing" for i in items):
             if held is None:
                 held = word_values(program, table.compares, set(driven), set(power_on))
-                xs = index_ranges(program)
+                xs = index_values(program)
                 ranges = {f.operands[0]: f for f in applicable_facts(program, set(driven)) if len(f.operands) == 1}
             items = [_explained(program, cmp, item, held, xs, ranges) if item.status == "missing" else item
                      for item in items]
+            if cmp.constant is None:
+                relations = word_relations(program) if relations is None else relations
+                items = [_related(cmp, item, relations) if item.status == "missing" else item for item in items]
         boundaries += items
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
@@ -765,6 +782,68 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
+def _constant_string_reason(strings: StringCompares, decision: Decision, number: int) -> str:
+    """Why condition `number`, a string compare the code right before it fixes (string_values.py), can never be
+    shown: it never changes; "" where it is no such compare."""
+    cond = decision.conditions[number]
+    found = strings.outcome(cond.file, cond.index)
+    if found is None:
+        return ""
+    outcome, left, right = found
+    return (f"{cond.text} is always {int(outcome)}: SA holds \"{left}\" and the operand \"{right}\" there, set by the "
+            "string loads, appends and stores right before it on the only way to it")
+
+
+def _idle_timers(program: Program, sets: Sequence, driven: set[tuple[str, int]]) -> dict[tuple[str, int], str]:
+    """The timer running bits no run can see at 1, with the machine parameter that says why: the timer's preset is 0
+    in every run (Coverage.idle_timers), so the timer service never sets the bit, and nothing else writes it (no write
+    of the program, named, implicit or through the index register, and no scenario)."""
+    if not sets:
+        return {}
+    idle = frozenset.intersection(*(frozenset(getattr(cov, "idle_timers", ())) for cov in sets))
+    if not idle:
+        return {}
+    profile = program.semantics.profile
+    sites, other, indexed = write_sites(program)
+    if "T" in indexed:
+        return {}
+    out: dict[tuple[str, int], str] = {}
+    for addr in sorted(idle):
+        key = ("T", addr)
+        if key in driven or key in sites or key in other:
+            continue
+        number = profile.timer_start[0] + addr - profile.timer_running[0]
+        out[key] = f"MP{TIMER_MP}.{number}"
+    return out
+
+
+def _idle_timer_reason(decision: Decision, number: int, idle: Mapping[tuple[str, int], str]) -> str:
+    """Why condition `number`, a running bit of a timer whose preset is 0 in every run, can never be shown: it is
+    always 0; "" where it is no such bit."""
+    o = decision.conditions[number].operand
+    if o is None or o.indexed or (o.kind, o.addr) not in idle:
+        return ""
+    return (f"{o.display()} is always 0: its timer's preset ({idle[(o.kind, o.addr)]}) is 0 in every run, so the "
+            "timer service never sets it, and neither the program nor a scenario writes it")
+
+
+def _related(cmp: Compare, item: BoundaryItem,
+             relations: Mapping[tuple[int, int], tuple[int | None, int | None]]) -> BoundaryItem:
+    """`item` (missing, of a compare of two words) as infeasible where the difference the words can have there
+    (word_relations) leaves its offset out."""
+    low, high = relations.get(cmp.key, (None, None))
+    offset = item.offset
+    if high is not None and offset > high:
+        bound = f"{cmp.left} - {cmp.right} is at most {high}"
+    elif low is not None and offset < low:
+        bound = f"{cmp.left} - {cmp.right} is at least {low}"
+    else:
+        return item
+    return dataclasses.replace(item, status="infeasible", reason=(
+        f"{bound} here, never {offset:+d}: the compares of the two words the jumps before it went on, and the steps "
+        "of one of them by a constant since, on every path to it, keep the difference there"))
+
+
 def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
     items = []
     for offset in (-1, 0, 1):
@@ -788,7 +867,7 @@ def _boundary_items(cmp: Compare, seen: set[int]) -> list[BoundaryItem]:
 
 
 def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordValues,
-               xs: Mapping[tuple[int, int], tuple[int, int]], ranges: Mapping[tuple[str, int], NcFact]
+               xs: Mapping[tuple[int, int], XValues], ranges: Mapping[tuple[str, int], NcFact]
                ) -> BoundaryItem:
     """`item` (missing) as infeasible where the values the word can hold at the compare (word_values), the values
     the index register can hold there (index_range) or the values the NC model writes to a word only it writes
@@ -818,7 +897,20 @@ def _explained(program: Program, cmp: Compare, item: BoundaryItem, held: WordVal
         return dataclasses.replace(item, status="infeasible",
                                    reason=f"X holds only {x[0]}..{x[1]} here, not {value}: the index register's "
                                           "loads, steps and compares before this one on every path keep it there")
-    return item
+    residue = _index_residue_reason(x, value)
+    return dataclasses.replace(item, status="infeasible", reason=residue) if residue else item
+
+
+def _index_residue_reason(x: XValues, value: int) -> str:
+    """Why X cannot hold `value`, inside its interval, where its loads and steps keep it to one residue (a loop
+    stepping X by 2 from 0 never gives it an odd value); "" where it can."""
+    if x.modulus == 1 or x.holds(value):
+        return ""
+    if x.modulus == 0:
+        return (f"X holds only {x.residue} here, not {value}: the index register's loads and steps before this one on "
+                "every path give it no other value")
+    return (f"X holds only values {x.residue} modulo {x.modulus} here ({x.lo}..{x.hi}), not {value}: the index "
+            f"register's loads and steps before this one on every path keep it at {x.residue} modulo {x.modulus}")
 
 
 def figures(cov: Mapping[str, Any]) -> str:

@@ -6,7 +6,8 @@ The analysis works on bit patterns of memory operands (B/W/D named without an in
 "any" (a set larger than _MAX_VALUES is "any"):
 
 - What the program can store: every `=` of the operand with a value the analysis knows (a constant, a copy of a
-  word whose values it knows, plus or minus a constant) adds its values; anything else that writes memory makes
+  word whose values it knows, plus or minus, times, divided by or modulo a constant; RPLY's answers, without
+  "running" where no submitted job reaches the RPLY) adds its values; anything else that writes memory makes
   the operand "any": a store of an unknown value, INC, DEC, a pull from the data stack, a write of another operand
   that shares one of its bytes (B, W and D overlap), a write through the index register that can reach one of its
   bytes (index_range gives X there; unknown: all memory), a PLC module that takes a memory address or is not in
@@ -38,7 +39,8 @@ import dataclasses
 from typing import Iterable, Mapping
 
 from transpiler.exec.interp.decisions import Compare
-from transpiler.exec.interp.support import saturate
+from transpiler.exec.interp.submit import REPLY_STATES
+from transpiler.exec.interp.support import divide, remainder, saturate
 from transpiler.frontend.flow import RoutineBodies, routines_entered
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, CallTarget, Op, Program, sext
@@ -127,9 +129,12 @@ class Held:
     writes: tuple[str, ...]
     narrowed: tuple[str, ...]
     start: int | None                   # the power-on value (None: the first cycle writes it before any read)
+    note: str = ""                      # WA only: what gives it its values where that is not word operations
 
     def reason(self, value: int) -> str:
         """Why the word cannot hold `value` at this compare."""
+        if self.word == "WA" and self.note:
+            return f"WA holds only {_spans(self.values)} here, not {value}: {self.note}"
         if self.word == "WA":
             return (f"WA holds only {_spans(self.values)} here, not {value}: the word operations before the compare "
                     "(a mask with a constant, constants and the words they are loaded from) leave no other value")
@@ -202,6 +207,7 @@ class _Analysis:
         self.linked = self._linked()
         self.interface = sem.profile.interface
         self.flag = sem["add_overflow"] == "flag"
+        self.job_code: set[tuple[int, int]] | None = None     # worked out at the first RPLY (replies)
 
     # ------------------------------------------------------------------------------------ what memory the program
     # does not own
@@ -770,9 +776,58 @@ class _Analysis:
             return _Flow(cells, None if wa is None else frozenset(_int32(v + d) for v in wa), facts)
         if c == "WAND" and o is not None and o.kind == "K":
             return _Flow(cells, _masked(wa, _int32(o.addr)), facts)
+        if c in ("MUL", "DIV", "MOD"):
+            return _Flow(cells, self.times_constant(c, o, wa), facts)
+        if c == "RPLY":
+            return _Flow(cells, self.replies(f, i), facts)
         if c in _KEEP_WA or (c in _LOGIC and not self.shared):
             return _Flow(cells, wa, facts)
         return _Flow(cells, None, facts)
+
+    def times_constant(self, c: str, o, wa: frozenset | None) -> frozenset | None:
+        """WA after `x`, `/` or `MOD` of a constant (`L W10` `x K2`), each known value worked out as the interpreter
+        works it out (A-10: an overflowing product wraps or leaves WA; A-11/A-12: divide, remainder); None (any) where
+        WA or the operand is not known."""
+        if wa is None or o is None or o.kind != "K" or o.indexed:
+            return None
+        k = _int32(o.addr)
+        sem = self.program.semantics
+        if c == "MUL":
+            keep = sem["mul_overflow_result"] == "unchanged"
+            return frozenset(v if keep and _int32(v * k) != v * k else _int32(v * k) for v in wa)
+        work = divide if c == "DIV" else remainder
+        floor, flag = sem["div_semantics"] == "floor", 1 if sem["div_min_by_minus_one"] == "flag" else 0
+        return frozenset(work(v, k, floor, flag)[0] for v in wa)
+
+    def replies(self, f: int, i: int) -> frozenset:
+        """WA after the RPLY at op i: its states (0 finished or unknown, 1 running, 2 waiting), without 1 where no
+        submitted job reaches the op: a job is running only while its own code (and what it calls) runs, so RPLY
+        elsewhere never finds the job it asks about running."""
+        if self.job_code is None:
+            self.job_code = self._job_code()
+        states = frozenset(REPLY_STATES)
+        return states if (f, i) in self.job_code else states - {REPLY_STATES[1]}
+
+    def _job_code(self) -> set[tuple[int, int]]:
+        """(file, op index) of every op a submitted job can run: from each SUBM target, along jumps, calls and CASE
+        entries, whatever the values."""
+        found: set[tuple[int, int]] = set()
+        todo = [(op.call.file, op.call.index) for _, _, op in self.ops
+                if op.code == "SUBM" and op.call is not None and op.call.file >= 0]
+        while todo:
+            f, i = todo.pop()
+            ops = self.program.files[f].ops
+            if (f, i) in found or not 0 <= i < len(ops):
+                continue
+            found.add((f, i))
+            op = ops[i]
+            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
+                todo.append((f, op.target))
+            todo += [(t.file, t.index) for t in (op.call, *op.case_targets)
+                     if t is not None and not t.is_module and t.file >= 0]
+            if op.code not in ("JP", "EM"):
+                todo.append((f, i + 1))
+        return found
 
     def facts_after(self, f: int, i: int, op: Op, facts: frozenset) -> frozenset:
         """The marker facts after op i: a write of a bit forgets what was known of it (a call or module call, an
@@ -820,7 +875,7 @@ def word_values(program: Program, compares: Iterable[Compare], driven: set[tuple
             # WA computed before the compare (`L W1032` `A K15` `== K0`): the values the flow gives it
             flow = before.get(cmp.key)
             if flow is not None and flow.wa is not None and not analysis.shared:
-                held[cmp.key] = Held("WA", flow.wa, flow.wa, (), (), 0)
+                held[cmp.key] = Held("WA", flow.wa, flow.wa, (), (), 0, _reply_note(ops[cmp.index - 1], flow.wa))
             continue
         if word is None or word.kind not in _BITS or word.indexed:
             continue
@@ -839,3 +894,13 @@ def word_values(program: Program, compares: Iterable[Compare], driven: set[tuple
                              frozenset(read(cell, p) for p in stored[cell]), tuple(writes.get(cell, ())),
                              tuple(sorted(narrowed)), 0 if analysis.start[cell] else None)
     return WordValues(held)
+
+
+def _reply_note(op: Op, wa: frozenset) -> str:
+    """Why WA holds only `wa` right after `op` where `op` is a RPLY (the Held.note), else ""."""
+    if op.code != "RPLY":
+        return ""
+    if REPLY_STATES[1] in wa:
+        return "RPLY gives only 0 (finished or unknown), 1 (running) or 2 (waiting)"
+    return ("RPLY gives only 0 (finished or unknown), 1 (running) or 2 (waiting), and 1 only inside the job it asks "
+            "about: no submitted job (nor anything one calls) reaches this RPLY, so it runs while no job does")

@@ -50,6 +50,8 @@ class Coverage:
     # among -1, 0, 1 it took
     vectors: Mapping[tuple[int, int], frozenset[int]] = dataclasses.field(default_factory=dict)
     bounds: Mapping[tuple[int, int], frozenset[int]] = dataclasses.field(default_factory=dict)
+    # timer running bits (T addresses) the run's timer service never sets: their timer's preset is 0 in this run
+    idle_timers: frozenset[int] = frozenset()
 
 
 def normalize_mp(mp: Mapping[Any, Any] | None) -> dict[tuple[int, int], Decimal]:
@@ -520,7 +522,7 @@ class Machine:
         consumers = self._primary.decision_ops
         vectors = {index[consumers[k]]: v for k, v in marks.decision_vectors().items()}
         return Coverage(executed, {k: frozenset(v) for k, v in branches.items()}, vectors,
-                        {k: frozenset(v) for k, v in bounds.items()})
+                        {k: frozenset(v) for k, v in bounds.items()}, self.timers.idle_running_bits())
 
     @property
     def unknown_modules(self) -> dict[int, int]:

@@ -7,6 +7,7 @@ from typing import Callable
 
 MAX_QUEUED = 8
 MAX_ID = 255
+REPLY_STATES = (0, 1, 2)        # what RPLY gives: finished or unknown, running, waiting
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,9 +42,10 @@ class SubmitQueue:
 
     def reply(self, ident: int) -> int:
         """RPLY: 0 finished or unknown, 1 running, 2 waiting in the queue."""
+        finished, running, waiting = REPLY_STATES
         if self.running is not None and self.running.ident == ident:
-            return 1
-        return 2 if any(j.ident == ident for j in self.queued) else 0
+            return running
+        return waiting if any(j.ident == ident for j in self.queued) else finished
 
     def cancel(self, ident: int) -> bool:
         """CAN: drop a queued job; True when `ident` is the running job (the caller unwinds it)."""

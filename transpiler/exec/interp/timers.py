@@ -36,6 +36,12 @@ class TimerService:
         self.t_running = bytearray(nt)
         self.c_running = bytearray(nc)
 
+    def idle_running_bits(self) -> frozenset[int]:
+        """The running bits (T addresses) of the timers whose preset is 0: a start loads 0 remaining cycles, so the
+        service never sets them (the presets are fixed for the machine's life)."""
+        run = self.t_first + self.t_run
+        return frozenset(run + i for i, preset in enumerate(self.t_preset) if preset <= 0)
+
     def service(self, T: bytearray, C: bytearray) -> None:
         self._timers(T)
         self._counters(C)
