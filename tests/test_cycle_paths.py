@@ -16,7 +16,7 @@ from transpiler.exec.interp.faults import MachineHalted
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
-from transpiler.verify.cycle_paths import Runner, Word, seen_vectors
+from transpiler.verify.cycle_paths import Runner, Word, seen_vectors, start_relations
 from transpiler.verify.mcdc import decision_coverage
 from transpiler.verify.simulate import program_operands
 
@@ -264,3 +264,214 @@ def test_recorded_vectors_of_the_samples_are_among_the_ones_found(project: str) 
     files = frozenset({"Toolaut1.src", "Mfunction.src", "Chip_conveyor.src"}) if project == "basic_program" else None
     assert _check_recorded(result.program, _random_memory_runs(result.program, 8, 40, 7), files) > 0 or \
         not decision_table(result.program).decisions
+
+
+# B10 is a step word (0 idle, 1 orient) that only Steps writes; Steps recomputes M1 = (B10 <> 0) at its end, in
+# every cycle, and nothing writes B10 or M1 after that. Spin runs before Steps: the spindle O1 runs only with no step
+# active (AN M1), so in Orient (step 1) O1 is 0 in every cycle but the first (M1 there is what the last cycle left:
+# B10 <> 0). In the first cycle (M4172) Init sets the step to 0 first: {first} is the first-cycle code, {after} code
+# after Steps.
+_FLAG = """{first}CM Spin
+CM Steps
+{after}EM
+LBL Init
+L K0
+= B10
+EM
+LBL Spin
+L I1
+AN M1
+= O1
+EM
+LBL Steps
+CASE B10
+CM Idle
+CM Orient
+ENDC
+{skip}L B10
+<> K0
+= M1
+EM
+LBL Idle
+L I2
+JPF Idle_w
+L K1
+= B10
+LBL Idle_w
+EM
+LBL Orient
+L I3
+AN O1
+= O2
+L I4
+JPF Or_w
+L K0
+= B10
+LBL Or_w
+EM
+"""
+_INIT = "L M4172\nCMT Init\n"
+
+
+def _flag_program(tmp_path: Path, first: str = _INIT, after: str = "", skip: str = ""):
+    return _program(tmp_path, _FLAG.format(first=first, after=after, skip=skip))
+
+
+def test_a_flag_the_step_chain_recomputes_every_cycle_holds_at_the_next_start(tmp_path: Path) -> None:
+    # Catches: the relation not found, not assumed at the main program's start, or not named in the reason.
+    program = _flag_program(tmp_path)
+    relations = start_relations(program, set())
+    assert [(r.flag, r.word, r.rel, r.constant) for r in relations] == [(("M", 1), ("B", 10), "<>", 0)]
+    item = _items(program)[("O1", "O2")]
+    assert item.status == "infeasible", item
+    assert "M1 = (B10 <> 0) at the start of every cycle but the first" in item.reason
+    assert "the first cycle followed from any memory with the first-cycle marker M4172 = 1" in item.reason
+    assert "O1 is always 0" in item.reason
+    assert _items(program)[("I3", "O2")].status == "missing"
+    # an operand a scenario sets only at power-on does not break it; one set later does
+    assert decision_coverage(program, [], driven={("M", 1), ("B", 10)}, power_on={("M", 1), ("B", 10)}
+                             ).conditions and _status(program, {("M", 1), ("B", 10)}, {("M", 1), ("B", 10)}) == \
+        "infeasible"
+    assert _status(program, {("M", 1)}, set()) == "missing"
+    assert _status(program, {("W", 10)}, set()) == "missing"     # a word sharing the step word's byte
+
+
+def _status(program, driven: set, power_on: set) -> str:
+    cov = decision_coverage(program, [], driven=driven, power_on=power_on)
+    return next(i.status for i in cov.conditions if i.condition.text == "O1" and
+                i.decision.op.operand is not None and i.decision.op.operand.display() == "O2")
+
+
+@pytest.mark.parametrize("first, after, skip", [
+    ("", "", ""),                               # no first-cycle reset: the power-on step word reaches Orient
+    ("L M4172\nA I7\nCMT Init\n", "", ""),      # a reset only under another input in the first cycle
+    ("CM Steps\n" + _INIT, "", ""),             # the step chain runs before the first cycle's reset
+    (_INIT, "L I5\n= M1\n", ""),                # the flag written after its store
+    (_INIT, "L I5\n= B10\n", ""),               # the step word written after the flag's store
+    (_INIT, "", "L I6\nEMT\n"),                 # the flag's store skipped on a path
+    (_INIT, "L I5\n= M4172\n", ""),             # the program writes the first-cycle marker
+], ids=["no_reset", "conditional_reset", "read_before_reset", "flag_rewritten", "word_rewritten", "store_skipped",
+        "marker_written"])
+def test_what_breaks_the_flag_relation_leaves_the_condition_missing(tmp_path: Path, first: str, after: str,
+                                                                    skip: str) -> None:
+    # Catches: a claim where a state the relation does not cover reaches Orient with O1 = 1.
+    program = _flag_program(tmp_path, first, after, skip)
+    assert _items(program)[("O1", "O2")].status == "missing"
+
+
+def test_recorded_vectors_of_runs_are_among_the_ones_found_with_the_relations(tmp_path: Path) -> None:
+    # Soundness: runs from random power-on memory (step word, flag, outputs) with random inputs every cycle, restarts
+    # (M4172 again later) included: every vector recorded is among those the run from the relations finds.
+    program = _flag_program(tmp_path)
+    relations = start_relations(program, set())
+    assert relations
+    runner = Runner(program, relations)
+    rng = random.Random(11)
+    compiled = compile_program(program, coverage=True)
+    recorded: dict = {}
+    for _ in range(40):
+        machine = Machine(program, compiled=compiled, coverage=True)
+        for cycle in range(30):
+            writes = [("I", n, rng.randrange(2)) for n in range(1, 8)]
+            if cycle == 0:
+                writes += [("B", 10, rng.choice((0, 1, 2))), ("M", 1, rng.randrange(2)), ("O", 1, rng.randrange(2))]
+            elif rng.random() < 0.1:
+                writes.append(("M", 4172, 1))       # the first-cycle code again (a restart without power-on)
+            elif cycle > 1:
+                writes.append(("M", 4172, 0))
+            machine.run_cycle(cycle, writes)
+        for key, found in machine.coverage.vectors.items():
+            recorded.setdefault(key, set()).update(found)
+    checked = 0
+    for decision in decision_table(program).decisions:
+        seen = seen_vectors(runner, decision)
+        if seen is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        got = {v & mask for v in recorded.get(decision.key, ())}
+        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
+        checked += bool(got)
+    assert checked >= 3
+
+
+_LOOPED_INIT = """LBL Init
+L K0
+= B10
+L K0
+= X
+LBL Again
+L M0
+= M200[X]
+{inside}INCX
+L X
+< K4
+JPT Again
+EM
+"""
+
+
+@pytest.mark.parametrize("inside, claimed", [("", True), ("L X\n= B10\n", False), ("L I9\n= M1\n", False)],
+                         ids=["loop_writes_markers", "loop_writes_the_step_word", "loop_writes_the_flag"])
+def test_a_loop_in_a_joined_subprogram_forgets_only_what_it_writes(tmp_path: Path, inside: str,
+                                                                   claimed: bool) -> None:
+    # The first cycle's Init sets the step word to 0 and then clears markers in a loop: the run goes on after the
+    # loop knowing B10 = 0 unless the loop writes B10. A loop that writes the flag M1 breaks it too: a restart
+    # (M4172 again) runs Init before Spin reads M1. Catches: a loop run once only (its later passes not covered),
+    # the whole subprogram forgotten.
+    text = _FLAG.format(first=_INIT, after="", skip="").replace("LBL Init\nL K0\n= B10\nEM\n",
+                                                                _LOOPED_INIT.format(inside=inside))
+    program = _program(tmp_path, text)
+    assert (_items(program)[("O1", "O2")].status == "infeasible") == claimed
+    assert _check_recorded(program, _random_memory_runs(program, 6, 20, 4)) > 0
+
+
+def test_recorded_vectors_of_the_sample_runs_are_among_the_ones_found_with_the_relations() -> None:
+    # Every scenario of the sample (power-on states mid tool change, restarts, late first cycles) and a generated
+    # search: each vector a step chain's decision recorded is among those the run from the sample's relations finds
+    # (operands scenarios set after power-on break a relation, as in equiv). Catches: an unsound relation or start.
+    from transpiler import api
+    from transpiler.diagnostics import Diagnostics
+    from transpiler.verify.guided import generate
+    from transpiler.verify.mcdc import driven_operands, power_on_operands
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import build_machine, project_names, run_scenario
+    sample = ROOT / "samples" / "basic_program"
+    program = api.load_project(api.project_options(sample / "Main_PGM.src")).program
+    names = project_names(program)
+    compiled = compile_program(program, coverage=True)
+    scenarios = [load_scenario(p, names) for p in sorted((sample / "scenarios").glob("*.yaml"))]
+    scenarios += generate(program, names, 600, seed=6, seeds=scenarios, machine_parameters=sample / "MP_data.mp")
+    relations = start_relations(program, driven_operands(scenarios, names) - power_on_operands(scenarios, names))
+    assert any(r.names[0] == "MG_tc_active" for r in relations)
+    recorded: dict = {}
+    for scenario in scenarios:
+        machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
+        for key, found in run_scenario(program, scenario, names, machine=machine).machine.coverage.vectors.items():
+            recorded.setdefault(key, set()).update(found)
+    runner = Runner(program, relations)
+    checked = 0
+    for decision in decision_table(program).decisions:
+        if Path(program.files[decision.file].path).name not in ("Toolaut1.src", "Toolmag1.src"):
+            continue
+        seen = seen_vectors(runner, decision)
+        if seen is None:
+            continue
+        mask = (1 << len(decision.conditions)) - 1
+        got = {v & mask for v in recorded.get(decision.key, ())}
+        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
+        checked += bool(got)
+    assert checked > 20
+
+
+def test_recorded_vectors_behind_overlapping_loops_are_among_the_ones_found(tmp_path: Path) -> None:
+    # A joined subprogram with two loops, the second jumping back into the first from beyond it (a way back to a
+    # head through code after its own jump back): every vector random memory and inputs record is among those
+    # found. Catches: a loop head's state that misses a write on a way around through later code.
+    text = ("CM Sub\nL M10\nAN I1\n= O1\nL M12\nA I2\n= O2\nL M10\nXO M12\n= O3\nEM\n"
+            "LBL Sub\nL I1\n= M10\nL K0\n= B20\n"
+            "LBL H1\nL B20\n+ K1\n= B20\nL M12\nXO I3\n= M12\nL B20\n< K2\nJPT H1\n"
+            "L B20\n< K6\nJPF Done\n"
+            "LBL H2\nL M12\n= M10\nL B20\n+ K1\n= B20\nL B20\n< K4\nJPT H1\nL B20\n< K6\nJPT H2\n"
+            "LBL Done\nEM\n")
+    program = _program(tmp_path, text)
+    assert _check_recorded(program, _random_memory_runs(program, 12, 20, 8)) >= 2

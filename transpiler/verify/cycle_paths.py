@@ -17,13 +17,20 @@ logic (unknown AND 0 is 0); B=/W=/D= of a known WA, the data stack (PS/PL, PSL/P
 an unknown bottom) and word stores of known values are followed too. A subprogram the decision cannot be reached
 from is run with its paths joined where they meet (its inner paths do not matter, only the state it returns with);
 where it reads a bit of the chain whose value at the start is not known yet, the path calling it forks on that bit
-first; where it jumps back, what it and its callees may write is unknown. Anything else not followed exactly makes
+first; where it jumps back, it is run again from the loop's head, from the state the head was entered with less
+what the ops from the head on and their callees may write (a state every pass starts from), and a later jump back
+to that head adds nothing. Anything else not followed exactly makes
 what it may write unknown: a PLC module its error marker and code word (all of memory where it writes to an
 address it is given), a write through the index register the operands index_range lets it reach, an op of a kind
 not modelled all of memory. A path that ends the start subprogram ends, and so does one that can no longer come to
 the chain. The run gives up (no claim) at a jump back on the way to the chain (a loop), deep calls, or when the
 paths or steps exceed their limits, and for semantics in which words or LA are not followed so (shared
 accumulator, zero extension, unsigned compares, dynamic chains).
+
+A run from the main program's start may assume what holds when every cycle but the first begins (start_relations:
+a marker a step chain works out from its step word at the end of every cycle, nothing writing either after it):
+it starts from one state per outcome of those relations, and from any state with the first-cycle marker 1 for the
+first cycle.
 
 Where every run of the decision starts: the subprogram whose code reaches the chain without a call between (its
 entry: the main program's start, a called or CASE-entered label, a submitted job); where all the calls of that
@@ -40,7 +47,9 @@ from transpiler.exec.interp.support import saturate
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program, sext
 from transpiler.language.module_table import writes_anywhere
+from transpiler.verify.implication import cycle_order
 from transpiler.verify.index_range import index_ranges
+from transpiler.verify.nc_facts import NC_MODEL_OWNED
 
 MAX_STEPS = 200_000         # ops run over all paths of one start, at most
 MAX_PATHS = 4_000           # paths alive at once, at most
@@ -58,6 +67,7 @@ _MODELLED = KEEPS_LA | WORD_WRITERS | _READS | _BIT_STORES | {"CMP", "SCMP", "BT
 _RELATIONS = {"==": lambda a, b: a == b, "<>": lambda a, b: a != b, "<": lambda a, b: a < b,
               "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, ">=": lambda a, b: a >= b}
 _NEGATED = frozenset({"LDN", "ANDN", "ORN", "XORN"})
+_STACK_OPS = frozenset({"PSL", "PSW", "PUSH", "PSX", "PLL", "PLW", "POP", "PLX"})
 Key = tuple[str, int]
 
 
@@ -190,10 +200,12 @@ def followable(program: Program) -> bool:
 
 
 class Runner:
-    """The runs of one program (entries worked out once)."""
+    """The runs of one program (entries worked out once); `relations`: what holds at the start of every cycle but
+    the first (start_relations), assumed where a run starts at the main program's start (see start_paths)."""
 
-    def __init__(self, program: Program):
+    def __init__(self, program: Program, relations: Sequence[StartRelation] = ()):
         self.program = program
+        self.relations = tuple(relations)[:_MAX_RELATIONS]
         self.saturate = program.semantics["store_truncation"] == "saturate"
         self.case_fault = program.semantics["case_out_of_range"] == "fault"
         self.interface = program.semantics.profile.interface
@@ -203,7 +215,7 @@ class Runner:
         self.joining = 0
         self.steps = 0
         self.split: set[Key] = set()
-        self._writes: dict[tuple[int, int], tuple[frozenset, frozenset, bool, bool]] = {}
+        self._writes: dict[tuple[int, int], tuple[frozenset, frozenset, frozenset | None, bool]] = {}
         self.target: tuple[int, int] = (-1, -1)
         self.leading: set[tuple[int, int]] = set()
         self._reach: dict[tuple[int, int], frozenset[tuple[int, int]]] = {}
@@ -269,7 +281,7 @@ class Runner:
         self.leading = self._leading(self.target)
         self._leads: dict[tuple[int, int], bool] = {}
         arrivals: set[tuple] = set()
-        todo: list[tuple[int, int, _Path]] = [(start[0], start[1], _Path({}, {}))]
+        todo: list[tuple[int, int, _Path]] = [(start[0], start[1], p) for p in self.start_paths(start)]
         self.steps = 0
         try:
             while todo:
@@ -300,6 +312,37 @@ class Runner:
                 vectors.add(base | sum(1 << n for k, n in enumerate(unknown) if bits >> k & 1))
         return frozenset(vectors)
 
+    def start_paths(self, start: tuple[int, int]) -> list[_Path]:
+        """The states a run from `start` begins in: any state; from the main program's start with relations, one
+        state per outcome of the relations (each marker and its word narrowed to agree), for every cycle but the
+        first, and any state with the first-cycle marker 1 for the first cycle (the NC sets it there, where the
+        program never writes it)."""
+        if start != (0, 0) or not self.relations:
+            return [_Path({}, {})]
+        paths = [_Path({}, {})]
+        for rel in self.relations:
+            grown = []
+            for path in paths:
+                holds, fails = path.words.get(rel.word, _full(rel.word[0])).split(rel.rel, rel.constant)
+                for value, word in ((1, holds), (0, fails)):
+                    if word is None or path.bits.get(rel.flag, value) != value:
+                        continue
+                    p = path.copy()
+                    p.bits[rel.flag] = value
+                    p.words[rel.word] = word
+                    grown.append(p)
+            paths = grown
+        marker = self.first_cycle_marker()
+        return paths + [_Path({} if marker is None else {marker: 1}, {})]
+
+    def first_cycle_marker(self) -> Key | None:
+        """The first-cycle marker, where the program never writes it (the NC's 1 in the first cycle stands)."""
+        marker = self.program.semantics["first_cycle_marker"]
+        if marker is None or any(_may_write(self.program, f, i, op, ("M", int(marker)), None, self.ranges)
+                                 for f, code in enumerate(self.program.files) for i, op in enumerate(code.ops)):
+            return None
+        return ("M", int(marker))
+
     def count(self) -> None:
         self.steps += 1
         if self.steps > MAX_STEPS:
@@ -315,6 +358,9 @@ class Runner:
         path.calls = (_RETURN,)
         pending: dict[int, _Path] = {entry: path}
         returned: list[_Path] = []
+        heads = {op.target for op in ops if op.code in ("JPT", "JPF", "JP") and op.target is not None}
+        entered: dict[int, _Path] = {}          # the state a loop head was last run from
+        widened: set[int] = set()               # loop heads run from a state that covers every pass
         self.joining += 1
         try:
             while pending:
@@ -323,6 +369,8 @@ class Runner:
                 self.count()
                 if not 0 <= i < len(ops):
                     raise _NotJoined
+                if i in heads:
+                    entered[i] = here.copy()
                 for g, j, q in self.step(f, i, ops[i], here, self.split, set()):
                     if (g, j) == _RETURN:
                         returned.append(q)
@@ -334,8 +382,23 @@ class Runner:
                             continue
                         q.calls = (_RETURN,)
                         g, j = back
-                    if g != f or j <= i:
+                    if g != f or j not in entered and j <= i:
                         raise _NotJoined
+                    if j <= i:
+                        # a jump back: the subprogram again from the loop's head, from the state it was entered with
+                        # less what the ops from the head on (any path may come back to it through them) and their
+                        # callees may write: every pass starts from such a state, so a later jump back to a head run
+                        # so adds nothing (until a head before it is run again so)
+                        if j in widened:
+                            continue
+                        widened = {a for a in widened if a < j} | {j}
+                        later = [(g, k) for g, k in sorted(self.reach((f, entry))) if k >= j]
+                        q = entered[j].copy()
+                        self.forget(q, self.collect(later))
+                        q.la, q.frames = None, []
+                        if any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE")
+                               for _, k in later):
+                            q.stack = [_DEEP]
                     pending[j] = q if j not in pending else _join(pending[j], q)
         finally:
             self.joining -= 1
@@ -525,9 +588,7 @@ class Runner:
             elif c.startswith("JP"):
                 if op.target is None:
                     return []           # the program faults there
-                if op.target <= i:
-                    if self.joining:
-                        raise _NotJoined
+                if op.target <= i and not self.joining:      # (summarize runs a loop again from its head)
                     # a jump back: a loop, which the run does not follow; a path that can no longer come to the
                     # decision from there (nor from where its calls return to) does not matter
                     if any(self.leads_to(point) for point in ((f, op.target), *p.calls)):
@@ -687,29 +748,43 @@ class Runner:
         if path.source is not None and path.source[1] < hi and lo < path.source[1] + BYTES[path.source[0]]:
             path.source = None
 
-    def writes(self, entry: tuple[int, int], inside: tuple = ()) -> tuple[frozenset, frozenset, bool, bool]:
+    def writes(self, entry: tuple[int, int], inside: tuple = ()
+               ) -> tuple[frozenset, frozenset, frozenset | None, bool]:
         """What a subprogram and those it calls may write: (bit operands, kinds of bits written through an index
-        register of unknown reach, whether any word, whether anything at all)."""
+        register of unknown reach, the words written by name (None: any word), whether anything at all)."""
         if entry in self._writes:
             return self._writes[entry]
+        if entry in inside:
+            return frozenset(), frozenset(), None, True         # (recursion: anything)
+        found = self.collect(sorted(self.reach(entry)), inside + (entry,))
+        if not inside or not found[3]:
+            self._writes[entry] = found
+        return found
+
+    def collect(self, points: Sequence[tuple[int, int]], inside: tuple = ()
+                ) -> tuple[frozenset, frozenset, frozenset | None, bool]:
+        """What the ops at `points` (file, op index) and the subprograms they call may write (as `writes`)."""
         keys: set[Key] = set()
         kinds: set[str] = set()
-        words = everything = entry in inside        # (recursion: anything)
-        for g, j in sorted(self.reach(entry)) if not everything else ():
+        everything = False
+        words: set[Key] | None = set()
+        for g, j in points:
             op = self.program.files[g].ops[j]
             c, o = op.code, op.operand
-            keys.update(k for k in implicit_writes(op, self.interface, self.flag) if k[0] not in ("B", "W", "D"))
-            words |= any(k[0] in ("B", "W", "D") for k in implicit_writes(op, self.interface, self.flag))
+            implicit = implicit_writes(op, self.interface, self.flag)
+            keys.update(k for k in implicit if k[0] not in ("B", "W", "D"))
+            if words is not None:
+                words.update(k for k in implicit if k[0] in ("B", "W", "D"))
             for t in (op.call, *op.case_targets):
                 if t is None:
                     continue
                 if t.is_module:
                     everything |= writes_anywhere(t.module)
                 elif t.file >= 0:
-                    more = self.writes(t.key, inside + (entry,))
+                    more = self.writes(t.key, inside)
                     keys |= more[0]
                     kinds |= more[1]
-                    words |= more[2]
+                    words = None if words is None or more[2] is None else words | more[2]
                     everything |= more[3]
             if c not in _MODELLED and c not in ("CALL", "CALLT", "CALLF", "CASE", "JP", "JPT", "JPF", "EM", "EMT",
                                                   "EMF", "LBL"):
@@ -722,15 +797,16 @@ class Runner:
                 else:
                     keys.update((o.kind, a) for a in range(o.addr + x[0], o.addr + x[1] + width))
             elif c in _MEMORY_WRITERS and o is not None and o.kind in ("B", "W", "D"):
-                words = True
-        found = (frozenset(keys), frozenset(kinds), words, everything)
-        if not inside or not everything:
-            self._writes[entry] = found
-        return found
+                words = None if words is None or o.indexed else words | {(o.kind, o.addr)}
+        return frozenset(keys), frozenset(kinds), None if words is None else frozenset(words), everything
 
     def forget_written(self, path: _Path, entry: tuple[int, int]) -> None:
-        """What the subprogram entered at `entry` may write is unknown."""
-        keys, kinds, words, everything = self.writes(entry)
+        """What the subprogram entered at `entry` may write is unknown, and so is WA after it."""
+        self.forget(path, self.writes(entry))
+
+    def forget(self, path: _Path, found: tuple[frozenset, frozenset, frozenset | None, bool]) -> None:
+        """What `found` (writes, collect) says may be written is unknown, and so is WA."""
+        keys, kinds, words, everything = found
         if everything:
             self.forget_all(path)
             return
@@ -739,9 +815,12 @@ class Runner:
         for key in [k for k in path.bits if k[0] in kinds]:
             del path.bits[key]
         path.written |= {k for k in self.split if k[0] in kinds}
-        if words:
+        if words is None:
             path.words.clear()
-            path.wa, path.source = None, None
+        else:
+            for key in words:
+                self.forget_word(path, key)
+        path.wa, path.source = None, None
 
     def put(self, path: _Path, key: Key, value: int | None) -> None:
         """A write of bit `key` (None: a value not known)."""
@@ -840,3 +919,181 @@ def start_name(program: Program, start: tuple[int, int]) -> str:
     if start == (0, 0):
         return f"the start of the main program ({op.span})"
     return f"LBL {op.label} ({op.span})" if op.code == "LBL" and op.label else f"{op.span}"
+
+
+# ------------------------------------------------------------------------------------- state at a cycle's start
+
+@dataclasses.dataclass(frozen=True)
+class StartRelation:
+    """At the start of every cycle but the first, bit `flag` holds whether `word rel constant` holds (the word as a
+    load reads it): the store `= flag` of that compare (`at`) runs in every cycle, nothing writes either after it in
+    the cycle or in a submitted job, and only the program writes them (see start_relations)."""
+
+    flag: Key
+    word: Key
+    rel: str
+    constant: int
+    at: str                 # the store's place and text, for the reason
+    names: tuple[str, str]
+
+    def text(self) -> str:
+        return (f"{self.names[0]} = ({self.names[1]} {self.rel} {self.constant}) at the start of every cycle but the "
+                f"first: {self.at} stores it in every cycle, nothing writes either after it, and only the program "
+                "writes them")
+
+
+_MAX_RELATIONS = 4          # relations a run starts from at most (each doubles the start paths)
+_CONTROL = frozenset({"CALL", "CALLT", "CALLF", "CASE", "JP", "JPT", "JPF", "EM", "EMT", "EMF", "LBL"})
+# ops that write no memory (the data stack, LA, WA, a constant field, a job submitted or asked about: a job's own
+# ops are looked at where they are)
+_NO_MEMORY = frozenset({"PSL", "PSW", "PUSH", "PSX", "PLL", "PLW", "PLX", "KFIELD", "SUBM", "RPLY", "CAN"})
+
+
+def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation, ...]:
+    """The relations between a marker and a word that hold at the start of every cycle after the first (see
+    StartRelation): `L W` `rel K` `= M` (or `=N`) where control comes to the compare and the store only from the load,
+    the store runs on every path of every cycle (_always_runs: from the main program's start through unconditional
+    calls, forward jumps only, no module end before it), no op that may write M or a byte of W (named, through the
+    index register, a PLC module that writes anywhere, an op not modelled) can run after it in the same cycle or in a
+    submitted job (implication.cycle_order), and M and W are no NC, interface, data-table or `outside` operand
+    (operands scenarios set after power-on): between two cycles nothing but the program changes them."""
+    if not followable(program):
+        return ()
+    itf = program.semantics.profile.interface
+    profile = program.semantics.profile
+    tables = {(row.kind, row.addr) for row in program.data_rows}
+    entries: set[tuple[int, int]] = set()
+    for code in program.files:
+        for op in code.ops:
+            for t in (op.call, *op.case_targets):
+                if t is not None and not t.is_module and t.file >= 0:
+                    entries.add(t.key)
+    targets = {(f, op.target) for f, code in enumerate(program.files) for op in code.ops
+               if op.code in ("JP", "JPT", "JPF") and op.target is not None}
+    found: list[tuple[tuple[int, int], StartRelation]] = []
+    for f, code in enumerate(program.files):
+        ops = code.ops
+        for i in range(2, len(ops)):
+            load, cmp = ops[i - 2], ops[i - 1]
+            if load.code != "WLD" or cmp.code != "CMP" or not cmp.rel:
+                continue
+            w, k = load.operand, cmp.operand
+            if w is None or w.indexed or w.kind not in ("B", "W", "D") or k is None or k.kind != "K" or k.indexed:
+                continue
+            word = (w.kind, w.addr)
+            span = range(w.addr, w.addr + BYTES[w.kind])
+            if any(b in itf.interface_bytes for b in span) or any(
+                    key[0] in ("B", "W", "D") and key[1] < span.stop and span.start < key[1] + BYTES[key[0]]
+                    for key in (*outside, *tables, *NC_MODEL_OWNED)):
+                continue
+            if (f, i - 1) in targets or (f, i - 1) in entries:
+                continue                    # the compare entered from elsewhere: WA there need not be the word
+            j = i
+            while j < len(ops) and ops[j].code in ("ST", "STN"):
+                o = ops[j].operand
+                if (f, j) in targets or (f, j) in entries:
+                    break
+                if o is not None and o.is_bit and not o.indexed and o.kind in ("M", "O"):
+                    flag = (o.kind, o.addr)
+                    if flag not in outside and flag not in tables and flag not in NC_MODEL_OWNED \
+                            and not profile.is_interface(*flag):
+                        rel = cmp.rel if ops[j].code == "ST" else _NEGATED_REL[cmp.rel]
+                        found.append(((f, j), StartRelation(flag, word, rel, int32(k.addr),
+                                                            f"{ops[j].span} {ops[j].mnemonic} {o.display()}",
+                                                            (o.display(), w.display()))))
+                j += 1
+    if not found:
+        return ()
+    order = cycle_order(program)
+    if order is None:
+        return ()
+    ranges = index_ranges(program)
+    kept = []
+    for (f, j), rel in found:
+        if not _always_runs(program, f, j, entries, ()):
+            continue
+        if any(_may_write(program, g, i, op, rel.flag, rel.word, ranges) and _after(order, (g, i), (f, j))
+               for g, code in enumerate(program.files) for i, op in enumerate(code.ops)):
+            continue
+        kept.append(rel)
+    return tuple(kept)
+
+
+_NEGATED_REL = {"==": "<>", "<>": "==", "<": ">=", ">=": "<", ">": "<=", "<=": ">"}
+
+
+def _after(order, writer: tuple[int, int], store: tuple[int, int]) -> bool:
+    """Whether `writer` may run after `store` in a cycle (later in the main program, in a loop with it, or in a
+    submitted job)."""
+    if writer in order.in_jobs:
+        return True
+    for ps in order.positions.get(store, ()):
+        for pw in order.positions.get(writer, ()):
+            if pw > ps or any(pt <= min(pw, ps) and pj >= max(pw, ps) for pt, pj in order.loops):
+                return True
+    return False
+
+
+def _may_write(program: Program, f: int, i: int, op: Op, flag: Key, word: Key | None,
+               ranges: dict[tuple[int, int], tuple[int, int]]) -> bool:
+    """Whether op i of file f may write bit `flag` or a byte of `word` (None: no word; `ranges`: index_range's
+    values of X)."""
+    sem = program.semantics
+    flagged = sem["add_overflow"] == "flag"
+    lo, hi = (word[1], word[1] + BYTES[word[0]]) if word is not None else (0, 0)
+    for key in implicit_writes(op, sem.profile.interface, flagged):
+        if key == flag or key[0] in ("B", "W", "D") and key[1] < hi and lo < key[1] + BYTES[key[0]]:
+            return True
+    for t in (op.call, *op.case_targets):
+        if t is not None and t.is_module and writes_anywhere(t.module):
+            return True
+    c, o = op.code, op.operand
+    if c not in _MODELLED and c not in _CONTROL and c not in _NO_MEMORY:
+        return True
+    if c not in _MEMORY_WRITERS or o is None:
+        return False
+    if o.is_bit:
+        if o.kind != flag[0]:
+            return False
+        width = op.nbits if c == "STBITS" else 1
+        if not o.indexed:
+            return o.addr <= flag[1] < o.addr + width
+        x = ranges.get((f, i))
+        return x is None or o.addr + x[0] <= flag[1] < o.addr + x[1] + width
+    if o.kind not in ("B", "W", "D"):
+        return False
+    if o.indexed:
+        return True
+    return o.addr < hi and lo < o.addr + BYTES[o.kind]
+
+
+def _always_runs(program: Program, f: int, i: int, entries: set[tuple[int, int]], seen: tuple) -> bool:
+    """Whether op i of file f runs on every path of every cycle: the routine it is in (the nearest entry before it
+    from which control comes to it going forward only) is the main program, or is called by a CM that always runs,
+    and from that entry every path comes to op i (forward jumps that land at or before it, no module end, no jump
+    back on the way)."""
+    if len(seen) > _DEPTH:
+        return False
+    ops = program.files[f].ops
+    start = i
+    while start > 0 and (f, start) not in entries and not (f == 0 and start == 0):
+        start -= 1
+    if (f, start) in seen:
+        return False
+    for j in range(start, i):
+        op = ops[j]
+        if op.code in ("EM", "EMT", "EMF"):
+            return False
+        if op.code in ("JP", "JPT", "JPF") and (op.target is None or op.target <= j or op.target > i):
+            return False
+    # nothing may jump into start..i from outside it (control would skip the part before the landing point)
+    for g, code in enumerate(program.files):
+        for j, op in enumerate(code.ops):
+            if g == f and op.code in ("JP", "JPT", "JPF") and op.target is not None and start < op.target <= i \
+                    and not start <= j < i:
+                return False
+    if f == 0 and start == 0:
+        return True
+    return any(op.code == "CALL" and op.call is not None and not op.call.is_module and op.call.key == (f, start)
+               and _always_runs(program, g, j, entries, seen + ((f, start),))
+               for g, code in enumerate(program.files) for j, op in enumerate(code.ops))

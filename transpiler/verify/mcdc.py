@@ -24,7 +24,9 @@ cycle, a compare or bit test of WA, or an error marker of x, / and MOD, that con
 in that code followed into), a condition a relation between two of its chain's operands rules out that holds at
 every point of every cycle (implication.Invariant: 0 at power-on, only the program writes them, each write keeps
 it), a condition no path of the cycle that comes to its chain lets decide alone (cycle_paths.py: the code run from
-where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them),
+where every run of the chain begins, through its calls and CASE entries, words and markers as each path leaves them;
+from the main program's start also under what holds at the start of every cycle but the first, with the first cycle
+run from any memory and the first-cycle marker 1),
 a string compare the straight-line code before it fixes (string_values.py), the running bit of a timer whose
 preset is 0 in every run (Coverage.idle_timers) that nothing else writes, and a boundary value the word cannot hold
 (word_values.py; for X, index_range's interval and congruence; for a compare of two words, the differences
@@ -45,7 +47,7 @@ from transpiler.language.presets import TIMER_MP
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors, write_sites
-from transpiler.verify.cycle_paths import Runner, Seen, seen_vectors, start_name
+from transpiler.verify.cycle_paths import Runner, Seen, StartRelation, seen_vectors, start_name, start_relations
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_bounds, word_relations
@@ -720,6 +722,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     # what is still missing may be ruled out by the paths that come to its chain (cycle_paths)
     if explain_missing:
         _explain_by_paths(program, conditions)
+        # and by what holds at the start of every cycle but the first (operands set after power-on break it)
+        if any(item.status == "missing" for item in conditions):
+            at_start = start_relations(program, set(driven) - set(power_on))
+            if at_start:
+                _explain_by_paths(program, conditions, at_start)
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
     xs: dict[tuple[int, int], XValues] | None = None
@@ -745,8 +752,11 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
 
-def _explain_by_paths(program: Program, conditions: list[ConditionItem]) -> None:
-    """Marks the missing conditions the paths that come to their chain never show (cycle_paths) as infeasible."""
+def _explain_by_paths(program: Program, conditions: list[ConditionItem],
+                      relations: Sequence[StartRelation] = ()) -> None:
+    """Marks the missing conditions the paths that come to their chain never show (cycle_paths) as infeasible; with
+    `relations` (cycle_paths.start_relations), runs from the main program's start assume them in every cycle but
+    the first, and the reason names those the claim rests on."""
     runner: Runner | None = None
     found: dict[tuple[int, int], Seen | None] = {}
     for k, item in enumerate(conditions):
@@ -754,16 +764,26 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem]) -> None
             continue
         decision = item.decision
         if decision.key not in found:
-            runner = runner or Runner(program)
+            runner = runner or Runner(program, relations)
             found[decision.key] = seen_vectors(runner, decision)
         seen = found[decision.key]
         if seen is None or not seen.vectors or _showable(decision, item.number, item.masking, seen.vectors):
             continue
+        used = list(relations) if seen.start == (0, 0) else []
+        for rel in list(used):
+            trial = Runner(program, [r for r in used if r is not rel])
+            again = trial.seen(decision, seen.start)
+            if again is not None and again and not _showable(decision, item.number, item.masking, again):
+                used.remove(rel)
         ties = _ties(decision, item.number, Tied(seen.vectors, seen.start[1], ()))
+        marker = runner.first_cycle_marker() if used and runner is not None else None
+        assumed = "".join(f"; {rel.text()}" for rel in used) + (
+            "; the first cycle followed from any memory" + (f" with the first-cycle marker M{marker[1]} = 1"
+                                                            if marker is not None else "") if used else "")
         reason = (f"{item.condition.text} cannot change the outcome on its own here: "
                   f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain, "
                   f"followed from {start_name(program, seen.start)} through the calls and CASE entries on the way, "
-                  "with the values the compares, jumps and stores on each path leave its markers and words)")
+                  f"with the values the compares, jumps and stores on each path leave its markers and words{assumed})")
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
