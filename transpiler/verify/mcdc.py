@@ -727,6 +727,15 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             at_start = start_relations(program, set(driven) - set(power_on))
             if at_start:
                 _explain_by_paths(program, conditions, at_start)
+    boundaries = _boundary_coverage(program, table, bounds, set(driven), set(power_on), explain_missing)
+    return DecisionCoverage(tuple(conditions), tuple(boundaries))
+
+
+def _boundary_coverage(program: Program, table: DecisionTable, bounds: Mapping[tuple[int, int], set[int]],
+                       driven: set[tuple[str, int]], power_on: set[tuple[str, int]],
+                       explain_missing: bool) -> list[BoundaryItem]:
+    """The boundary items of every compare: reached by a run, or missing unless an analysis (word_values, X's
+    values, the NC ranges, word_relations) shows the value cannot be there."""
     boundaries: list[BoundaryItem] = []
     held: WordValues | None = None
     xs: dict[tuple[int, int], XValues] | None = None
@@ -749,7 +758,7 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
                 word_range = word_bounds(program) if word_range is None else word_range
                 items = [_bounded(cmp, item, word_range) if item.status == "missing" else item for item in items]
         boundaries += items
-    return DecisionCoverage(tuple(conditions), tuple(boundaries))
+    return boundaries
 
 
 def _explain_by_paths(program: Program, conditions: list[ConditionItem],
