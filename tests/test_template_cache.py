@@ -41,7 +41,7 @@ def _uncached_text() -> str:
 
 
 def _cache_files(cache: Path) -> list[Path]:
-    return sorted((cache / templating.TEMPLATE_CACHE_FOLDER).glob("*.cache"))
+    return sorted((cache / templating.TEMPLATE_CACHE_FOLDER).rglob("*.cache"))
 
 
 def test_a_second_process_loads_the_compiled_templates_and_prints_the_same(own_cache: Path,
@@ -103,3 +103,14 @@ def test_a_cache_folder_that_cannot_be_written_only_costs_the_compile(own_cache:
     monkeypatch.setattr(templating.jinja2.bccache.tempfile, "NamedTemporaryFile", refused)
     assert StPrinter().project(rich_project()) == _uncached_text()
     assert _cache_files(own_cache) == []
+
+
+def test_templates_compiled_with_other_options_are_kept_apart(own_cache: Path) -> None:
+    """jinja keys a cache file by the template's source and the Python version only, while options such as
+    trim_blocks change the compiled code: another set of options (another hh2iec version, say) gets a folder of
+    its own instead of loading code compiled for the current one."""
+    other = {**templating._OPTIONS, "trim_blocks": False}
+    ours, theirs = templating.template_cache(), templating.template_cache(other)
+    assert ours is not None and theirs is not None
+    assert ours.directory != theirs.directory
+    assert templating.template_cache().directory == ours.directory     # the same options: the same folder

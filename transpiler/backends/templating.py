@@ -6,7 +6,9 @@ all of them format with the same whitespace rules. The compiled templates are ke
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 import jinja2
 from jinja2.bccache import Bucket
@@ -35,10 +37,30 @@ class _CompiledTemplates(jinja2.FileSystemBytecodeCache):
             pass
 
 
-def template_cache() -> jinja2.BytecodeCache | None:
-    """The cache of compiled templates in the per-user cache folder; None when the folder cannot be made."""
+# The options every environment is made with. They shape the compiled code, and jinja's cache files are keyed by the
+# template's source and the Python version only, so the cache keeps one folder per set of options and jinja version.
+_OPTIONS = MappingProxyType(dict(
+    undefined=jinja2.StrictUndefined,
+    autoescape=False,
+    trim_blocks=True,
+    lstrip_blocks=True,
+    keep_trailing_newline=True,
+    # (a template included once per POU would otherwise be checked on disk for changes at every include)
+    auto_reload=False,
+))
+
+
+def _options_folder(options: Mapping[str, object]) -> str:
+    """The cache folder's name for templates compiled with `options` by this jinja version."""
+    described = repr(sorted((key, getattr(value, "__qualname__", value)) for key, value in options.items()))
+    return f"jinja{jinja2.__version__}-{hashlib.sha256(described.encode()).hexdigest()[:16]}"
+
+
+def template_cache(options: Mapping[str, object] = _OPTIONS) -> jinja2.BytecodeCache | None:
+    """The cache of templates compiled with `options`, in the per-user cache folder; None when the folder cannot be
+    made."""
     try:
-        folder = cache_dir() / TEMPLATE_CACHE_FOLDER
+        folder = cache_dir() / TEMPLATE_CACHE_FOLDER / _options_folder(options)
         folder.mkdir(parents=True, exist_ok=True)
     except (OSError, RuntimeError):       # (RuntimeError: Path.home() without a home directory)
         return None
@@ -49,15 +71,9 @@ def template_environment(folder: str, filters: Mapping[str, Callable]) -> jinja2
     """An environment that loads templates/<folder> (installed copy first, else the checkout's)."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(data_dir("templates") / folder)),
-        undefined=jinja2.StrictUndefined,
-        autoescape=False,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        # (a template included once per POU would otherwise be checked on disk for changes at every include)
-        auto_reload=False,
         # (compiling the templates of project.st costs about 10 ms in every process; loading them, about 1)
         bytecode_cache=template_cache(),
+        **_OPTIONS,
     )
     env.filters.update(filters)
     return env
