@@ -584,7 +584,8 @@ class Runner:
                 return out
             except _NotJoined:
                 self.forget_written(path, target.key)
-                path.la, path.stack, path.frames = None, [_DEEP], []
+                # it may load WA too, writing nothing
+                path.la, path.wa, path.source, path.stack, path.frames = None, None, None, [_DEEP], []
                 return [(f, i + 1, path)]
             if back is None:
                 return []
