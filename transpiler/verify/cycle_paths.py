@@ -674,7 +674,7 @@ class Runner:
         self.forget_word(path, key)
         bits = 8 * BYTES[key[0]]
         if wa is not None and wa.value is not None:
-            v = saturate(wa.value, bits) if self.saturate and bits < 32 else sext(wa.value & ((1 << bits) - 1), bits)
+            v = sext(saturate(wa.value, bits) if self.saturate and bits < 32 else wa.value & ((1 << bits) - 1), bits)
             path.words[key] = Word(v, v)
         elif wa is not None and _full(key[0]).lo <= wa.lo and wa.hi <= _full(key[0]).hi:
             path.words[key] = wa
