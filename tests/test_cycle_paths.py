@@ -137,6 +137,26 @@ def test_a_path_or_write_that_breaks_it_leaves_the_condition_missing(tmp_path: P
     assert items[("M2", "O3")].status == "missing", items[("M2", "O3")]
 
 
+def test_a_subprogram_not_joined_may_leave_wa_changed(tmp_path: Path) -> None:
+    # Sub loads K5 and loops (its paths are not joined); it writes no memory, but the caller stores the WA it returns
+    # with: B10 = 5 reaches the chain. Catches: WA kept over a call whose subprogram was not followed.
+    program = _program(tmp_path, "L K0\nCM Sub\n= B10\nL B10\n== K5\nA I2\n= O1\nEM\n"
+                                 "LBL Sub\nL K5\nLBL Lp\nL M5\nJPT Lp\nEM\n")
+    assert _check_recorded(program, _random_memory_runs(program, 10, 30, 3)) >= 1
+    assert _items(program)[("B10 == K5", "O1")].status == "missing"
+
+
+def test_a_negative_value_stored_under_saturation_loads_back_negative(tmp_path: Path) -> None:
+    # A-08 saturate: `L K-1` `= B10` stores -1 (within the byte's range), and `L B10` loads -1 again, so the compare
+    # is always 1. Catches: the clamped bit pattern (255) kept as the byte's value.
+    program = _program(tmp_path, "L K-1\n= B10\nL B10\n== K-1\nA I2\n= O1\nL K-300\n= B12\nL B12\n== K-128\n"
+                                 "A I2\n= O2\nEM\n", store_truncation="saturate")
+    runner = Runner(program)
+    for decision in decision_table(program).decisions:
+        assert seen_vectors(runner, decision).vectors == {1, 3}, decision.text()
+    assert _check_recorded(program, _random_memory_runs(program, 4, 5, 3)) == 2
+
+
 def test_a_subprogram_called_from_two_places_starts_its_own_runs(tmp_path: Path) -> None:
     # Work is called by the CASE and once more after it, from code where B10 and M2 are anything: the run starts
     # at the main program's code that makes both calls, and the second call sees M2 = 0.

@@ -377,6 +377,18 @@ def test_no_difference_is_claimed_where_the_loop_may_break_it(tmp_path: Path, bo
     assert _relation(program, 10 + body.count("\n"))[1] is None, why
 
 
+def test_a_copy_after_an_indexed_store_does_not_equal_the_word_loaded_before_it(tmp_path: Path) -> None:
+    # `L W6` `= D0[X]` `= W8`: the double word through X (bytes 4..7 here) rewrites W6's bytes with WA's upper half,
+    # so W8 (WA, 1) is W6 (0) + 1. Catches: WA still taken as W6's value after a store that may change W6.
+    program = _program(tmp_path, "L K1\n= W6\nL K4\n= X\nL W6\n= D0[X]\n= W8\nL W8\n== W6\n= O1\nEM\n")
+    assert _relation(program, 9) == (None, None)
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    machine.run_cycle(0, [])
+    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 9)
+    assert machine.coverage.bounds[cmp.key] == {1}
+    _bounds_inside(program, [machine.coverage])
+
+
 # W6 counts the set markers among M100..M107: set to 0 with X, INC'd at most once per pass of the loop over X; after
 # the loop W6 is 0..8 (W6 - X <= 0 and X = 8 there), so its compare with K0 never sees -1.
 COUNT_BESIDE_X = """{before}L     K0

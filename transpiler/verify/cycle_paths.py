@@ -645,7 +645,8 @@ class Runner:
                 return out
             except _NotJoined:
                 self.forget_written(path, target.key)
-                path.la, path.stack, path.frames = None, [_DEEP], []
+                # it may load WA too, writing nothing
+                path.la, path.wa, path.source, path.stack, path.frames = None, None, None, [_DEEP], []
                 return [(f, i + 1, path)]
             if back is None:
                 return []
@@ -734,7 +735,7 @@ class Runner:
         self.forget_word(path, key)
         bits = 8 * BYTES[key[0]]
         if wa is not None and wa.value is not None:
-            v = saturate(wa.value, bits) if self.saturate and bits < 32 else sext(wa.value & ((1 << bits) - 1), bits)
+            v = sext(saturate(wa.value, bits) if self.saturate and bits < 32 else wa.value & ((1 << bits) - 1), bits)
             path.words[key] = Word(v, v)
         elif wa is not None and _full(key[0]).lo <= wa.lo and wa.hi <= _full(key[0]).hi:
             path.words[key] = wa

@@ -288,7 +288,8 @@ class _Analysis:
             return _State(self.forget(facts, X_CELL), None, None)
         if c in _MEM_WRITERS and o is not None and (o.kind in _BITS or o.kind == "X"):
             if o.indexed:
-                return _State({}, wa, None)
+                # the store may hit the cell WA was loaded from: WA then no longer equals it
+                return _State({}, wa if wa is not None and wa[0] == ZERO else None, None)
             cell = X_CELL if o.kind == "X" else (o.kind, o.addr)
             if c in ("INC", "DEC"):
                 kept = self.stepped(i, facts, cell, 1 if c == "INC" else -1)
