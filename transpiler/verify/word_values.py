@@ -207,7 +207,6 @@ class _Analysis:
         self.linked = self._linked()
         self.interface = sem.profile.interface
         self.flag = sem["add_overflow"] == "flag"
-        self.job_code: set[tuple[int, int]] | None = None     # worked out at the first RPLY (replies)
 
     # ------------------------------------------------------------------------------------ what memory the program
     # does not own
@@ -803,31 +802,8 @@ class _Analysis:
         """WA after the RPLY at op i: its states (0 finished or unknown, 1 running, 2 waiting), without 1 where no
         submitted job reaches the op: a job is running only while its own code (and what it calls) runs, so RPLY
         elsewhere never finds the job it asks about running."""
-        if self.job_code is None:
-            self.job_code = self._job_code()
         states = frozenset(REPLY_STATES)
-        return states if (f, i) in self.job_code else states - {REPLY_STATES[1]}
-
-    def _job_code(self) -> set[tuple[int, int]]:
-        """(file, op index) of every op a submitted job can run: from each SUBM target, along jumps, calls and CASE
-        entries, whatever the values."""
-        found: set[tuple[int, int]] = set()
-        todo = [(op.call.file, op.call.index) for _, _, op in self.ops
-                if op.code == "SUBM" and op.call is not None and op.call.file >= 0]
-        while todo:
-            f, i = todo.pop()
-            ops = self.program.files[f].ops
-            if (f, i) in found or not 0 <= i < len(ops):
-                continue
-            found.add((f, i))
-            op = ops[i]
-            if op.code in ("JP", "JPT", "JPF") and op.target is not None:
-                todo.append((f, op.target))
-            todo += [(t.file, t.index) for t in (op.call, *op.case_targets)
-                     if t is not None and not t.is_module and t.file >= 0]
-            if op.code not in ("JP", "EM"):
-                todo.append((f, i + 1))
-        return found
+        return states if (f, i) in self.contexts[1] else states - {REPLY_STATES[1]}
 
     def facts_after(self, f: int, i: int, op: Op, facts: frozenset) -> frozenset:
         """The marker facts after op i: a write of a bit forgets what was known of it (a call or module call, an
