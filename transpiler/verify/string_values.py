@@ -15,7 +15,7 @@ Sound, not complete: where anything is not known, nothing is claimed."""
 from __future__ import annotations
 
 import operator
-from typing import Callable, Mapping
+from typing import Callable, Iterator, Mapping
 
 from transpiler.ir import Op, Program
 
@@ -67,33 +67,18 @@ class StringCompares:
             return o.text
         if o.kind != "S" or o.indexed:
             return None
-        ops = self.program.files[f].ops
-        j = i
-        while True:
-            if (f, j) in self.entered or j == 0:
-                return None
-            j -= 1
-            prev = ops[j]
-            if prev.code in _BARRIERS or (prev.call is not None and prev.call.is_module):
-                return None
+        for j, prev in self._stretch_before(f, i):
             if prev.code == "SST" and prev.operand is not None and prev.operand.kind == "S":
                 if prev.operand.indexed:
                     return None         # may have written S<n>
                 if prev.operand.addr == o.addr:
                     return self._accumulator(f, j)
+        return None
 
     def _accumulator(self, f: int, i: int) -> str | None:
         """The string accumulator's text before op i: its last load in the stretch before, with the appends since."""
-        ops = self.program.files[f].ops
         appended: list[str] = []
-        j = i
-        while True:
-            if (f, j) in self.entered or j == 0:
-                return None
-            j -= 1
-            prev = ops[j]
-            if prev.code in _BARRIERS or (prev.call is not None and prev.call.is_module):
-                return None
+        for j, prev in self._stretch_before(f, i):
             if prev.code == "SCAT":
                 text = self._operand(f, j, prev)
                 if text is None:
@@ -106,3 +91,16 @@ class StringCompares:
                 for more in reversed(appended):
                     text = (text + more)[:self.limit]
                 return text
+        return None
+
+    def _stretch_before(self, f: int, i: int) -> Iterator[tuple[int, Op]]:
+        """The ops before op i, nearest first, back to the start of its straight stretch: an entry (a jump, call or
+        CASE target), the file's start, or an op that may write strings unseen (a call, CASE, SUBM, module)."""
+        ops = self.program.files[f].ops
+        j = i
+        while (f, j) not in self.entered and j > 0:
+            j -= 1
+            prev = ops[j]
+            if prev.code in _BARRIERS or (prev.call is not None and prev.call.is_module):
+                return
+            yield j, prev
