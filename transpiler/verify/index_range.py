@@ -390,15 +390,21 @@ def index_ranges(program: Program) -> dict[tuple[int, int], Interval]:
     return {key: (v.lo, v.hi) for key, v in index_values(program).items()}
 
 
-def index_values(program: Program) -> dict[tuple[int, int], XValues]:
-    """(file, op index) -> what X can hold before that op (interval and congruence), for every op the analysis
-    reaches."""
+def entry_points(program: Program) -> dict[int, set[int]]:
+    """file -> the op indices a run of it can start at: the file's start and every call or CASE target in it."""
     entries: dict[int, set[int]] = {f: {0} for f in range(len(program.files))}
     for code in program.files:
         for op in code.ops:
             for target in (op.call, *op.case_targets):
                 if target is not None and not target.is_module and target.file >= 0:
                     entries.setdefault(target.file, set()).add(target.index)
+    return entries
+
+
+def index_values(program: Program) -> dict[tuple[int, int], XValues]:
+    """(file, op index) -> what X can hold before that op (interval and congruence), for every op the analysis
+    reaches."""
+    entries = entry_points(program)
     out: dict[tuple[int, int], XValues] = {}
     for f, code in enumerate(program.files):
         if not code.ops:

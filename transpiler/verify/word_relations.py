@@ -45,7 +45,7 @@ from typing import Mapping
 from transpiler.exec.interp.gen_exprs import int32
 from transpiler.frontend.opcodes import implicit_writes
 from transpiler.ir import BYTES, Op, Program
-from transpiler.verify.index_range import index_ranges
+from transpiler.verify.index_range import entry_points, index_ranges
 
 Cell = tuple[str, int]              # (kind, byte address) of a named B/W/D operand; X_CELL; ZERO
 Facts = Mapping[tuple[Cell, Cell], int]     # (A, B) -> k: load(A) - load(B) <= k
@@ -395,12 +395,7 @@ def _run(program: Program):
     if sem["compare_signedness"] == "unsigned" or sem["accumulator_model"] == "shared_bit7" or \
             sem["load_extension"] == "zero":
         return
-    entries: dict[int, set[int]] = {f: {0} for f in range(len(program.files))}
-    for code in program.files:
-        for op in code.ops:
-            for target in (op.call, *op.case_targets):
-                if target is not None and not target.is_module and target.file >= 0:
-                    entries.setdefault(target.file, set()).add(target.index)
+    entries = entry_points(program)
     xs = index_ranges(program)
     for f, code in enumerate(program.files):
         if not code.ops:
