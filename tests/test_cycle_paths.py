@@ -248,7 +248,17 @@ def _random_memory_runs(program, runs: int, cycles: int, seed: int) -> list[Mach
 
 
 def _check_recorded(program, machines, files: frozenset[str] | None = None) -> int:
-    runner = Runner(program)
+    recorded: dict = {}
+    for machine in machines:
+        for key, found in machine.coverage.vectors.items():
+            recorded.setdefault(key, set()).update(found)
+    return _check_vectors(program, recorded, files)
+
+
+def _check_vectors(program, recorded: dict, files: frozenset[str] | None = None, runner: Runner | None = None) -> int:
+    """Asserts that every vector `recorded` (decision key -> vectors) of a decision in `files` (None: all) is among
+    those the run finds; the number of decisions checked with at least one vector."""
+    runner = runner or Runner(program)
     checked = 0
     for decision in decision_table(program).decisions:
         if files is not None and Path(program.files[decision.file].path).name not in files:
@@ -257,9 +267,9 @@ def _check_recorded(program, machines, files: frozenset[str] | None = None) -> i
         if seen is None:
             continue
         mask = (1 << len(decision.conditions)) - 1
-        recorded = {v & mask for m in machines for v in m.coverage.vectors.get(decision.key, ())}
-        assert recorded <= seen.vectors, (decision.text(), sorted(recorded - seen.vectors))
-        checked += bool(recorded)
+        got = {v & mask for v in recorded.get(decision.key, ())}
+        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
+        checked += bool(got)
     return checked
 
 
@@ -402,16 +412,7 @@ def test_recorded_vectors_of_runs_are_among_the_ones_found_with_the_relations(tm
             machine.run_cycle(cycle, writes)
         for key, found in machine.coverage.vectors.items():
             recorded.setdefault(key, set()).update(found)
-    checked = 0
-    for decision in decision_table(program).decisions:
-        seen = seen_vectors(runner, decision)
-        if seen is None:
-            continue
-        mask = (1 << len(decision.conditions)) - 1
-        got = {v & mask for v in recorded.get(decision.key, ())}
-        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
-        checked += bool(got)
-    assert checked >= 3
+    assert _check_vectors(program, recorded, runner=runner) >= 3
 
 
 _LOOPED_INIT = """LBL Init
@@ -468,19 +469,8 @@ def test_recorded_vectors_of_the_sample_runs_are_among_the_ones_found_with_the_r
         machine = build_machine(program, scenario, Diagnostics(), coverage=True, compiled=compiled)
         for key, found in run_scenario(program, scenario, names, machine=machine).machine.coverage.vectors.items():
             recorded.setdefault(key, set()).update(found)
-    runner = Runner(program, relations)
-    checked = 0
-    for decision in decision_table(program).decisions:
-        if Path(program.files[decision.file].path).name not in ("Toolaut1.src", "Toolmag1.src"):
-            continue
-        seen = seen_vectors(runner, decision)
-        if seen is None:
-            continue
-        mask = (1 << len(decision.conditions)) - 1
-        got = {v & mask for v in recorded.get(decision.key, ())}
-        assert got <= seen.vectors, (decision.text(), sorted(got - seen.vectors))
-        checked += bool(got)
-    assert checked > 20
+    steps = frozenset({"Toolaut1.src", "Toolmag1.src"})
+    assert _check_vectors(program, recorded, steps, Runner(program, relations)) > 20
 
 
 def test_recorded_vectors_behind_overlapping_loops_are_among_the_ones_found(tmp_path: Path) -> None:
