@@ -338,10 +338,18 @@ def test_rply_gives_running_only_in_code_a_job_reaches(tmp_path: Path) -> None:
 COUNTING = "L K0\n= W6\nL W6\n< W30\nWHILET\n{body}L W6\n{step}= W6\nL W6\n< W30\nENDW\nEM\n{routines}"
 
 
+def _compare_at(program, line: int):
+    """The compare of the decision table at source line `line`."""
+    return next(c for c in decision_table(program).compares if c.op.span.line == line)
+
+
+def _boundary(program, coverage: list, what: str):
+    """The boundary item `what` (as BoundaryItem.what() prints it) of the decision coverage over `coverage`."""
+    return {i.what(): i for i in decision_coverage(program, coverage).boundaries}[what]
+
+
 def _relation(program, line: int) -> tuple:
-    table = decision_table(program)
-    cmp = next(c for c in table.compares if c.op.span.line == line)
-    return word_relations(program).get(cmp.key, (None, None))
+    return word_relations(program).get(_compare_at(program, line).key, (None, None))
 
 
 def test_a_counting_loop_never_passes_its_limit_at_its_test(tmp_path: Path) -> None:
@@ -355,10 +363,9 @@ def test_a_counting_loop_never_passes_its_limit_at_its_test(tmp_path: Path) -> N
         machine.state.write("W", 30, limit)
         machine.run_cycle(cycle, [])
     _bounds_inside(program, [machine.coverage])
-    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 10)
+    cmp = _compare_at(program, 10)
     assert machine.coverage.bounds[cmp.key] == {-1, 0}
-    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
-    item = items["boundary W6 < W30: W6 - W30 = +1"]
+    item = _boundary(program, [machine.coverage], "boundary W6 < W30: W6 - W30 = +1")
     assert item.status == "infeasible" and item.reason.startswith("W6 - W30 is at most 0 here, never +1"), item
 
 
@@ -384,7 +391,7 @@ def test_a_copy_after_an_indexed_store_does_not_equal_the_word_loaded_before_it(
     assert _relation(program, 9) == (None, None)
     machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
     machine.run_cycle(0, [])
-    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 9)
+    cmp = _compare_at(program, 9)
     assert machine.coverage.bounds[cmp.key] == {1}
     _bounds_inside(program, [machine.coverage])
 
@@ -411,8 +418,7 @@ EM
 
 
 def _bound_at(program, line: int) -> tuple[int, int] | None:
-    cmp = next(c for c in decision_table(program).compares if c.op.span.line == line)
-    return word_bounds(program).get(cmp.key)
+    return word_bounds(program).get(_compare_at(program, line).key)
 
 
 def test_a_count_kept_beside_x_stays_within_the_loop_s_passes(tmp_path: Path) -> None:
@@ -427,10 +433,9 @@ def test_a_count_kept_beside_x_stays_within_the_loop_s_passes(tmp_path: Path) ->
             machine.state.write("M", 100 + bit, 1 if cycle == 1 else 0 if cycle == 2 else rng.randrange(2))
         machine.run_cycle(cycle, [])
     assert _bounds_inside(program, [machine.coverage]) > 0
-    cmp = next(c for c in decision_table(program).compares if c.op.span.line == 14)
+    cmp = _compare_at(program, 14)
     assert machine.coverage.bounds[cmp.key] == {0, 1}     # c and c+1 reached, c-1 not
-    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
-    item = items["boundary W6 > K0: W6 = c-1 (-1)"]
+    item = _boundary(program, [machine.coverage], "boundary W6 > K0: W6 = c-1 (-1)")
     assert item.status == "infeasible" and item.reason.startswith("W6 holds only 0..8 here, not -1"), item
 
 
@@ -509,8 +514,7 @@ def test_a_word_set_with_a_count_is_known_where_the_count_is_not_zero(tmp_path: 
             machine.state.write("M", 100 + bit, 0 if cycle % 3 == 0 else rng.randrange(2))
         machine.run_cycle(cycle, [])
     assert _bounds_inside(program, [machine.coverage]) > 0
-    items = {i.what(): i for i in decision_coverage(program, [machine.coverage]).boundaries}
-    item = items["boundary W8 == K0: W8 = c-1 (-1)"]
+    item = _boundary(program, [machine.coverage], "boundary W8 == K0: W8 = c-1 (-1)")
     assert item.status == "infeasible" and item.reason.startswith("W8 holds only 0..7 here, not -1"), item
 
 
