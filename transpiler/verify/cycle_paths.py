@@ -44,8 +44,9 @@ from typing import Sequence
 from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.exec.interp.gen_exprs import int32
 from transpiler.exec.interp.support import saturate
+from transpiler.frontend.flow import RoutineBodies
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.ir import BYTES, Op, Program, sext
+from transpiler.ir import BYTES, CallTarget, Op, Program, sext
 from transpiler.language.module_table import writes_anywhere
 from transpiler.verify.implication import cycle_order
 from transpiler.verify.index_range import index_ranges
@@ -219,6 +220,7 @@ class Runner:
         self.target: tuple[int, int] = (-1, -1)
         self.leading: set[tuple[int, int]] = set()
         self._reach: dict[tuple[int, int], frozenset[tuple[int, int]]] = {}
+        self._bodies = RoutineBodies.of(program)
 
     # ---------------------------------------------------------------------------------------- where runs start
 
@@ -238,20 +240,7 @@ class Runner:
         """The ops control comes to from `entry` without a call between (falling through, jumping, past calls)."""
         if entry not in self._reach:
             f, start = entry
-            ops = self.program.files[f].ops
-            seen: set[int] = set()
-            todo = [start]
-            while todo:
-                i = todo.pop()
-                if i in seen or not 0 <= i < len(ops):
-                    continue
-                seen.add(i)
-                op = ops[i]
-                if op.code in ("JP", "JPT", "JPF") and op.target is not None:
-                    todo.append(op.target)
-                if op.code not in ("JP", "EM"):
-                    todo.append(i + 1)
-            self._reach[entry] = frozenset((f, i) for i in seen)
+            self._reach[entry] = frozenset((f, i) for i in self._bodies(CallTarget(file=f, index=start)))
         return self._reach[entry]
 
     def starts(self, f: int, i: int) -> list[tuple[int, int]]:

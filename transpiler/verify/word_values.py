@@ -354,18 +354,13 @@ class _Analysis:
         calls: dict[tuple[int, int], set[tuple[int, int]]] = {}
         entries = {(t.file, t.index) for code in self.program.files for op in code.ops
                    for t in (op.call, *op.case_targets) if t is not None and not t.is_module and t.file >= 0}
+        bodies = RoutineBodies.of(self.program)
         for entry in entries:
             f, start = entry
             ops = self.program.files[f].ops
-            seen: set[int] = set()
-            todo = [start]
             written: set[Cell] | None = set()
             called: set[tuple[int, int]] = set()
-            while todo:
-                i = todo.pop()
-                if i in seen or not 0 <= i < len(ops):
-                    continue
-                seen.add(i)
+            for i in bodies(CallTarget(file=f, index=start)):
                 op = ops[i]
                 cell, others = self.written_by(f, i, op)
                 if others is None:
@@ -375,10 +370,6 @@ class _Analysis:
                 if op.code in _CALLS:
                     called |= {(t.file, t.index) for t in (op.call, *op.case_targets)
                                if t is not None and not t.is_module and t.file >= 0}
-                if op.code in ("JP", "JPT", "JPF") and op.target is not None:
-                    todo.append(op.target)
-                if op.code not in ("JP", "EM"):
-                    todo.append(i + 1)
             direct[entry], calls[entry] = written, called
         total = dict(direct)
         changed = True
