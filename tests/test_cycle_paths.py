@@ -377,7 +377,7 @@ def _status(program, driven: set, power_on: set) -> str:
     ("L M4172\nA I7\nCMT Init\n", "", ""),      # a reset only under another input in the first cycle
     ("CM Steps\n" + _INIT, "", ""),             # the step chain runs before the first cycle's reset
     (_INIT, "L I5\n= M1\n", ""),                # the flag written after its store
-    (_INIT, "L I5\n= B10\n", ""),               # the step word written after the flag's store
+    (_INIT, "L I5\nIFT\nL K1\n= B10\nENDI\n", ""),   # the step word written after the flag's store
     (_INIT, "", "L I6\nEMT\n"),                 # the flag's store skipped on a path
     (_INIT, "L I5\n= M4172\n", ""),             # the program writes the first-cycle marker
 ], ids=["no_reset", "conditional_reset", "read_before_reset", "flag_rewritten", "word_rewritten", "store_skipped",

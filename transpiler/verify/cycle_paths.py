@@ -18,7 +18,7 @@ an unknown bottom) and word stores of known values are followed too. A subprogra
 from is run with its paths joined where they meet (its inner paths do not matter, only the state it returns with);
 where it reads a bit of the chain whose value at the start is not known yet, the path calling it forks on that bit
 first; where it jumps back, it is run again from the loop's head, from the state the head was entered with less
-what the ops from the head on and their callees may write (a state every pass starts from), and a later jump back
+what the ops of the loop and their callees may write (a state every pass starts from), and a later jump back
 to that head adds nothing. Anything else not followed exactly makes
 what it may write unknown: a PLC module its error marker and code word (all of memory where it writes to an
 address it is given), a write through the index register the operands index_range lets it reach, an op of a kind
@@ -216,6 +216,7 @@ class Runner:
         self.entries, self.callers = self._entries()
         self.ranges = index_ranges(program)
         self.joining = 0
+        self.fork_joined = False        # runs joined where they meet fork on `split` too (cycle_states)
         self.steps = 0
         self.split: set[Key] = set()
         self._writes: dict[tuple[int, int], tuple[frozenset, frozenset, frozenset | None, bool]] = {}
@@ -303,12 +304,45 @@ class Runner:
                 vectors.add(base | sum(1 << n for k, n in enumerate(unknown) if bits >> k & 1))
         return frozenset(vectors)
 
+    def wa_at(self, f: int, i: int, start: tuple[int, int]) -> Word | None:
+        """The values WA can hold when op i of file f runs, on every path from `start` (None: the run gave up, a
+        path comes there with WA not known, or none comes there)."""
+        self.split = set()
+        self.target = (f, i)
+        self.leading = self._leading(self.target)
+        self._leads = {}
+        self.steps = 0
+        found: Word | None = None
+        todo: list[tuple[int, int, _Path]] = [(start[0], start[1], p) for p in self.start_paths(start)]
+        try:
+            while todo:
+                g, j, path = todo.pop()
+                while True:
+                    self.count()
+                    if len(todo) > MAX_PATHS:
+                        raise _GiveUp
+                    ops = self.program.files[g].ops
+                    if not 0 <= j < len(ops):
+                        raise _GiveUp
+                    if g == f and j == i:
+                        if path.wa is None:
+                            return None
+                        found = path.wa if found is None else found.join(path.wa)
+                    nexts = self.step(g, j, ops[j], path, set(), set())
+                    if not nexts:
+                        break
+                    g, j, path = nexts[0]
+                    todo.extend(nexts[1:])
+        except _GiveUp:
+            return None
+        return found
+
     def start_paths(self, start: tuple[int, int]) -> list[_Path]:
         """The states a run from `start` begins in: any state; from the main program's start with relations, one
         state per outcome of the relations (each marker and its word narrowed to agree), for every cycle but the
         first, and any state with the first-cycle marker 1 for the first cycle (the NC sets it there, where the
-        program never writes it); with `states` (step_states), those states stand for every cycle but the first (the
-        relations split each of them)."""
+        program never writes it); with `states` (cycle_states.start_states), those states stand for every cycle
+        but the first (the relations split each of them)."""
         if start != (0, 0) or not self.relations and not self.states:
             return [_Path({}, {})]
         paths = [state.copy() for state in self.states] or [_Path({}, {})]
@@ -378,13 +412,13 @@ class Runner:
                         raise _NotJoined
                     if j <= i:
                         # a jump back: the subprogram again from the loop's head, from the state it was entered with
-                        # less what the ops from the head on (any path may come back to it through them) and their
-                        # callees may write: every pass starts from such a state, so a later jump back to a head run
+                        # less what the ops of the loop (loop_ops: from the head to the last jump back into it) and
+                        # their callees may write: every pass starts from such a state, so a later jump back to a head run
                         # so adds nothing (until a head before it is run again so)
                         if j in widened:
                             continue
                         widened = {a for a in widened if a < j} | {j}
-                        later = [(g, k) for g, k in sorted(self.reach((f, entry))) if k >= j]
+                        later = loop_ops(ops, sorted(k for _, k in self.reach((f, entry))), j, i, f)
                         q = entered[j].copy()
                         self.forget(q, self.collect(later))
                         q.la, q.frames = None, []
@@ -407,7 +441,7 @@ class Runner:
             return [(path, path.bits[key])]
         if key not in split:
             return [(path, None)]
-        if self.joining:
+        if self.joining and not self.fork_joined:
             if key in path.written:
                 return [(path, None)]
             raise _NeedSplit(key)       # its value at the start matters: the caller's path splits on it
@@ -871,6 +905,17 @@ class Runner:
             path.wa, path.source = None, None
 
 
+def loop_ops(ops, reach: list[int], head: int, back: int, f: int) -> list[tuple[int, int]]:
+    """The ops of `reach` (a subprogram's op indices, sorted) a pass of the loop from `head` back to it (the jump at
+    `back`) may run: from the head to the jump, and on to any later jump back to them or before them (a way around
+    through code after the jump) and so on."""
+    end = back
+    for k in reach:
+        if k > end and ops[k].code in ("JP", "JPT", "JPF") and ops[k].target is not None and ops[k].target <= end:
+            end = k
+    return [(f, k) for k in reach if head <= k <= end]
+
+
 def _join(a: _Path, b: _Path) -> _Path:
     """A state that holds what either of `a` and `b` may hold."""
     words = {}
@@ -1090,237 +1135,3 @@ def _always_runs(program: Program, f: int, i: int, entries: set[tuple[int, int]]
     return any(op.code == "CALL" and op.call is not None and not op.call.is_module and op.call.key == (f, start)
                and _always_runs(program, g, j, entries, seen + ((f, start),))
                for g, code in enumerate(program.files) for j, op in enumerate(code.ops))
-
-
-# ------------------------------------------------------------------------------ states keyed by a step word
-
-_MAX_PARTS = 48             # values of the step word a cycle's states are kept apart by, at most
-_WIDEN_AFTER = 4            # times the state of one value grows before all but the step word is forgotten in it
-_MAX_CYCLES = 300           # whole cycles run for one step word, at most
-
-
-def wa_at(runner: Runner, f: int, i: int, start: tuple[int, int]) -> Word | None:
-    """The values WA can hold when op i of file f runs, on every path from `start` (None: the run gave up, a path
-    comes there with WA not known, or none comes there)."""
-    runner.split = set()
-    runner.target = (f, i)
-    runner.leading = runner._leading(runner.target)
-    runner._leads = {}
-    runner.steps = 0
-    found: Word | None = None
-    todo: list[tuple[int, int, _Path]] = [(start[0], start[1], p) for p in runner.start_paths(start)]
-    try:
-        while todo:
-            g, j, path = todo.pop()
-            while True:
-                runner.count()
-                if len(todo) > MAX_PATHS:
-                    raise _GiveUp
-                ops = runner.program.files[g].ops
-                if not 0 <= j < len(ops):
-                    raise _GiveUp
-                if g == f and j == i:
-                    if path.wa is None:
-                        return None
-                    found = path.wa if found is None else found.join(path.wa)
-                nexts = runner.step(g, j, ops[j], path, set(), set())
-                if not nexts:
-                    break
-                g, j, path = nexts[0]
-                todo.extend(nexts[1:])
-    except _GiveUp:
-        return None
-    return found
-
-
-def step_words(program: Program, outside: set[Key]) -> list[Key]:
-    """The words CASE dispatches on (not through the index register) that only the program writes (see
-    _kept_between_cycles), in program order."""
-    found: list[Key] = []
-    kept = _kept_between_cycles(program, outside)
-    for code in program.files:
-        for op in code.ops:
-            o = op.operand
-            if op.code == "CASE" and o is not None and not o.indexed and o.kind in ("B", "W", "D"):
-                key = (o.kind, o.addr)
-                if key not in found and kept(key):
-                    found.append(key)
-    return found
-
-
-def _kept_between_cycles(program: Program, outside: set[Key]):
-    """Whether an operand keeps between two cycles what the program's cycle left in it: a marker or output bit, or
-    a byte, word or double word, that is no NC, interface, data-table or `outside` operand (what a scenario sets
-    after power-on) and that no submitted job writes (jobs are forgotten separately)."""
-    profile = program.semantics.profile
-    itf = profile.interface
-    tables = {(row.kind, row.addr) for row in program.data_rows}
-    foreign_words = [k for k in (*outside, *tables, *NC_MODEL_OWNED) if k[0] in ("B", "W", "D")]
-
-    def kept(key: Key) -> bool:
-        if key in outside or key in tables or key in NC_MODEL_OWNED:
-            return False
-        if key[0] in ("B", "W", "D"):
-            span = range(key[1], key[1] + BYTES[key[0]])
-            return not any(b in itf.interface_bytes for b in span) and not any(
-                k[1] < span.stop and span.start < k[1] + BYTES[k[0]] for k in foreign_words)
-        return key[0] in ("M", "O") and not profile.is_interface(*key)
-    return kept
-
-
-def nc_word_ranges(program: Program, driven: set[Key]) -> dict[Key, Word]:
-    """The NC words only the NC writes, with the range it keeps each in at every instant (single-word facts of
-    nc_facts.applicable_facts; their truth is the same between neighbouring edges)."""
-    from transpiler.verify.nc_facts import applicable_facts
-    out: dict[Key, Word] = {}
-    for fact in applicable_facts(program, driven):
-        if len(fact.operands) != 1 or len(fact.edges) != 2 or fact.operands[0][0] not in ("B", "W", "D"):
-            continue
-        key, (lo, hi) = fact.operands[0], fact.edges
-        if lo < hi and all(fact.holds({key: v}) for v in (lo, hi, min(lo + 1, hi))) and \
-                not fact.holds({key: lo - 1}) and not fact.holds({key: hi + 1}):
-            out[key] = Word(lo, hi)
-    return out
-
-
-def step_states(program: Program, step: Key, outside: set[Key], driven: set[Key]) -> tuple[_Path, ...] | None:
-    """States one of which holds at the start of every cycle but the first, one per value (or range) step word
-    `step` can have at the end of a cycle: an inductive invariant. Base: the first cycle run on every path from
-    any memory (the first-cycle marker 1 where the program never writes it); step: a cycle run on every path from
-    each state found ends in states found. Between cycles only what _kept_between_cycles keeps is kept (what a
-    submitted job may write is forgotten too); words the NC alone writes are in their NC range (nc_word_ranges).
-    The cycle is run with its paths joined where they meet with the same value of the step word (loops run again
-    from a state that forgets what they write, as Runner.summarize does). None where a run gives up or the states
-    keep growing past the limits."""
-    if not followable(program):
-        return None
-    runner = Runner(program)
-    kept = _kept_between_cycles(program, outside)
-    nc = nc_word_ranges(program, driven)
-    jobs = [op.call.key for code in program.files for op in code.ops
-            if op.code == "SUBM" and op.call is not None and not op.call.is_module and op.call.file >= 0]
-    if any(op.code == "SUBM" and (op.call is None or op.call.is_module or op.call.file < 0)
-           for code in program.files for op in code.ops):
-        return None
-    marker = runner.first_cycle_marker()
-    parts: dict[Word | None, _Path] = {}
-    grown: dict[Word | None, int] = {}
-    todo = [_Path({marker: 1} if marker is not None else {}, {})]
-    cycles = 0
-    try:
-        while todo:
-            cycles += 1
-            if cycles > _MAX_CYCLES:
-                return None
-            start = todo.pop()
-            start.words.update(nc)
-            for end in _cycle_ends(runner, start, step):
-                for job in jobs:
-                    runner.forget(end, runner.writes(job))
-                end = _Path({k: v for k, v in end.bits.items() if kept(k)},
-                            {k: v for k, v in end.words.items() if kept(k)})
-                value = end.words.get(step)
-                old = parts.get(value)
-                new = end if old is None else _join(old, end)
-                new = _Path(new.bits, new.words)
-                if new == old:
-                    continue
-                if old is not None:
-                    grown[value] = grown.get(value, 0) + 1
-                    if grown[value] > _WIDEN_AFTER:
-                        new = _Path({}, {} if value is None else {step: value})
-                        if new == old:
-                            continue
-                parts[value] = new
-                todo.append(new.copy())
-                if len(parts) > _MAX_PARTS:
-                    return None
-    except _GiveUp:
-        return None
-    out = []
-    for state in parts.values():
-        state = state.copy()
-        state.words.update(nc)
-        out.append(state)
-    return tuple(out)
-
-
-def _cycle_ends(runner: Runner, start: _Path, step: Key) -> list[_Path]:
-    """The states a cycle run from `start` on every path ends in (joined where the step word agrees)."""
-    runner.split = set()
-    runner.target = (-1, -1)
-    runner.leading = set()
-    runner._leads = {}
-    runner.steps = 0
-    path = start.copy()
-    runner.joining += 1
-    try:
-        return _run_parted(runner, 0, 0, [path], step, 0)
-    finally:
-        runner.joining -= 1
-
-
-def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], step: Key, depth: int) -> list[_Path]:
-    """Runs the subprogram entered at (f, entry) from each of `paths` and those it calls likewise, the paths joined
-    where they meet with the same value of the step word: the states it returns with (as Runner.summarize, whose
-    loop rule it follows, keeping the values of the step word apart)."""
-    if depth > _DEPTH:
-        raise _GiveUp
-    ops = runner.program.files[f].ops
-    heads = {op.target for op in ops if op.code in ("JPT", "JPF", "JP") and op.target is not None}
-    pending: dict[int, dict] = {}
-    returned: dict = {}
-
-    def add(into: dict, q: _Path) -> None:
-        # (paths with different LA kept apart too: a compare's two outcomes meet at the jump that decides on them)
-        value = (q.words.get(step), q.la)
-        into[value] = q if value not in into else _join(into[value], q)
-        if len(into) > _MAX_PARTS:
-            raise _GiveUp
-
-    for p in paths:
-        p.calls = (_RETURN,)
-        add(pending.setdefault(entry, {}), p)
-    entered: dict[int, list[_Path]] = {}
-    widened: set[int] = set()
-    while pending:
-        i = min(pending)
-        here = pending.pop(i)
-        if not 0 <= i < len(ops):
-            raise _GiveUp
-        if i in heads:
-            entered[i] = [p.copy() for p in here.values()]
-        for path in here.values():
-            runner.count()
-            for g, j, q in runner.step(f, i, ops[i], path, set(), set()):
-                if (g, j) == _RETURN:
-                    add(returned, q)
-                    continue
-                if len(q.calls) > 1:            # a call entered: its returns go on after it
-                    back, q.calls = q.calls[-1], (_RETURN,)
-                    for r in _run_parted(runner, g, j, [q], step, depth + 1):
-                        r.calls = (_RETURN,)
-                        if back[0] != f or back[1] <= i:
-                            raise _GiveUp
-                        add(pending.setdefault(back[1], {}), r)
-                    continue
-                if g != f or j <= i and j not in entered:
-                    raise _GiveUp
-                if j <= i:
-                    if j in widened:
-                        continue
-                    widened = {a for a in widened if a < j} | {j}
-                    later = [(g2, k) for g2, k in sorted(runner.reach((f, entry))) if k >= j]
-                    written = runner.collect(later)
-                    deep = any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE")
-                               for _, k in later)
-                    for old in entered[j]:
-                        again = old.copy()
-                        runner.forget(again, written)
-                        again.la, again.frames = None, []
-                        if deep:
-                            again.stack = [_DEEP]
-                        add(pending.setdefault(j, {}), again)
-                    continue
-                add(pending.setdefault(j, {}), q)
-    return list(returned.values())

@@ -47,7 +47,9 @@ from transpiler.language.presets import TIMER_MP
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors, write_sites
-from transpiler.verify.cycle_paths import Runner, Seen, StartRelation, seen_vectors, start_name, start_relations
+from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, followable, seen_vectors, start_name,
+                                          start_relations)
+from transpiler.verify.cycle_states import StartStates, chain_bits, item_keys, kept_between_cycles, start_states
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_bounds, word_relations
@@ -728,6 +730,9 @@ def decision_coverage(program: Program, sets: Sequence, driven: set[tuple[str, i
             if at_start:
                 _explain_by_paths(program, conditions, at_start)
     boundaries = _boundary_coverage(program, table, bounds, set(driven), set(power_on), explain_missing)
+    if explain_missing:
+        # last, as it runs whole cycles: what holds at the start of every cycle but the first, item by item
+        _explain_by_states(program, table, conditions, boundaries, set(driven), set(power_on))
     return DecisionCoverage(tuple(conditions), tuple(boundaries))
 
 
@@ -794,6 +799,72 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
                   f"followed from {start_name(program, seen.start)} through the calls and CASE entries on the way, "
                   f"with the values the compares, jumps and stores on each path leave its markers and words{assumed})")
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
+
+
+def _explain_by_states(program: Program, table: DecisionTable, conditions: list[ConditionItem],
+                       boundaries: list[BoundaryItem], driven: set[tuple[str, int]],
+                       power_on: set[tuple[str, int]]) -> None:
+    """Marks the missing items that no path of a cycle shows from the states one of which holds at the start of
+    every cycle but the first (cycle_states: kept apart by the keys the item needs) as infeasible; the first cycle
+    is followed from any memory. Only items every run of which starts at the main program's start."""
+    todo = [k for k, item in enumerate(conditions) if item.status == "missing"]
+    bounds = [k for k, item in enumerate(boundaries) if item.status == "missing" and item.compare.constant is not None
+              and not item.compare.constant_left and item.compare.index > 0
+              and program.files[item.compare.file].ops[item.compare.index - 1].code == "WLD"]
+    if not (todo or bounds) or not followable(program):
+        return
+    outside = driven - power_on
+    kept = kept_between_cycles(program, outside)
+    base = Runner(program)
+    found: dict[tuple, StartStates | None] = {}
+
+    def states_for(target: tuple[int, int], bits: list) -> StartStates | None:
+        if base.starts(*target)[:1] != [(0, 0)]:
+            return None
+        keys, split = item_keys(base, table, target, bits, kept)
+        if (keys, split) not in found:
+            found[keys, split] = start_states(program, keys, set(split), outside, driven, _key_names(program, keys))
+        return found[keys, split]
+
+    for k in todo:
+        item = conditions[k]
+        decision = item.decision
+        target = (decision.file, min(c.index for c in decision.conditions))
+        if any(c.file != decision.file for c in decision.conditions) or \
+                base.starts(*target) != base.starts(decision.file, decision.index):
+            continue
+        states = states_for(target, chain_bits(decision))
+        vectors = Runner(program, (), states.states).seen(decision, (0, 0)) if states is not None else None
+        if not vectors or _showable(decision, item.number, item.masking, vectors):
+            continue
+        ties = _ties(decision, item.number, Tied(vectors, 0, ()))
+        conditions[k] = dataclasses.replace(item, status="infeasible", reason=(
+            f"{item.condition.text} cannot change the outcome on its own here: "
+            f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain from the "
+            f"start of the main program; {states.text()})"))
+    for k in bounds:
+        item = boundaries[k]
+        cmp = item.compare
+        states = states_for(cmp.key, [])
+        held = Runner(program, (), states.states).wa_at(cmp.file, cmp.index, (0, 0)) if states is not None else None
+        value = cmp.constant + item.offset
+        if held is None or held.holds(value):
+            continue
+        shown = f"{held.lo}..{held.hi}" if held.some is None else ", ".join(map(str, sorted(held.some)))
+        boundaries[k] = dataclasses.replace(item, status="infeasible", reason=(
+            f"{cmp.left} holds only {shown} here, never {value} (on every path of the cycle to this compare from "
+            f"the start of the main program; {states.text()})"))
+
+
+def _key_names(program: Program, keys: Sequence[tuple[str, int]]) -> tuple[str, ...]:
+    """The operands' names as the source writes them (the first op that names each)."""
+    names = {}
+    for code in program.files:
+        for op in code.ops:
+            o = op.operand
+            if o is not None and not o.indexed and (o.kind, o.addr) in keys:
+                names.setdefault((o.kind, o.addr), o.display())
+    return tuple(names.get(k, f"{k[0]}{k[1]}") for k in keys)
 
 
 def _constant_string_reason(strings: StringCompares, decision: Decision, number: int) -> str:
