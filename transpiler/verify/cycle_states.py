@@ -314,6 +314,7 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
 
 _MAX_KEYS = 12              # bits an item's states are kept apart by, at most
 _HOPS = 2                   # writers followed back from the item's own bits, at most
+_MAX_FORKS = 6              # inputs an item's runs fork on, at most
 _BIT_WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 
@@ -324,7 +325,8 @@ def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bit
     judged with: the step words whose CASE leads to it, then the item's bits and those the chains writing them read
     and the chains deciding whether those writes run (their subprogram and its callers' jumps, module ends and
     conditional calls), followed back _HOPS writers: those that carry a value from one cycle into the next (a
-    subprogram reads them before writing them) are keys, NC operands are forked on, inputs and timers are free."""
+    subprogram reads them before writing them) are keys, NC operands and the inputs the item's own writers read
+    are forked on, other inputs and timers are free."""
     program = runner.program
     leading = runner._leading(target)
     words = [k for k in step_words(program, set()) if kept(k) and any(
@@ -342,8 +344,8 @@ def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bit
         if bit in seen:
             continue
         seen.add(bit)
-        if bit in NC_MODEL_OWNED:
-            split.add(bit)
+        if bit in NC_MODEL_OWNED or bit[0] == "I" and hops <= 1 and len(split) < _MAX_FORKS:
+            split.add(bit)      # (what the NC or an input gives the item's own writers decides what they store)
             continue
         if not kept(bit):
             continue
