@@ -38,6 +38,7 @@ Key = tuple[str, int]
 _MAX_PARTS = 512            # key values a cycle's paths are kept apart by at one point, at most
 _WIDEN_AFTER = 2            # times the state of one key value grows before all but the key values are forgotten
 _MAX_CYCLES = 400           # whole cycles run for one set of keys, at most
+_MAX_TOTAL_STEPS = 6_000_000    # ops run over all those cycles, at most (about half a minute)
 _WORDS = ("B", "W", "D")
 # ops where paths may part or meet: a run goes straight on over any other op
 _CONTROL = frozenset({"JP", "JPT", "JPF", "EM", "EMT", "EMF", "CALL", "CALLT", "CALLF", "CASE", "LBL"})
@@ -117,13 +118,15 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     parts: dict[tuple, _Path] = {}
     grown: dict[tuple, int] = {}
     todo = [_Path({marker: 1} if marker is not None else {}, {})]
-    cycles = 0
+    cycles = steps = 0
     try:
         while todo:
             cycles += 1
-            if cycles > _MAX_CYCLES:
+            if cycles > _MAX_CYCLES or steps > _MAX_TOTAL_STEPS:
                 return None
-            for end in _cycle_ends(runner, _nc_cases([todo.pop()], facts), apart):
+            ends = _cycle_ends(runner, _nc_cases([todo.pop()], facts), apart)
+            steps += runner.steps
+            for end in ends:
                 for job in jobs:
                     runner.forget(end, runner.writes(job))
                 end = _Path({k: v for k, v in end.bits.items() if kept(k)},

@@ -801,6 +801,9 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
+_MAX_STATE_SEARCHES = 6     # searches for start states (cycle_states) one coverage report runs, at most
+
+
 def _explain_by_states(program: Program, table: DecisionTable, conditions: list[ConditionItem],
                        boundaries: list[BoundaryItem], driven: set[tuple[str, int]],
                        power_on: set[tuple[str, int]]) -> None:
@@ -823,7 +826,9 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
             return None
         keys, split = item_keys(base, table, target, bits, kept)
         if (keys, split) not in found:
-            found[keys, split] = start_states(program, keys, set(split), outside, driven, _key_names(program, keys))
+            # (each search runs whole cycles: a project with many such items gets the first few)
+            found[keys, split] = None if len(found) >= _MAX_STATE_SEARCHES else \
+                start_states(program, keys, set(split), outside, driven, _key_names(program, keys))
         return found[keys, split]
 
     for k in todo:
