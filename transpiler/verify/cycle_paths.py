@@ -413,18 +413,12 @@ class Runner:
                     if j <= i:
                         # a jump back: the subprogram again from the loop's head, from the state it was entered with
                         # less what the ops of the loop (loop_ops: from the head to the last jump back into it) and
-                        # their callees may write: every pass starts from such a state, so a later jump back to a head run
-                        # so adds nothing (until a head before it is run again so)
+                        # their callees may write (pass_start): every pass starts from such a state, so a later jump back
+                        # to a head run so adds nothing (until a head before it is run again so)
                         if j in widened:
                             continue
                         widened = {a for a in widened if a < j} | {j}
-                        later = loop_ops(ops, sorted(k for _, k in self.reach((f, entry))), j, i, f)
-                        q = entered[j].copy()
-                        self.forget(q, self.collect(later))
-                        q.la, q.frames = None, []
-                        if any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE")
-                               for _, k in later):
-                            q.stack = [_DEEP]
+                        q = self.pass_start([entered[j]], f, entry, j, i)[0]
                     pending[j] = q if j not in pending else _join(pending[j], q)
         finally:
             self.joining -= 1
@@ -434,6 +428,24 @@ class Runner:
         for other in returned[1:]:
             result = _join(result, other)
         return result
+
+    def pass_start(self, entered: Sequence[_Path], f: int, entry: int, head: int, back: int) -> list[_Path]:
+        """The states every pass of the loop from op `head` back to it (the jump at `back`) in the subprogram entered
+        at (f, entry) starts from: each of `entered` (the states the head was entered with) less what the loop's
+        ops (loop_ops) and their callees may write, LA unknown, and the data stack unknown where they move it."""
+        ops = self.program.files[f].ops
+        later = loop_ops(ops, sorted(k for _, k in self.reach((f, entry))), head, back, f)
+        written = self.collect(later)
+        deep = any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE") for _, k in later)
+        out = []
+        for old in entered:
+            again = old.copy()
+            self.forget(again, written)
+            again.la, again.frames = None, []
+            if deep:
+                again.stack = [_DEEP]
+            out.append(again)
+        return out
 
     def bit(self, path: _Path, key: Key, split: set[Key]) -> list[tuple[_Path, int | None]]:
         """The value of bit `key` on `path`: forked into 0 and 1 where it is an operand of the chain not known."""

@@ -29,8 +29,7 @@ from typing import Callable, Sequence
 
 from transpiler.exec.interp.decisions import Decision, DecisionTable
 from transpiler.ir import BYTES, Program
-from transpiler.verify.cycle_paths import (_DEEP, _DEPTH, _RETURN, _STACK_OPS, Runner, Word, _full, _GiveUp, _join,
-                                           _Path, followable, loop_ops)
+from transpiler.verify.cycle_paths import _DEPTH, _RETURN, Runner, Word, _full, _GiveUp, _join, _Path, followable
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 
 Key = tuple[str, int]
@@ -115,6 +114,7 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     jobs = [op.call.key for code in program.files for op in code.ops
             if op.code == "SUBM" and op.call is not None and not op.call.is_module]
     marker = runner.first_cycle_marker()
+    key_of = _key_reader(keys)
     parts: dict[tuple, _Path] = {}
     grown: dict[tuple, int] = {}
     todo = [_Path({marker: 1} if marker is not None else {}, {})]
@@ -131,7 +131,7 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
                     runner.forget(end, runner.writes(job))
                 end = _Path({k: v for k, v in end.bits.items() if kept(k)},
                             {k: v for k, v in end.words.items() if kept(k)})
-                value = _key_value(end, keys)
+                value = key_of(end)
                 old = parts.get(value)
                 new = end if old is None else _join(old, end)
                 new = _Path(new.bits, new.words)
@@ -153,12 +153,9 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     return StartStates(keys, tuple(names) or tuple(f"{k[0]}{k[1]}" for k in keys), states)
 
 
-def _key_value(path: _Path, keys: tuple[Key, ...]) -> tuple:
-    return tuple(path.words.get(k) if k[0] in _WORDS else path.bits.get(k) for k in keys)
-
-
 def _key_reader(keys: tuple[Key, ...]) -> Callable[[_Path], tuple]:
-    """_key_value of `keys` as a function (the cycle runs call it for every path at every point they may meet)."""
+    """The values a path gives `keys` (None: not known; bits first, then words), as a function: the cycle runs call
+    it for every path at every point where paths may meet."""
     bits = [k for k in keys if k[0] not in _WORDS]
     words = [k for k in keys if k[0] in _WORDS]
     return lambda path: (*map(path.bits.get, bits), *map(path.words.get, words))
@@ -297,16 +294,7 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
                     if j in widened:
                         continue
                     widened = {a for a in widened if a < j} | {j}
-                    later = loop_ops(ops, sorted(k for _, k in runner.reach((f, entry))), j, i, f)
-                    written = runner.collect(later)
-                    deep = any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE")
-                               for _, k in later)
-                    for old in entered[j]:
-                        again = old.copy()
-                        runner.forget(again, written)
-                        again.la, again.frames = None, []
-                        if deep:
-                            again.stack = [_DEEP]
+                    for again in runner.pass_start(entered[j], f, entry, j, i):
                         add(pending.setdefault(j, {}), again)
                     continue
                 add(pending.setdefault(j, {}), q)
