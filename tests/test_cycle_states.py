@@ -22,8 +22,8 @@ from transpiler.verify.simulate import program_operands
 ROOT = Path(__file__).resolve().parents[1]
 
 # B10 is a step word: 0 idle, 1 evaluate. Idle takes the flag M5 = (I1 and W30 >= 1) and the pocket W20 from W30
-# (a word the program never writes: any value) together and moves to step 1; Evaluate reads M5 and W20 < 1 in one chain and
-# goes back to idle. M5 = 1 comes only with W20 >= 1, one cycle later: no single-cycle analysis sees that.
+# (a word the program never writes: any value) together and moves to step 1; Evaluate reads M5 and W20 < 1 in one
+# chain and goes back to idle. M5 = 1 comes only with W20 >= 1, one cycle later: no single-cycle analysis sees that.
 # {between}: code after Idle's stores, {first}: the first-cycle code.
 _TAKE_OVER = """{first}CASE B10
 CM Idle

@@ -204,11 +204,9 @@ class Runner:
     """The runs of one program (entries worked out once); `relations`: what holds at the start of every cycle but
     the first (start_relations), assumed where a run starts at the main program's start (see start_paths)."""
 
-    def __init__(self, program: Program, relations: Sequence[StartRelation] = (),
-                 states: Sequence[_Path] = ()):
+    def __init__(self, program: Program, relations: Sequence[StartRelation] = ()):
         self.program = program
         self.relations = tuple(relations)[:_MAX_RELATIONS]
-        self.states = tuple(states)
         self.saturate = program.semantics["store_truncation"] == "saturate"
         self.case_fault = program.semantics["case_out_of_range"] == "fault"
         self.interface = program.semantics.profile.interface
@@ -217,6 +215,7 @@ class Runner:
         self.ranges = index_ranges(program)
         self.joining = 0
         self.fork_joined = False        # runs joined where they meet fork on `split` too (cycle_states)
+        self.max_steps = MAX_STEPS
         self.steps = 0
         self.split: set[Key] = set()
         self._writes: dict[tuple[int, int], tuple[frozenset, frozenset, frozenset | None, bool]] = {}
@@ -294,58 +293,16 @@ class Runner:
                     todo.extend(nexts[1:])
         except _GiveUp:
             return None
-        vectors: set[int] = set()
-        for arrival in arrivals:
-            unknown = [n for n, v in enumerate(arrival) if v is None]
-            if len(unknown) > _UNKNOWN_CONDITIONS:
-                return None
-            base = sum(1 << n for n, v in enumerate(arrival) if v)
-            for bits in range(1 << len(unknown)):
-                vectors.add(base | sum(1 << n for k, n in enumerate(unknown) if bits >> k & 1))
-        return frozenset(vectors)
-
-    def wa_at(self, f: int, i: int, start: tuple[int, int]) -> Word | None:
-        """The values WA can hold when op i of file f runs, on every path from `start` (None: the run gave up, a
-        path comes there with WA not known, or none comes there)."""
-        self.split = set()
-        self.target = (f, i)
-        self.leading = self._leading(self.target)
-        self._leads = {}
-        self.steps = 0
-        found: Word | None = None
-        todo: list[tuple[int, int, _Path]] = [(start[0], start[1], p) for p in self.start_paths(start)]
-        try:
-            while todo:
-                g, j, path = todo.pop()
-                while True:
-                    self.count()
-                    if len(todo) > MAX_PATHS:
-                        raise _GiveUp
-                    ops = self.program.files[g].ops
-                    if not 0 <= j < len(ops):
-                        raise _GiveUp
-                    if g == f and j == i:
-                        if path.wa is None:
-                            return None
-                        found = path.wa if found is None else found.join(path.wa)
-                    nexts = self.step(g, j, ops[j], path, set(), set())
-                    if not nexts:
-                        break
-                    g, j, path = nexts[0]
-                    todo.extend(nexts[1:])
-        except _GiveUp:
-            return None
-        return found
+        return condition_vectors(arrivals)
 
     def start_paths(self, start: tuple[int, int]) -> list[_Path]:
         """The states a run from `start` begins in: any state; from the main program's start with relations, one
         state per outcome of the relations (each marker and its word narrowed to agree), for every cycle but the
         first, and any state with the first-cycle marker 1 for the first cycle (the NC sets it there, where the
-        program never writes it); with `states` (cycle_states.start_states), those states stand for every cycle
-        but the first (the relations split each of them)."""
-        if start != (0, 0) or not self.relations and not self.states:
+        program never writes it)."""
+        if start != (0, 0) or not self.relations:
             return [_Path({}, {})]
-        paths = [state.copy() for state in self.states] or [_Path({}, {})]
+        paths = [_Path({}, {})]
         for rel in self.relations:
             grown = []
             for path in paths:
@@ -371,7 +328,7 @@ class Runner:
 
     def count(self) -> None:
         self.steps += 1
-        if self.steps > MAX_STEPS:
+        if self.steps > self.max_steps:
             raise _GiveUp
 
     def summarize(self, f: int, entry: int, path: _Path, depth: int) -> _Path | None:
@@ -413,8 +370,8 @@ class Runner:
                     if j <= i:
                         # a jump back: the subprogram again from the loop's head, from the state it was entered with
                         # less what the ops of the loop (loop_ops: from the head to the last jump back into it) and
-                        # their callees may write (pass_start): every pass starts from such a state, so a later jump back
-                        # to a head run so adds nothing (until a head before it is run again so)
+                        # their callees may write (pass_start): every pass starts from such a state, so a later jump
+                        # back to a head run so adds nothing (until a head before it is run again so)
                         if j in widened:
                             continue
                         widened = {a for a in widened if a < j} | {j}
@@ -926,6 +883,20 @@ def loop_ops(ops, reach: list[int], head: int, back: int, f: int) -> list[tuple[
         if k > end and ops[k].code in ("JP", "JPT", "JPF") and ops[k].target is not None and ops[k].target <= end:
             end = k
     return [(f, k) for k in reach if head <= k <= end]
+
+
+def condition_vectors(arrivals) -> frozenset[int] | None:
+    """The condition vectors (bit i = condition i) of the values paths read arriving at a decision, one tuple per
+    arrival (None: not known, either value); None where an arrival has too many unknown conditions."""
+    vectors: set[int] = set()
+    for arrival in arrivals:
+        unknown = [n for n, v in enumerate(arrival) if v is None]
+        if len(unknown) > _UNKNOWN_CONDITIONS:
+            return None
+        base = sum(1 << n for n, v in enumerate(arrival) if v)
+        for bits in range(1 << len(unknown)):
+            vectors.add(base | sum(1 << n for k, n in enumerate(unknown) if bits >> k & 1))
+    return frozenset(vectors)
 
 
 def _join(a: _Path, b: _Path) -> _Path:

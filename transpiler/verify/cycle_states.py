@@ -51,6 +51,8 @@ class StartStates:
     keys: tuple[Key, ...]
     names: tuple[str, ...]
     states: tuple[_Path, ...]
+    split: frozenset[Key] = frozenset()         # the bits the runs forked on (the facts' bits too)
+    facts: tuple[NcFact, ...] = ()              # what the NC guarantees when the program starts
 
     def text(self) -> str:
         return (f"at the start of every cycle but the first, one of {len(self.states)} states holds, kept apart by "
@@ -105,6 +107,7 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     keys = tuple(keys)
     runner = Runner(program)
     runner.fork_joined = True
+    runner.max_steps = _MAX_TOTAL_STEPS
     runner.split = set(split) | {k for k in keys if k[0] not in _WORDS}
     kept = kept_between_cycles(program, outside)
     facts = [f for f in applicable_facts(program, driven) if not f.bits or set(f.bits) & runner.split]
@@ -122,8 +125,9 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     try:
         while todo:
             cycles += 1
-            if cycles > _MAX_CYCLES or steps > _MAX_TOTAL_STEPS:
+            if cycles > _MAX_CYCLES:
                 return None
+            runner.max_steps = _MAX_TOTAL_STEPS - steps
             ends = _cycle_ends(runner, _nc_cases([todo.pop()], facts), apart)
             steps += runner.steps
             for end in ends:
@@ -150,7 +154,40 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     except _GiveUp:
         return None
     states = tuple(state for part in parts.values() for state in _nc_cases([part.copy()], facts))
-    return StartStates(keys, tuple(names) or tuple(f"{k[0]}{k[1]}" for k in keys), states)
+    return StartStates(keys, tuple(names) or tuple(f"{k[0]}{k[1]}" for k in keys), states,
+                       frozenset(runner.split), tuple(facts))
+
+
+def arrivals(program: Program, found: StartStates, at: tuple[int, int], reads: Sequence[int] = (),
+             split: set[Key] = frozenset()) -> list[_Path] | None:
+    """The states in which op `at` (file, op index) runs in a cycle, on every path: from each of `found`'s states
+    and, for the first cycle, from any memory with the first-cycle marker 1, with what the NC guarantees; the paths
+    kept apart as `found`'s were, and by the bits of `split` too; `reads` (op indices in that file) record the values
+    they read (path.reads). None where a run gives up."""
+    runner = Runner(program)
+    runner.fork_joined = True
+    runner.max_steps = _MAX_TOTAL_STEPS
+    runner.split = set(found.split) | set(split)
+    apart = found.keys + tuple(sorted(runner.split - set(found.keys)))
+    marker = runner.first_cycle_marker()
+    starts = [s.copy() for s in found.states] + _nc_cases([_Path({} if marker is None else {marker: 1}, {})],
+                                                           found.facts)
+    seen: list[_Path] = []
+    try:
+        _cycle_ends(runner, starts, apart, _Watch(at[0], at[1], frozenset(reads), seen))
+    except _GiveUp:
+        return None
+    return seen
+
+
+@dataclasses.dataclass(frozen=True)
+class _Watch:
+    """Where a keyed cycle run records the paths that come to an op, and the ops whose reads it records."""
+
+    file: int
+    index: int
+    reads: frozenset[int]
+    found: list
 
 
 def _key_reader(keys: tuple[Key, ...]) -> Callable[[_Path], tuple]:
@@ -215,22 +252,23 @@ def _parts(word: Word, edges: tuple[int, ...]) -> list[Word]:
 
 # ------------------------------------------------------------------------------------------ one cycle, keyed
 
-def _cycle_ends(runner: Runner, starts: list[_Path], keys: tuple[Key, ...]) -> list[_Path]:
+def _cycle_ends(runner: Runner, starts: list[_Path], keys: tuple[Key, ...], watch: _Watch | None = None
+                ) -> list[_Path]:
     """The states a cycle run from each of `starts` on every path ends in (joined where the values of `keys`
-    agree)."""
+    agree); `watch`: where to record the paths that come to an op."""
     runner.target = (-1, -1)
     runner.leading = set()
     runner._leads = {}
     runner.steps = 0
     runner.joining += 1
     try:
-        return _run_parted(runner, 0, 0, [p.copy() for p in starts], keys, 0)
+        return _run_parted(runner, 0, 0, [p.copy() for p in starts], keys, 0, watch)
     finally:
         runner.joining -= 1
 
 
 def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tuple[Key, ...],
-                depth: int) -> list[_Path]:
+                depth: int, watch: _Watch | None = None) -> list[_Path]:
     """Runs the subprogram entered at (f, entry) from each of `paths` and those it calls likewise, the paths joined
     where they meet with the same key values and LA: the states it returns with (as Runner.summarize, whose loop
     rule it follows, keeping the key values apart)."""
@@ -241,6 +279,7 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
     pending: dict[int, dict] = {}
     returned: dict = {}
     key_of = _key_reader(keys)
+    reads = watch.reads if watch is not None and watch.file == f else frozenset()
 
     def add(into: dict, q: _Path) -> None:
         # (paths with different LA kept apart too: a compare's two outcomes meet at the jump that decides on them)
@@ -254,7 +293,9 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
         # op it stopped after and what that op gave
         while True:
             runner.count()
-            outs = runner.step(f, i, ops[i], path, runner.split, set())
+            if watch is not None and (f, i) == (watch.file, watch.index):
+                watch.found.append(path.copy())
+            outs = runner.step(f, i, ops[i], path, runner.split, reads)
             if len(outs) != 1 or ops[i].code in _CONTROL:
                 return i, outs
             g, j, q = outs[0]
@@ -284,7 +325,7 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
                     back, q.calls = q.calls[-1], (_RETURN,)
                     if back[0] != f or back[1] <= i:
                         raise _GiveUp
-                    for r in _run_parted(runner, g, j, [q], keys, depth + 1):
+                    for r in _run_parted(runner, g, j, [q], keys, depth + 1, watch):
                         r.calls = (_RETURN,)
                         add(pending.setdefault(back[1], {}), r)
                     continue

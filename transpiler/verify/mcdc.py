@@ -47,9 +47,10 @@ from transpiler.language.presets import TIMER_MP
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors, write_sites
-from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, followable, seen_vectors, start_name,
-                                          start_relations)
-from transpiler.verify.cycle_states import StartStates, chain_bits, item_keys, kept_between_cycles, start_states
+from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, condition_vectors, followable, seen_vectors,
+                                          start_name, start_relations)
+from transpiler.verify.cycle_states import (StartStates, arrivals, chain_bits, item_keys, kept_between_cycles,
+                                           start_states)
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_bounds, word_relations
@@ -839,7 +840,10 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
                 base.starts(*target) != base.starts(decision.file, decision.index):
             continue
         states = states_for(target, chain_bits(decision))
-        vectors = Runner(program, (), states.states).seen(decision, (0, 0)) if states is not None else None
+        came = arrivals(program, states, decision.key, [c.index for c in decision.conditions],
+                        set(chain_bits(decision))) if states is not None else None
+        vectors = condition_vectors(tuple(p.reads.get(c.index) for c in decision.conditions) for p in came) \
+            if came else None
         if not vectors or _showable(decision, item.number, item.masking, vectors):
             continue
         ties = _ties(decision, item.number, Tied(vectors, 0, ()))
@@ -851,9 +855,14 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
         item = boundaries[k]
         cmp = item.compare
         states = states_for(cmp.key, [])
-        held = Runner(program, (), states.states).wa_at(cmp.file, cmp.index, (0, 0)) if states is not None else None
+        came = arrivals(program, states, cmp.key) if states is not None else None
+        if not came or any(p.wa is None for p in came):
+            continue
+        held = came[0].wa
+        for path in came[1:]:
+            held = held.join(path.wa)
         value = cmp.constant + item.offset
-        if held is None or held.holds(value):
+        if held.holds(value):
             continue
         shown = f"{held.lo}..{held.hi}" if held.some is None else ", ".join(map(str, sorted(held.some)))
         boundaries[k] = dataclasses.replace(item, status="infeasible", reason=(
