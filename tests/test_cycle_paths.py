@@ -127,7 +127,7 @@ def test_an_abort_before_the_case_keeps_its_condition_from_the_steps(tmp_path: P
     ("", "L I8\n= M2\n"),               # M2 written again between
     ("", "L W20\n= B10\n"),             # the step word overwritten from a word the run does not know
     ("", "PS K40\nPS K0\nCM 9040\n"),    # a PLC module that writes to an address it is given
-    ("", "LBL Again\nL I9\nJPT Again\n"),   # a loop before the CASE: the run gives up
+    ("", "LBL Again\nL I9\n= M2\nL I8\nJPT Again\n"),   # a loop before the CASE that writes M2
 ], ids=["abort_needs_more", "indexed_write", "rewritten", "step_from_word", "module", "loop"])
 def test_a_path_or_write_that_breaks_it_leaves_the_condition_missing(tmp_path: Path, abort: str, between: str) -> None:
     # Catches: a claim where M2 = 0 can reach a working step, or where the run cannot know.
