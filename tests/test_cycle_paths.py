@@ -431,14 +431,15 @@ EM
 """
 
 
-@pytest.mark.parametrize("inside, claimed", [("", True), ("L X\n= B10\n", False), ("L I9\n= M1\n", False)],
+@pytest.mark.parametrize("inside, claimed", [("", True), ("L X\n= B10\n", False), ("L I9\n= M1\n", True)],
                          ids=["loop_writes_markers", "loop_writes_the_step_word", "loop_writes_the_flag"])
 def test_a_loop_in_a_joined_subprogram_forgets_only_what_it_writes(tmp_path: Path, inside: str,
                                                                    claimed: bool) -> None:
     # The first cycle's Init sets the step word to 0 and then clears markers in a loop: the run goes on after the
-    # loop knowing B10 = 0 unless the loop writes B10. A loop that writes the flag M1 breaks it too: a restart
-    # (M4172 again) runs Init before Spin reads M1. Catches: a loop run once only (its later passes not covered),
-    # the whole subprogram forgotten.
+    # loop knowing B10 = 0 unless the loop writes B10. A loop that writes the flag M1 breaks the relation (a
+    # restart, M4172 again, runs Init before Spin reads M1) but not the claim: that cycle's CASE runs Idle (B10 = 0),
+    # and the states at the cycles' starts (cycle_states) show it. Catches: a loop run once only (its later passes
+    # not covered), the whole subprogram forgotten.
     text = _FLAG.format(first=_INIT, after="", skip="").replace("LBL Init\nL K0\n= B10\nEM\n",
                                                                 _LOOPED_INIT.format(inside=inside))
     program = _program(tmp_path, text)
