@@ -114,11 +114,20 @@ def _watch(machine: Machine, states: StartStates, kept, failures: list) -> None:
     machine.program_phase = checked
 
 
-@pytest.mark.parametrize("between", ["", "L W40\n= W20\n", "L W40\n= W30\nL K1\n= B10\n"])
-def test_every_state_a_random_run_starts_a_cycle_in_is_found(tmp_path: Path, between: str) -> None:
+# Init clearing with a loop that also writes the flag (a restart runs it in the middle of a run)
+_LOOPED_INIT = "LBL Init\nL K0\n= B10\nL K0\n= X\nLBL Again\nL I7\n= M5\nINCX\nL X\n< K3\nJPT Again\nEM\n"
+
+
+@pytest.mark.parametrize("between, looped", [("", False), ("L W40\n= W20\n", False),
+                                             ("L W40\n= W30\nL K1\n= B10\n", False), ("", True)])
+def test_every_state_a_random_run_starts_a_cycle_in_is_found(tmp_path: Path, between: str, looped: bool) -> None:
     # Soundness on small programs: random power-on memory (step word, flag, words, outputs), random inputs and free
-    # words every cycle; at the start of every cycle but the first the memory is one of the states found.
-    program = _program(tmp_path, _TAKE_OVER.format(first=_INIT, between=between))
+    # words every cycle, restarts (the first-cycle marker again); at the start of every cycle but the first the
+    # memory is one of the states found.
+    text = _TAKE_OVER.format(first=_INIT, between=between)
+    if looped:
+        text = text.replace("LBL Init\nL K0\n= B10\nEM\n", _LOOPED_INIT)
+    program = _program(tmp_path, text)
     states = start_states(program, [("B", 10), ("M", 5)], set(), set(), set())
     assert states is not None and any(("W", 20) in s.words and s.bits.get(("M", 5)) == 1 for s in states.states)
     kept = kept_between_cycles(program, set())
@@ -134,8 +143,9 @@ def test_every_state_a_random_run_starts_a_cycle_in_is_found(tmp_path: Path, bet
         _watch(machine, states, kept, failures)
         try:
             for cycle in range(30):
-                machine.run_cycle(cycle, [(k, a, rng.choice((-1, 0, 1, 3)) if k in "BWD" else rng.randrange(2))
-                                          for k, a in free if k != "M"])
+                restart = [("M", 4172, int(rng.random() < 0.1))] if cycle else []
+                machine.run_cycle(cycle, restart + [(k, a, rng.choice((-1, 0, 1, 3)) if k in "BWD" else
+                                                     rng.randrange(2)) for k, a in free if k != "M"])
         except MachineHalted:
             pass
     assert failures == []
