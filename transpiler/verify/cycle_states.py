@@ -35,9 +35,21 @@ from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 Key = tuple[str, int]
 
 _MAX_PARTS = 512            # key values a cycle's paths are kept apart by at one point, at most
-_WIDEN_AFTER = 2            # times the state of one key value grows before all but the key values are forgotten
+_WIDEN_AFTER = 2            # times the state of one key value grows before the words that grew are forgotten
 _MAX_CYCLES = 400           # whole cycles run for one set of keys, at most
 _MAX_TOTAL_STEPS = 6_000_000    # ops run over all those cycles, at most (about half a minute)
+
+
+@dataclasses.dataclass
+class StepBudget:
+    """Ops the whole-cycle runs may still follow (shared by the searches one report runs)."""
+
+    left: int = _MAX_TOTAL_STEPS
+
+    def spend(self, runner: Runner) -> None:
+        self.left -= runner.steps
+
+
 _WORDS = ("B", "W", "D")
 # ops where paths may part or meet: a run goes straight on over any other op
 _CONTROL = frozenset({"JP", "JPT", "JPF", "EM", "EMT", "EMF", "CALL", "CALLT", "CALLF", "CASE", "LBL"})
@@ -97,17 +109,18 @@ def step_words(program: Program, outside: set[Key]) -> list[Key]:
 
 
 def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside: set[Key], driven: set[Key],
-                 names: Sequence[str] = ()) -> StartStates | None:
+                 names: Sequence[str] = (), budget: StepBudget | None = None) -> StartStates | None:
     """The states one of which holds at the start of every cycle but the first (see the module's docstring), kept
     apart by `keys`; runs fork on the bits of `split` where they are not known. `outside`: operands a scenario sets
-    after power-on; `driven`: all a scenario sets. None where a run gives up or the states grow past the limits."""
+    after power-on; `driven`: all a scenario sets; `budget`: the ops the runs may follow (spent as they run). None
+    where a run gives up, the budget runs out or the states grow past the limits."""
+    budget = budget or StepBudget()
     if not followable(program) or any(op.code == "SUBM" and (op.call is None or op.call.is_module or op.call.file < 0)
                                       for code in program.files for op in code.ops):
         return None
     keys = tuple(keys)
     runner = Runner(program)
     runner.fork_joined = True
-    runner.max_steps = _MAX_TOTAL_STEPS
     runner.split = set(split) | {k for k in keys if k[0] not in _WORDS}
     kept = kept_between_cycles(program, outside)
     facts = [f for f in applicable_facts(program, driven) if not f.bits or set(f.bits) & runner.split]
@@ -120,16 +133,20 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
     key_of = _key_reader(keys)
     parts: dict[tuple, _Path] = {}
     grown: dict[tuple, int] = {}
-    todo = [_Path({marker: 1} if marker is not None else {}, {})]
-    cycles = steps = 0
+    # the states still to run a cycle from, by key value (a state that grows again before its run is run once)
+    todo: dict[tuple | None, _Path] = {None: _Path({marker: 1} if marker is not None else {}, {})}
+    cycles = 0
+    stop = max(0, budget.left - _MAX_TOTAL_STEPS)          # (the budget left when this search gives up)
     try:
         while todo:
             cycles += 1
             if cycles > _MAX_CYCLES:
                 return None
-            runner.max_steps = _MAX_TOTAL_STEPS - steps
-            ends = _cycle_ends(runner, _nc_cases([todo.pop()], facts), apart)
-            steps += runner.steps
+            runner.max_steps = budget.left - stop
+            try:
+                ends = _cycle_ends(runner, _nc_cases([todo.pop(next(iter(todo)))], facts), apart)
+            finally:
+                budget.spend(runner)
             for end in ends:
                 for job in jobs:
                     runner.forget(end, runner.writes(job))
@@ -148,7 +165,7 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
                         if new == old:
                             continue
                 parts[value] = new
-                todo.append(new.copy())
+                todo[value] = new.copy()
                 if len(parts) > _MAX_PARTS:
                     return None
     except _GiveUp:
@@ -158,36 +175,41 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
                        frozenset(runner.split), tuple(facts))
 
 
-def arrivals(program: Program, found: StartStates, at: tuple[int, int], reads: Sequence[int] = (),
-             split: set[Key] = frozenset()) -> list[_Path] | None:
-    """The states in which op `at` (file, op index) runs in a cycle, on every path: from each of `found`'s states
-    and, for the first cycle, from any memory with the first-cycle marker 1, with what the NC guarantees; the paths
-    kept apart as `found`'s were, and by the bits of `split` too; `reads` (op indices in that file) record the values
-    they read (path.reads). None where a run gives up."""
+def arrivals(program: Program, found: StartStates, points: Sequence[tuple[int, int]], reads: Sequence[tuple[int, int]]
+             = (), split: set[Key] = frozenset(), budget: StepBudget | None = None
+             ) -> dict[tuple[int, int], list[_Path]] | None:
+    """The states in which each op of `points` (file, op index) runs in a cycle, on every path: from each of
+    `found`'s states and, for the first cycle, from any memory with the first-cycle marker 1, with what the NC
+    guarantees; the paths kept apart as `found`'s were, and by the bits of `split` too; the ops of `reads` record
+    the values they read (path.reads, by op index). None where a run gives up or `budget` runs out."""
+    budget = budget or StepBudget()
     runner = Runner(program)
     runner.fork_joined = True
-    runner.max_steps = _MAX_TOTAL_STEPS
+    runner.max_steps = budget.left
     runner.split = set(found.split) | set(split)
     apart = found.keys + tuple(sorted(runner.split - set(found.keys)))
     marker = runner.first_cycle_marker()
     starts = [s.copy() for s in found.states] + _nc_cases([_Path({} if marker is None else {marker: 1}, {})],
                                                            found.facts)
-    seen: list[_Path] = []
+    watch = _Watch({point: [] for point in points}, {})
+    for f, i in reads:
+        watch.reads[f] = watch.reads.get(f, frozenset()) | {i}
     try:
-        _cycle_ends(runner, starts, apart, _Watch(at[0], at[1], frozenset(reads), seen))
+        _cycle_ends(runner, starts, apart, watch)
     except _GiveUp:
         return None
-    return seen
+    finally:
+        budget.spend(runner)
+    return watch.found
 
 
 @dataclasses.dataclass(frozen=True)
 class _Watch:
-    """Where a keyed cycle run records the paths that come to an op, and the ops whose reads it records."""
+    """Where a keyed cycle run records the paths that come to an op (`found`: op -> paths), and the ops whose
+    reads it records (`reads`: file -> op indices)."""
 
-    file: int
-    index: int
-    reads: frozenset[int]
-    found: list
+    found: dict[tuple[int, int], list[_Path]]
+    reads: dict[int, frozenset[int]]
 
 
 def _key_reader(keys: tuple[Key, ...]) -> Callable[[_Path], tuple]:
@@ -279,7 +301,8 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
     pending: dict[int, dict] = {}
     returned: dict = {}
     key_of = _key_reader(keys)
-    reads = watch.reads if watch is not None and watch.file == f else frozenset()
+    reads = watch.reads.get(f, frozenset()) if watch is not None else frozenset()
+    watched = {i for g, i in watch.found if g == f} if watch is not None else set()
 
     def add(into: dict, q: _Path) -> None:
         # (paths with different LA kept apart too: a compare's two outcomes meet at the jump that decides on them)
@@ -293,8 +316,8 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
         # op it stopped after and what that op gave
         while True:
             runner.count()
-            if watch is not None and (f, i) == (watch.file, watch.index):
-                watch.found.append(path.copy())
+            if i in watched:
+                watch.found[f, i].append(path.copy())
             outs = runner.step(f, i, ops[i], path, runner.split, reads)
             if len(outs) != 1 or ops[i].code in _CONTROL:
                 return i, outs
@@ -344,7 +367,7 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
 
 # ------------------------------------------------------------------------------------------ which keys an item needs
 
-_MAX_KEYS = 12              # bits an item's states are kept apart by, at most
+_MAX_KEYS = 8               # bits an item's states are kept apart by, at most (more: no search, it would not end)
 _HOPS = 2                   # writers followed back from the item's own bits, at most
 _MAX_FORKS = 6              # inputs an item's runs fork on, at most
 _BIT_WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
@@ -352,13 +375,13 @@ _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 
 
 def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bits: Sequence[Key],
-              kept: Callable[[Key], bool]) -> tuple[tuple[Key, ...], frozenset[Key]]:
+              kept: Callable[[Key], bool]) -> tuple[tuple[Key, ...], frozenset[Key]] | None:
     """The keys and the bits to fork on for the states an item at op `target` (file, op index) that reads `bits` is
     judged with: the step words whose CASE leads to it, then the item's bits and those the chains writing them read
     and the chains deciding whether those writes run (their subprogram and its callers' jumps, module ends and
     conditional calls), followed back _HOPS writers: those that carry a value from one cycle into the next (a
     subprogram reads them before writing them) are keys, NC operands and the inputs the item's own writers read
-    are forked on, other inputs and timers are free."""
+    are forked on, other inputs and timers are free. None where more than _MAX_KEYS bits would be keys."""
     program = runner.program
     leading = runner._leading(target)
     words = [k for k in step_words(program, set()) if kept(k) and any(
@@ -371,7 +394,7 @@ def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bit
     split: set[Key] = set()
     queue = [(b, 0) for b in bits]
     seen: set[Key] = set()
-    while queue and len(keys) < _MAX_KEYS:
+    while queue:
         bit, hops = queue.pop(0)
         if bit in seen:
             continue
@@ -385,7 +408,26 @@ def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bit
             keys.append(bit)
         if hops < _HOPS:
             queue += [(b, hops + 1) for b in feeds.get(bit, ())]
+    if len(keys) > _MAX_KEYS:
+        return None
     return tuple(words) + tuple(keys), frozenset(split)
+
+
+def merged_keys(needs: Sequence[tuple[tuple[Key, ...], frozenset[Key]]]
+                ) -> list[tuple[tuple[Key, ...], frozenset[Key]]]:
+    """`needs` (item_keys of several items) with those that share their step words merged into one search (their
+    bits and forks together) where the merged bits stay within _MAX_KEYS: one search then judges them all."""
+    groups: dict[tuple[Key, ...], tuple[list[Key], set[Key]]] = {}
+    for keys, split in needs:
+        bits, forks = groups.setdefault(tuple(k for k in keys if k[0] in _WORDS), ([], set()))
+        bits += [k for k in keys if k[0] not in _WORDS and k not in bits]
+        forks |= split
+    out = []
+    for keys, split in needs:
+        words = tuple(k for k in keys if k[0] in _WORDS)
+        bits, forks = groups[words]
+        out.append((words + tuple(bits), frozenset(forks)) if len(bits) <= _MAX_KEYS else (keys, split))
+    return out
 
 
 def _feeds(runner: Runner, table: DecisionTable) -> dict[Key, list[Key]]:

@@ -49,8 +49,8 @@ from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_
     inductive_invariants, program_entries, tied_vectors, write_sites
 from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, condition_vectors, followable, seen_vectors,
                                           start_name, start_relations)
-from transpiler.verify.cycle_states import (StartStates, arrivals, chain_bits, item_keys, kept_between_cycles,
-                                           start_states)
+from transpiler.verify.cycle_states import (StartStates, StepBudget, arrivals, chain_bits, item_keys,
+                                           kept_between_cycles, merged_keys, start_states)
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_bounds, word_relations
@@ -802,7 +802,10 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
         conditions[k] = dataclasses.replace(item, status="infeasible", reason=reason)
 
 
-_MAX_STATE_SEARCHES = 6     # searches for start states (cycle_states) one coverage report runs, at most
+# The searches for start states (cycle_states) run whole cycles: one report runs them only where few items are left
+# (the last ones of a project whose runs cover the rest), within one budget of ops followed.
+_MAX_ITEMS_FOR_STATES = 8
+_STATES_BUDGET = 8_000_000
 
 
 def _explain_by_states(program: Program, table: DecisionTable, conditions: list[ConditionItem],
@@ -810,64 +813,94 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
                        power_on: set[tuple[str, int]]) -> None:
     """Marks the missing items that no path of a cycle shows from the states one of which holds at the start of
     every cycle but the first (cycle_states: kept apart by the keys the item needs) as infeasible; the first cycle
-    is followed from any memory. Only items every run of which starts at the main program's start."""
-    todo = [k for k, item in enumerate(conditions) if item.status == "missing"]
-    bounds = [k for k, item in enumerate(boundaries) if item.status == "missing" and item.compare.constant is not None
-              and not item.compare.constant_left and item.compare.index > 0
-              and program.files[item.compare.file].ops[item.compare.index - 1].code == "WLD"]
-    if not (todo or bounds) or not followable(program):
+    is followed from any memory. Only items every run of which starts at the main program's start, and only where
+    few items are left; the searches with the fewest keys run first, within one budget."""
+    todo = [(conditions, k) for k, item in enumerate(conditions) if item.status == "missing"]
+    todo += [(boundaries, k) for k, item in enumerate(boundaries) if item.status == "missing"
+             and item.compare.constant is not None and not item.compare.constant_left and item.compare.index > 0
+             and program.files[item.compare.file].ops[item.compare.index - 1].code == "WLD"]
+    if not todo or len(todo) > _MAX_ITEMS_FOR_STATES or not followable(program):
         return
     outside = driven - power_on
     kept = kept_between_cycles(program, outside)
     base = Runner(program)
-    found: dict[tuple, StartStates | None] = {}
+    needs: list[tuple[tuple, list, int]] = []
+    for items, k in todo:
+        item = items[k]
+        if isinstance(item, ConditionItem):
+            decision = item.decision
+            target, bits = (decision.file, min(c.index for c in decision.conditions)), chain_bits(decision)
+            if any(c.file != decision.file for c in decision.conditions) or \
+                    base.starts(*target) != base.starts(decision.file, decision.index):
+                continue
+        else:
+            target, bits = item.compare.key, []
+        need = item_keys(base, table, target, bits, kept) if base.starts(*target)[:1] == [(0, 0)] else None
+        if need is not None:
+            needs.append((need, items, k))
+    needs = [(merged, items, k) for merged, (_, items, k) in zip(merged_keys([n[0] for n in needs]), needs)]
+    budget = StepBudget(_STATES_BUDGET)
+    searches: dict[tuple, list[tuple[list, int]]] = {}
+    for need, items, k in sorted(needs, key=lambda n: len(n[0][0]) + len(n[0][1])):
+        searches.setdefault(need, []).append((items, k))
+    for (keys, split), judged in searches.items():
+        states = start_states(program, keys, set(split), outside, driven, _key_names(program, keys), budget) \
+            if budget.left > 0 else None
+        if states is not None:
+            _judge_from_states(program, states, judged, budget)
 
-    def states_for(target: tuple[int, int], bits: list) -> StartStates | None:
-        if base.starts(*target)[:1] != [(0, 0)]:
-            return None
-        keys, split = item_keys(base, table, target, bits, kept)
-        if (keys, split) not in found:
-            # (each search runs whole cycles: a project with many such items gets the first few)
-            found[keys, split] = None if len(found) >= _MAX_STATE_SEARCHES else \
-                start_states(program, keys, set(split), outside, driven, _key_names(program, keys))
-        return found[keys, split]
 
-    for k in todo:
-        item = conditions[k]
-        decision = item.decision
-        target = (decision.file, min(c.index for c in decision.conditions))
-        if any(c.file != decision.file for c in decision.conditions) or \
-                base.starts(*target) != base.starts(decision.file, decision.index):
-            continue
-        states = states_for(target, chain_bits(decision))
-        came = arrivals(program, states, decision.key, [c.index for c in decision.conditions],
-                        set(chain_bits(decision))) if states is not None else None
-        vectors = condition_vectors(tuple(p.reads.get(c.index) for c in decision.conditions) for p in came) \
-            if came else None
-        if not vectors or _showable(decision, item.number, item.masking, vectors):
-            continue
-        ties = _ties(decision, item.number, Tied(vectors, 0, ()))
-        conditions[k] = dataclasses.replace(item, status="infeasible", reason=(
-            f"{item.condition.text} cannot change the outcome on its own here: "
-            f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain from the "
-            f"start of the main program; {states.text()})"))
-    for k in bounds:
-        item = boundaries[k]
-        cmp = item.compare
-        states = states_for(cmp.key, [])
-        came = arrivals(program, states, cmp.key) if states is not None else None
-        if not came or any(p.wa is None for p in came):
-            continue
-        held = came[0].wa
-        for path in came[1:]:
-            held = held.join(path.wa)
-        value = cmp.constant + item.offset
-        if held.holds(value):
-            continue
-        shown = f"{held.lo}..{held.hi}" if held.some is None else ", ".join(map(str, sorted(held.some)))
-        boundaries[k] = dataclasses.replace(item, status="infeasible", reason=(
-            f"{cmp.left} holds only {shown} here, never {value} (on every path of the cycle to this compare from "
-            f"the start of the main program; {states.text()})"))
+def _judge_from_states(program: Program, states: StartStates, judged: list[tuple[list, int]],
+                       budget: StepBudget) -> None:
+    """Judges the items `judged` ((list, index) of each) from `states`: one cycle run per file of theirs finds
+    what each sees (the values paths read are kept by op index, so the chains of one run are in one file)."""
+    by_file: dict[int, list[tuple[list, int]]] = {}
+    for items, k in judged:
+        item = items[k]
+        by_file.setdefault(item.decision.file if isinstance(item, ConditionItem) else item.compare.file,
+                           []).append((items, k))
+    for here in by_file.values():
+        points = [items[k].decision.key if isinstance(items[k], ConditionItem) else items[k].compare.key
+                  for items, k in here]
+        decisions = [items[k].decision for items, k in here if isinstance(items[k], ConditionItem)]
+        came = arrivals(program, states, points, [(c.file, c.index) for d in decisions for c in d.conditions],
+                        {b for d in decisions for b in chain_bits(d)}, budget)
+        for (items, k), point in zip(here, points):
+            if came is not None and came[point]:
+                items[k] = (_judged_by_states(items[k], states, came[point]) if isinstance(items[k], ConditionItem)
+                            else _bounded_by_states(items[k], states, came[point]))
+
+
+def _judged_by_states(item: ConditionItem, states: StartStates, came: list) -> ConditionItem:
+    """`item` (missing) as infeasible where no path of a cycle from `states` (those that `came` to its chain)
+    shows it."""
+    decision = item.decision
+    vectors = condition_vectors(tuple(p.reads.get(c.index) for c in decision.conditions) for p in came)
+    if not vectors or _showable(decision, item.number, item.masking, vectors):
+        return item
+    ties = _ties(decision, item.number, Tied(vectors, 0, ()))
+    return dataclasses.replace(item, status="infeasible", reason=(
+        f"{item.condition.text} cannot change the outcome on its own here: "
+        f"{'; '.join(ties) or 'its conditions are tied'} (on every path of the cycle to this chain from the "
+        f"start of the main program; {states.text()})"))
+
+
+def _bounded_by_states(item: BoundaryItem, states: StartStates, came: list) -> BoundaryItem:
+    """`item` (missing, of a word loaded right before its compare) as infeasible where no path of a cycle from
+    `states` (those that `came` to the compare) holds the word at its value."""
+    if any(p.wa is None for p in came):
+        return item
+    held = came[0].wa
+    for path in came[1:]:
+        held = held.join(path.wa)
+    cmp = item.compare
+    value = cmp.constant + item.offset
+    if held.holds(value):
+        return item
+    shown = f"{held.lo}..{held.hi}" if held.some is None else ", ".join(map(str, sorted(held.some)))
+    return dataclasses.replace(item, status="infeasible", reason=(
+        f"{cmp.left} holds only {shown} here, never {value} (on every path of the cycle to this compare from the "
+        f"start of the main program; {states.text()})"))
 
 
 def _key_names(program: Program, keys: Sequence[tuple[str, int]]) -> tuple[str, ...]:
