@@ -30,7 +30,7 @@ from typing import Callable, Sequence
 from transpiler.exec.interp.decisions import Decision, DecisionTable
 from transpiler.ir import BYTES, Program
 from transpiler.verify.cycle_paths import _DEPTH, _RETURN, Runner, Word, _full, _GiveUp, _join, _Path, followable
-from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
+from transpiler.verify.nc_facts import NC_FACTS, NC_MODEL_OWNED, NcFact, applicable_facts
 
 Key = tuple[str, int]
 
@@ -368,8 +368,8 @@ def _run_parted(runner: Runner, f: int, entry: int, paths: list[_Path], keys: tu
 # ------------------------------------------------------------------------------------------ which keys an item needs
 
 _MAX_KEYS = 8               # bits an item's states are kept apart by, at most (more: no search, it would not end)
-_HOPS = 2                   # writers followed back from the item's own bits, at most
-_MAX_FORKS = 6              # inputs an item's runs fork on, at most
+_THROUGH = 3                # bits recomputed every cycle followed back to what they are computed from, at most
+_MAX_FORKS = 2              # NC operands and inputs an item's runs fork on, at most
 _BIT_WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 
@@ -377,40 +377,51 @@ _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bits: Sequence[Key],
               kept: Callable[[Key], bool]) -> tuple[tuple[Key, ...], frozenset[Key]] | None:
     """The keys and the bits to fork on for the states an item at op `target` (file, op index) that reads `bits` is
-    judged with: the step words whose CASE leads to it, then the item's bits and those the chains writing them read
-    and the chains deciding whether those writes run (their subprogram and its callers' jumps, module ends and
-    conditional calls), followed back _HOPS writers: those that carry a value from one cycle into the next (a
-    subprogram reads them before writing them) are keys, NC operands and the inputs the item's own writers read
-    are forked on, other inputs and timers are free. None where more than _MAX_KEYS bits would be keys."""
+    judged with. Keys: the step words whose CASE leads to it; the item's bits that carry a value from one cycle
+    into the next (a subprogram reads them before writing them; a bit recomputed every cycle stands for those it is
+    computed from); those the chains deciding whether their writes run read (jumps, module ends and conditional
+    calls of the writing subprogram and its callers); and the bits other entries of a CASE write where an entry
+    writes one of the item's bits (at most one entry runs a cycle) that its writers read. Forks: the NC operands
+    and inputs those keys' writers read, at most _MAX_FORKS (an NC fact's bits first, then those read directly).
+    None where more than _MAX_KEYS bits would be keys."""
     program = runner.program
     leading = runner._leading(target)
     words = [k for k in step_words(program, set()) if kept(k) and any(
         op.code == "CASE" and op.operand is not None and (op.operand.kind, op.operand.addr) == k
         and any(t is not None and not t.is_module and t.key in leading for t in op.case_targets)
         for code in program.files for op in code.ops)]
-    feeds = _feeds(runner, table)
+    graph = _Feeds.of(runner, table)
     carried = _carried(runner, table)
-    keys: list[Key] = []
-    split: set[Key] = set()
-    queue = [(b, 0) for b in bits]
-    seen: set[Key] = set()
-    while queue:
-        bit, hops = queue.pop(0)
-        if bit in seen:
-            continue
-        seen.add(bit)
-        if bit in NC_MODEL_OWNED or bit[0] == "I" and hops <= 1 and len(split) < _MAX_FORKS:
-            split.add(bit)      # (what the NC or an input gives the item's own writers decides what they store)
-            continue
-        if not kept(bit):
-            continue
-        if bit in carried:
-            keys.append(bit)
-        if hops < _HOPS:
-            queue += [(b, hops + 1) for b in feeds.get(bit, ())]
+
+    def sources(start: Sequence[Key]) -> list[Key]:
+        # the carried, NC and input bits `start` stands for: bits recomputed every cycle followed back
+        found: list[Key] = []
+        level, seen = list(start), set(start)
+        for _ in range(_THROUGH + 1):
+            nxt: list[Key] = []
+            for b in level:
+                if b in carried or b in NC_MODEL_OWNED or b[0] == "I":
+                    found.append(b)
+                elif kept(b):
+                    nxt += [c for c in (*graph.data.get(b, ()), *graph.control.get(b, ())) if c not in seen]
+                    seen.update(nxt)
+            level = nxt
+        return found
+
+    own = [b for b in sources(bits) if b in carried and kept(b)]
+    deciding = [b for b in sources([c for b in own for c in graph.control.get(b, ())])
+                if b in carried and kept(b)]
+    fed = sources([c for b in own for c in graph.data.get(b, ())])
+    alternatives = [b for b in fed if any(b in graph.siblings.get(a, ()) for a in own)]
+    keys = list(dict.fromkeys(own + deciding + alternatives))
     if len(keys) > _MAX_KEYS:
         return None
-    return tuple(words) + tuple(keys), frozenset(split)
+    direct = [c for b in keys for c in graph.data.get(b, ())]
+    forks = [b for b in dict.fromkeys(sources(direct)) if b in NC_MODEL_OWNED or b[0] == "I"]
+    # (those an NC fact ties to other operands first, then those the writers read themselves)
+    tied = {k for fact in NC_FACTS for k in fact.bits}
+    forks.sort(key=lambda b: (b not in tied, b not in direct))
+    return tuple(words) + tuple(keys), frozenset(forks[:_MAX_FORKS])
 
 
 def merged_keys(needs: Sequence[tuple[tuple[Key, ...], frozenset[Key]]]
@@ -430,32 +441,55 @@ def merged_keys(needs: Sequence[tuple[tuple[Key, ...], frozenset[Key]]]
     return out
 
 
-def _feeds(runner: Runner, table: DecisionTable) -> dict[Key, list[Key]]:
-    """For each bit the program writes by name: the bits read by the chains that write it and by the chains that
-    decide whether those writes run (see item_keys), in program order."""
-    program = runner.program
-    deciding: dict[tuple[int, int], list[Key]] = {}
-    for d in table.decisions:
-        if d.op.code in _DECIDES:
-            for entry in runner.entries:
-                if (d.file, d.index) in runner.reach(entry):
-                    deciding.setdefault(entry, []).extend(chain_bits(d))
-    feeds: dict[Key, list[Key]] = {}
-    for d in table.decisions:
-        o = d.op.operand
-        if d.op.code in _BIT_WRITES and o is not None and o.is_bit and not o.indexed:
-            feeds.setdefault((o.kind, o.addr), []).extend(chain_bits(d))
-    for f, code in enumerate(program.files):
-        for i, op in enumerate(code.ops):
-            o = op.operand
-            if op.code not in (*_BIT_WRITES, "STBITS") or o is None or not o.is_bit or o.indexed:
-                continue
-            around = [e for e in runner.entries if (f, i) in runner.reach(e)]
-            around += [e for a in list(around) for c in runner.callers.get(a, ()) for e in runner.entries
-                       if c[0] >= 0 and c in runner.reach(e)]
-            for n in range(op.nbits if op.code == "STBITS" else 1):
-                feeds.setdefault((o.kind, o.addr + n), []).extend(b for e in around for b in deciding.get(e, ()))
-    return feeds
+@dataclasses.dataclass(frozen=True)
+class _Feeds:
+    """For each bit the program writes by name: `data`, the bits the chains that write it read; `control`, the bits
+    the chains deciding whether those writes run read (the jumps, module ends and conditional calls of the writing
+    subprogram, and of those that call it); `siblings`, the bits the other entries of a CASE write where an entry
+    writes it."""
+
+    data: dict[Key, list[Key]]
+    control: dict[Key, list[Key]]
+    siblings: dict[Key, set[Key]]
+
+    @staticmethod
+    def of(runner: Runner, table: DecisionTable) -> _Feeds:
+        program = runner.program
+        deciding: dict[tuple[int, int], list[Key]] = {}
+        for d in table.decisions:
+            if d.op.code in _DECIDES:
+                for entry in runner.entries:
+                    if (d.file, d.index) in runner.reach(entry):
+                        deciding.setdefault(entry, []).extend(chain_bits(d))
+        data: dict[Key, list[Key]] = {}
+        for d in table.decisions:
+            o = d.op.operand
+            if d.op.code in _BIT_WRITES and o is not None and o.is_bit and not o.indexed:
+                data.setdefault((o.kind, o.addr), []).extend(chain_bits(d))
+        control: dict[Key, list[Key]] = {}
+        written_in: dict[tuple[int, int], set[Key]] = {}
+        for f, code in enumerate(program.files):
+            for i, op in enumerate(code.ops):
+                o = op.operand
+                if op.code not in (*_BIT_WRITES, "STBITS") or o is None or not o.is_bit or o.indexed:
+                    continue
+                inner = [e for e in runner.entries if (f, i) in runner.reach(e)]
+                around = inner + [e for a in inner for c in runner.callers.get(a, ()) for e in runner.entries
+                                  if c[0] >= 0 and c in runner.reach(e)]
+                for n in range(op.nbits if op.code == "STBITS" else 1):
+                    key = (o.kind, o.addr + n)
+                    control.setdefault(key, []).extend(b for e in around for b in deciding.get(e, ()))
+                    for e in inner:
+                        written_in.setdefault(e, set()).add(key)
+        siblings: dict[Key, set[Key]] = {}
+        for code in program.files:
+            for op in code.ops:
+                entries = [t.key for t in op.case_targets if t is not None and not t.is_module]
+                for a in entries:
+                    for key in written_in.get(a, ()):
+                        siblings.setdefault(key, set()).update(
+                            k for b in entries if b != a for k in written_in.get(b, ()))
+        return _Feeds(data, control, siblings)
 
 
 def _carried(runner: Runner, table: DecisionTable) -> set[Key]:
