@@ -103,13 +103,15 @@ def _covered(states: StartStates, kept, read) -> bool:
     return False
 
 
-def _watch(machine: Machine, states: StartStates, kept, failures: list) -> None:
-    """Checks the memory at the start of every program phase but the first against `states`."""
+def _watch(machine: Machine, found: list[StartStates], kept, failures: list) -> None:
+    """Checks the memory at the start of every program phase but the first against each of `found` (failures:
+    (the states' keys, cycle))."""
     phase = machine.program_phase
 
     def checked(cycle: int, report=None):
-        if cycle > 0 and not _covered(states, kept, lambda k: machine.read(*k)):
-            failures.append(cycle)
+        for states in found if cycle > 0 else ():
+            if not _covered(states, kept, lambda k: machine.read(*k)):
+                failures.append((states.names, cycle))
         return phase(cycle, report)
     machine.program_phase = checked
 
@@ -140,7 +142,7 @@ def test_every_state_a_random_run_starts_a_cycle_in_is_found(tmp_path: Path, bet
         machine = Machine(program, compiled=compiled)
         for r in used:
             machine.write(r.kind, r.addr, rng.choice((-2, -1, 0, 1, 2, 7)) if r.kind in "BWD" else rng.randrange(2))
-        _watch(machine, states, kept, failures)
+        _watch(machine, [states], kept, failures)
         try:
             for cycle in range(30):
                 restart = [("M", 4172, int(rng.random() < 0.1))] if cycle else []
@@ -154,7 +156,8 @@ def test_every_state_a_random_run_starts_a_cycle_in_is_found(tmp_path: Path, bet
 def test_every_state_a_sample_run_starts_a_cycle_in_is_found() -> None:
     # Soundness on the sample: every scenario (power-on states mid tool change, restarts, late first cycles) and a
     # generated search; the keys of the tool change's evaluation (its step word and the automatic-change flag, forked
-    # on the NC's tool flags) and of the M-function decoder (the strobe memory and three pending markers).
+    # on the NC's tool flags), of the M-function decoder (the strobe memory and three pending markers) and of the
+    # chip conveyor's M-function check.
     from transpiler import api
     from transpiler.diagnostics import Diagnostics
     from transpiler.verify.guided import generate
@@ -175,13 +178,16 @@ def test_every_state_a_sample_run_starts_a_cycle_in_is_found() -> None:
         return (ref.kind, ref.addr)
     kept = kept_between_cycles(program, outside)
     checks = [(["BG_step_tool", "ML_new_auto"], ["NP_M4522_tool_with_pocket", "NP_M4521_T0", "NP_M4073_strobe_T"]),
-              (["ML_strobe_M_mem", "MG_Mpend_M30", "MG_Mpend_M50", "MG_Mpend_M51"], ["NP_M4072_strobe_M"])]
-    for keys, split in checks:
-        states = start_states(program, [key(n) for n in keys], {key(n) for n in split}, outside, driven)
-        assert states is not None
-        failures: list = []
-        for scenario in scenarios:
-            machine = build_machine(program, scenario, Diagnostics(), compiled=compiled)
-            _watch(machine, states, kept, failures)
-            run_scenario(program, scenario, names, machine=machine)
-            assert failures == [], (keys, scenario.name, failures[:3])
+              (["ML_strobe_M_mem", "MG_Mpend_M30", "MG_Mpend_M50", "MG_Mpend_M51"], ["NP_M4072_strobe_M"]),
+              # the keys item_keys picks for Chip_conveyor.src:98
+              (["MG_Mpend_M50", "ML_sel_conv_fwd", "MG_Mpend_M51", "MG_control_ok", "ML_strobe_M_mem", "MG_Mpend_M30"],
+               ["NP_M4072_strobe_M", "I_control_voltage_on"])]
+    found = [start_states(program, [key(n) for n in keys], {key(n) for n in split}, outside, driven, keys)
+             for keys, split in checks]
+    assert None not in found
+    failures: list = []
+    for scenario in scenarios:
+        machine = build_machine(program, scenario, Diagnostics(), compiled=compiled)
+        _watch(machine, found, kept, failures)
+        run_scenario(program, scenario, names, machine=machine)
+        assert failures == [], (scenario.name, failures[:3])
