@@ -375,15 +375,16 @@ _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 
 
 def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bits: Sequence[Key],
-              kept: Callable[[Key], bool]) -> tuple[tuple[Key, ...], frozenset[Key]] | None:
-    """The keys and the bits to fork on for the states an item at op `target` (file, op index) that reads `bits` is
-    judged with. Keys: the step words whose CASE leads to it; the item's bits that carry a value from one cycle
-    into the next (a subprogram reads them before writing them; a bit recomputed every cycle stands for those it is
-    computed from); those the chains deciding whether their writes run read (jumps, module ends and conditional
-    calls of the writing subprogram and its callers); and the bits other entries of a CASE write where an entry
-    writes one of the item's bits (at most one entry runs a cycle) that its writers read. Forks: the NC operands
-    and inputs those keys' writers read, at most _MAX_FORKS (an NC fact's bits first, then those read directly).
-    None where more than _MAX_KEYS bits would be keys."""
+              kept: Callable[[Key], bool]) -> list[tuple[tuple[Key, ...], frozenset[Key]]]:
+    """The key sets to try in turn, each with the bits to fork on, for the states an item at op `target` (file, op
+    index) that reads `bits` is judged with. Keys: the step words whose CASE leads to it; the item's bits that
+    carry a value from one cycle into the next (a subprogram reads them before writing them; a bit recomputed every
+    cycle stands for those it is computed from); those the chains deciding whether their writes run read (jumps,
+    module ends and conditional calls of the writing subprogram and its callers); then, first, the bits other
+    entries of a CASE write where an entry writes one of the item's bits (at most one entry runs a cycle) that the
+    item's writers read, and second, every carried bit those writers read. Forks: the NC operands and inputs the
+    keys' writers read, at most _MAX_FORKS (an NC fact's bits first, then those read directly). A set of more than
+    _MAX_KEYS bits is left out."""
     program = runner.program
     leading = runner._leading(target)
     words = [k for k in step_words(program, set()) if kept(k) and any(
@@ -411,17 +412,20 @@ def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bit
     own = [b for b in sources(bits) if b in carried and kept(b)]
     deciding = [b for b in sources([c for b in own for c in graph.control.get(b, ())])
                 if b in carried and kept(b)]
-    fed = sources([c for b in own for c in graph.data.get(b, ())])
+    fed = [b for b in sources([c for b in own for c in graph.data.get(b, ())]) if b in carried and kept(b)]
     alternatives = [b for b in fed if any(b in graph.siblings.get(a, ()) for a in own)]
-    keys = list(dict.fromkeys(own + deciding + alternatives))
-    if len(keys) > _MAX_KEYS:
-        return None
-    direct = [c for b in keys for c in graph.data.get(b, ())]
-    forks = [b for b in dict.fromkeys(sources(direct)) if b in NC_MODEL_OWNED or b[0] == "I"]
-    # (those an NC fact ties to other operands first, then those the writers read themselves)
     tied = {k for fact in NC_FACTS for k in fact.bits}
-    forks.sort(key=lambda b: (b not in tied, b not in direct))
-    return tuple(words) + tuple(keys), frozenset(forks[:_MAX_FORKS])
+    found: list[tuple[tuple[Key, ...], frozenset[Key]]] = []
+    for chosen in (own + deciding + alternatives, own + deciding + fed):
+        keys = list(dict.fromkeys(chosen))
+        if len(keys) > _MAX_KEYS or any(tuple(words) + tuple(keys) == f[0] for f in found):
+            continue
+        direct = [c for b in keys for c in graph.data.get(b, ())]
+        forks = [b for b in dict.fromkeys(sources(direct)) if b in NC_MODEL_OWNED or b[0] == "I"]
+        # (those an NC fact ties to other operands first, then those the writers read themselves)
+        forks.sort(key=lambda b: (b not in tied, b not in direct))
+        found.append((tuple(words) + tuple(keys), frozenset(forks[:_MAX_FORKS])))
+    return found
 
 
 def merged_keys(needs: Sequence[tuple[tuple[Key, ...], frozenset[Key]]]

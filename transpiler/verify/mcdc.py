@@ -804,7 +804,7 @@ def _explain_by_paths(program: Program, conditions: list[ConditionItem],
 
 # The searches for start states (cycle_states) run whole cycles: one report runs them only where few items are left
 # (the last ones of a project whose runs cover the rest), within one budget of ops followed.
-_MAX_ITEMS_FOR_STATES = 8
+_MAX_ITEMS_FOR_STATES = 32
 _STATES_BUDGET = 8_000_000
 
 
@@ -824,7 +824,7 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
     outside = driven - power_on
     kept = kept_between_cycles(program, outside)
     base = Runner(program)
-    needs: list[tuple[tuple, list, int]] = []
+    candidates: list[tuple[list, list, int]] = []       # (the key sets to try in turn, items, index)
     for items, k in todo:
         item = items[k]
         if isinstance(item, ConditionItem):
@@ -835,19 +835,22 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
                 continue
         else:
             target, bits = item.compare.key, []
-        need = item_keys(base, table, target, bits, kept) if base.starts(*target)[:1] == [(0, 0)] else None
-        if need is not None:
-            needs.append((need, items, k))
-    needs = [(merged, items, k) for merged, (_, items, k) in zip(merged_keys([n[0] for n in needs]), needs)]
+        if base.starts(*target)[:1] == [(0, 0)]:
+            candidates.append((item_keys(base, table, target, bits, kept), items, k))
     budget = StepBudget(_STATES_BUDGET)
-    searches: dict[tuple, list[tuple[list, int]]] = {}
-    for need, items, k in sorted(needs, key=lambda n: len(n[0][0]) + len(n[0][1])):
-        searches.setdefault(need, []).append((items, k))
-    for (keys, split), judged in searches.items():
-        states = start_states(program, keys, set(split), outside, driven, _key_names(program, keys), budget) \
-            if budget.left > 0 else None
-        if states is not None:
-            _judge_from_states(program, states, judged, budget)
+    for turn in range(max((len(c[0]) for c in candidates), default=0)):
+        # the items still missing try their next key set (the narrow one first, then a wider one)
+        needs = [(keys[turn], items, k) for keys, items, k in candidates
+                 if turn < len(keys) and items[k].status == "missing"]
+        needs = [(merged, items, k) for merged, (_, items, k) in zip(merged_keys([n[0] for n in needs]), needs)]
+        searches: dict[tuple, list[tuple[list, int]]] = {}
+        for need, items, k in sorted(needs, key=lambda n: len(n[0][0]) + len(n[0][1])):
+            searches.setdefault(need, []).append((items, k))
+        for (keys, split), judged in searches.items():
+            states = start_states(program, keys, set(split), outside, driven, _key_names(program, keys), budget) \
+                if budget.left > 0 else None
+            if states is not None:
+                _judge_from_states(program, states, judged, budget)
 
 
 def _judge_from_states(program: Program, states: StartStates, judged: list[tuple[list, int]],
