@@ -185,3 +185,28 @@ def test_every_state_a_sample_run_starts_a_cycle_in_is_found() -> None:
             _watch(machine, states, kept, failures)
             run_scenario(program, scenario, names, machine=machine)
             assert failures == [], (keys, scenario.name, failures[:3])
+
+
+def test_a_marker_a_random_glob_toggles_is_not_kept_between_cycles(tmp_path: Path) -> None:
+    # Catches: driven_operands skipping a glob of `random.inputs`: `M5*` toggles the flag M5 every cycle, so M5 = 1
+    # reaches Evaluate with W20 = 0 (W30 stays 0) and the pair of M5 is shown; the states must not keep M5.
+    from transpiler.exec.interp import compile_program
+    from transpiler.diagnostics import Diagnostics
+    from transpiler.verify.mcdc import driven_operands, power_on_operands
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import build_machine, project_names, run_scenario
+    program = _program(tmp_path, _TAKE_OVER.format(first=_INIT, between=""))
+    (tmp_path / "s.yaml").write_text("name: glob\ncycles: 200\nrandom:\n  seed: 3\n  inputs: [\"I*\", \"M5*\"]\n"
+                                     "  toggle_probability: 0.5\nevents:\n  - cycle: 0\n    set: {W30: 0}\n")
+    names = project_names(program)
+    scenario = load_scenario(tmp_path / "s.yaml", names)
+    driven, power_on = driven_operands([scenario], names), power_on_operands([scenario], names)
+    assert ("M", 5) in driven and ("M", 5) not in power_on
+    machine = build_machine(program, scenario, Diagnostics(), coverage=True,
+                            compiled=compile_program(program, coverage=True))
+    run_scenario(program, scenario, names, machine=machine)
+    cov = decision_coverage(program, [machine.coverage], driven, power_on=power_on)
+    item = next(i for i in cov.conditions if i.condition.text == "M5" and i.decision.op.operand is not None
+                and i.decision.op.operand.display() == "O1")
+    assert item.status == "shown"
+    assert all(i.status != "infeasible" or "kept apart by" not in i.reason for i in cov.conditions)
