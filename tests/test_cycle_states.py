@@ -191,3 +191,99 @@ def test_every_state_a_sample_run_starts_a_cycle_in_is_found() -> None:
         _watch(machine, found, kept, failures)
         run_scenario(program, scenario, names, machine=machine)
         assert failures == [], (scenario.name, failures[:3])
+
+
+def test_a_marker_a_random_glob_toggles_is_not_kept_between_cycles(tmp_path: Path) -> None:
+    # Catches: driven_operands skipping a glob of `random.inputs`: `M5*` toggles the flag M5 every cycle, so M5 = 1
+    # reaches Evaluate with W20 = 0 (W30 stays 0) and the pair of M5 is shown; the states must not keep M5.
+    from transpiler.exec.interp import compile_program
+    from transpiler.diagnostics import Diagnostics
+    from transpiler.verify.mcdc import driven_operands, power_on_operands
+    from transpiler.verify.scenario import load_scenario
+    from transpiler.verify.simulate import build_machine, project_names, run_scenario
+    program = _program(tmp_path, _TAKE_OVER.format(first=_INIT, between=""))
+    (tmp_path / "s.yaml").write_text("name: glob\ncycles: 200\nrandom:\n  seed: 3\n  inputs: [\"I*\", \"M5*\"]\n"
+                                     "  toggle_probability: 0.5\nevents:\n  - cycle: 0\n    set: {W30: 0}\n")
+    names = project_names(program)
+    scenario = load_scenario(tmp_path / "s.yaml", names)
+    driven, power_on = driven_operands([scenario], names), power_on_operands([scenario], names)
+    assert ("M", 5) in driven and ("M", 5) not in power_on
+    machine = build_machine(program, scenario, Diagnostics(), coverage=True,
+                            compiled=compile_program(program, coverage=True))
+    run_scenario(program, scenario, names, machine=machine)
+    cov = decision_coverage(program, [machine.coverage], driven, power_on=power_on)
+    item = next(i for i in cov.conditions if i.condition.text == "M5" and i.decision.op.operand is not None
+                and i.decision.op.operand.display() == "O1")
+    assert item.status == "shown"
+    assert all(i.status != "infeasible" or "kept apart by" not in i.reason for i in cov.conditions)
+
+
+# M7 carried from the last cycle: with M7 = 1 the loop is entered by a jump forward past its head (Mid), and its
+# second pass runs Head with M7 = 1; with M7 = 0 it is entered at Head.
+_INTO_LOOP = """L K0
+= W50
+L M7
+JPT Mid
+LBL Head
+L M7
+A I4
+= O2
+LBL Mid
+L W50
++ K1
+= W50
+L W50
+< K3
+JPT Head
+L I1
+= M20
+L M20
+= M7
+EM
+"""
+
+
+def _runs(program, inputs, runs: int, cycles: int, seed: int) -> list[Machine]:
+    """Runs from random power-on memory with the inputs `inputs(rng)` gives every cycle."""
+    rng = random.Random(seed)
+    used = sorted(program_operands(program)[0], key=lambda r: (r.kind, r.addr))
+    compiled = compile_program(program, coverage=True)
+    machines = []
+    for _ in range(runs):
+        machine = Machine(program, compiled=compiled, coverage=True)
+        for r in used:
+            machine.write(r.kind, r.addr, rng.choice((-1, 0, 1, 2)) if r.kind in "BWD" else rng.randrange(2))
+        for cycle in range(cycles):
+            machine.run_cycle(cycle, inputs(rng))
+        machines.append(machine)
+    return machines
+
+
+def test_a_loop_entered_past_its_head_runs_its_passes_from_that_path_too(tmp_path: Path) -> None:
+    # Catches: a loop's passes run only from the states that entered its head (pass_start), so the path that jumped
+    # forward into the body (M7 = 1) never ran Head: M7 of `M7 AND I4 = O2` was called infeasible (M7 always 0),
+    # where a run with I4 = 1 shows it.
+    program = _program(tmp_path, _INTO_LOOP)
+    weak = _runs(program, lambda rng: [("I", 1, rng.randrange(2)), ("I", 4, 0)], 10, 30, 2)
+    cov = decision_coverage(program, [m.coverage for m in weak])
+    o2 = [i for i in cov.conditions if i.decision.op.operand is not None and i.decision.op.operand.display() == "O2"]
+    assert [i.status for i in o2] == ["missing", "missing"], [i.reason for i in o2]
+    full = _runs(program, lambda rng: [("I", 1, rng.randrange(2)), ("I", 4, rng.randrange(2))], 10, 30, 3)
+    cov = decision_coverage(program, [m.coverage for m in full])
+    assert [i.status for i in cov.conditions if i.decision.op.operand is not None
+            and i.decision.op.operand.display() == "O2"] == ["shown", "shown"]
+
+
+def test_a_subprogram_loop_entered_past_its_head_claims_nothing(tmp_path: Path) -> None:
+    # Catches: the same in a called subprogram, with a word: W40 == 1 jumps past Head, whose second pass stores
+    # W42 = W40 = 1; `W42 == K1` was called always 0. A run from power-on memory with W40 = 1 shows it.
+    program = _program(tmp_path, "CM Sub\nL W42\n== K1\n= O1\nEM\nLBL Sub\nL K0\n= W42\nL K0\n= W50\nL W40\n"
+                                 "== K1\nJPT Mid\nLBL Head\nL W40\n= W42\nLBL Mid\nL W50\n+ K1\n= W50\nL W50\n"
+                                 "< K3\nJPT Head\nEM\n")
+    item = next(i for i in decision_coverage(program, []).conditions if i.condition.text == "W42 == K1")
+    assert item.status == "missing", item.reason
+    machine = Machine(program, compiled=compile_program(program, coverage=True), coverage=True)
+    for cycle in range(3):
+        machine.run_cycle(cycle, [("W", 40, cycle % 2)])
+    cov = decision_coverage(program, [machine.coverage], explain_missing=False)
+    assert next(i for i in cov.conditions if i.condition.text == "W42 == K1").status == "shown"

@@ -391,7 +391,14 @@ class Runner:
         at (f, entry) starts from: each of `entered` (the states the head was entered with) less what the loop's
         ops (loop_ops) and their callees may write, LA unknown, and the data stack unknown where they move it."""
         ops = self.program.files[f].ops
-        later = loop_ops(ops, sorted(k for _, k in self.reach((f, entry))), head, back, f)
+        reach = sorted(k for _, k in self.reach((f, entry)))
+        later = loop_ops(ops, reach, head, back, f)
+        end = later[-1][1] if later else back
+        if any(k < head and ops[k].code in ("JP", "JPT", "JPF") and ops[k].target is not None
+               and head < ops[k].target <= end for k in reach):
+            # a loop entered past its head (a jump forward into its body): its passes may start from what that
+            # path holds, which no state the head was entered with covers
+            raise _GiveUp
         written = self.collect(later)
         deep = any(ops[k].code in _STACK_OPS or ops[k].code in ("CALL", "CALLT", "CALLF", "CASE") for _, k in later)
         out = []

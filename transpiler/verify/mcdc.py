@@ -42,8 +42,9 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from transpiler.exec.interp.decisions import Compare, Decision, DecisionTable, decision_table
 from transpiler.frontend.opcodes import implicit_writes
-from transpiler.ir import BYTES, Program, sext
+from transpiler.ir import BIT_KINDS, BYTES, Program, sext
 from transpiler.language.presets import TIMER_MP
+from transpiler.verify.scenario import is_glob
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors, write_sites
@@ -170,42 +171,47 @@ def _masking_pair(a: int, b: int, bit: int, n: int, function) -> bool:
 # ----------------------------------------------------------------------------------------------------- constants
 
 def driven_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
-    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs), and
-    (word_values.OVERRIDDEN_MODULE, number) of every module whose results one replaces (`module_results`)."""
+    """(kind, address) of every operand one of `scenarios` sets (initial values, events, random inputs: a glob's
+    every match), and (word_values.OVERRIDDEN_MODULE, number) of every module whose results one replaces
+    (`module_results`)."""
     driven: set[tuple[str, int]] = set()
     for scenario in scenarios:
         driven.update((OVERRIDDEN_MODULE, int(number)) for number in scenario.module_results)
         written = list(scenario.initial)
         for event in scenario.events:
             written += list(event.set)
-        if scenario.random is not None:
-            written += list(scenario.random.inputs)
-        for name in written:
-            try:
-                ref = names.resolve(name)
-            except ValueError:          # a glob of random inputs (inputs are driven anyway)
-                continue
-            driven.add((ref.kind, ref.addr))
+        driven |= _resolved(names, written)
+        driven |= _random_inputs(scenario, names)
     return driven
 
 
 def power_on_operands(scenarios: Sequence, names) -> set[tuple[str, int]]:
     """(kind, address) of every operand `scenarios` set before cycle 0 (`initial`) and never later (events, random
     inputs): a power-on value the program may overwrite before anything reads it."""
-    def resolved(written) -> set[tuple[str, int]]:
-        found = set()
-        for name in written:
-            try:
-                ref = names.resolve(name)
-            except ValueError:
-                continue
-            found.add((ref.kind, ref.addr))
-        return found
-    first = resolved(name for scenario in scenarios for name in scenario.initial)
-    later = resolved([name for scenario in scenarios for event in scenario.events for name in event.set]
-                     + [name for scenario in scenarios if scenario.random is not None
-                        for name in scenario.random.inputs])
+    first = _resolved(names, [name for scenario in scenarios for name in scenario.initial])
+    later = _resolved(names, [name for scenario in scenarios for event in scenario.events for name in event.set])
+    for scenario in scenarios:
+        later |= _random_inputs(scenario, names)
     return first - later
+
+
+def _resolved(names, written: Iterable[str]) -> set[tuple[str, int]]:
+    found = set()
+    for name in written:
+        try:
+            ref = names.resolve(name)
+        except ValueError:
+            continue
+        found.add((ref.kind, ref.addr))
+    return found
+
+
+def _random_inputs(scenario, names) -> set[tuple[str, int]]:
+    """The bit operands a scenario's random stimulus may toggle in any cycle: a glob stands for every name it matches
+    (a glob such as `M5*` toggles markers, not only inputs)."""
+    patterns = list(scenario.random.inputs) if scenario.random is not None else []
+    matched = [n for p in patterns for n in (names.match(p) if is_glob(p) else [p])]
+    return {k for k in _resolved(names, matched) if k[0] in BIT_KINDS}
 
 
 @dataclasses.dataclass
