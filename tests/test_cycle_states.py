@@ -15,7 +15,8 @@ from transpiler.exec.interp.faults import MachineHalted
 from transpiler.frontend.load import ProjectOptions
 from transpiler.frontend.pipeline import compile_project
 from transpiler.language.semantics import make_semantics
-from transpiler.verify.cycle_states import StartStates, kept_between_cycles, start_states
+from transpiler.verify.cycle_paths import kept_between_cycles
+from transpiler.verify.cycle_states import StartStates, start_states
 from transpiler.verify.mcdc import decision_coverage
 from transpiler.verify.simulate import program_operands
 
@@ -179,7 +180,7 @@ def test_every_state_a_sample_run_starts_a_cycle_in_is_found() -> None:
     kept = kept_between_cycles(program, outside)
     checks = [(["BG_step_tool", "ML_new_auto"], ["NP_M4522_tool_with_pocket", "NP_M4521_T0", "NP_M4073_strobe_T"]),
               (["ML_strobe_M_mem", "MG_Mpend_M30", "MG_Mpend_M50", "MG_Mpend_M51"], ["NP_M4072_strobe_M"]),
-              # the keys item_keys picks for Chip_conveyor.src:98
+              # the keys KeyChooser picks for Chip_conveyor.src:98
               (["MG_Mpend_M50", "ML_sel_conv_fwd", "MG_Mpend_M51", "MG_control_ok", "ML_strobe_M_mem", "MG_Mpend_M30"],
                ["NP_M4072_strobe_M", "I_control_voltage_on"])]
     found = [start_states(program, [key(n) for n in keys], {key(n) for n in split}, outside, driven, keys)

@@ -348,6 +348,14 @@ def _boundary(program, coverage: list, what: str):
     return {i.what(): i for i in decision_coverage(program, coverage).boundaries}[what]
 
 
+def _reached_and_claimed(program, machine, line: int, reached: set[int], what: str, reason: str) -> None:
+    """Asserts that the runs of `machine` reached exactly `reached` at the compare on `line`, and that the boundary
+    item `what` they left is infeasible with a reason starting with `reason`."""
+    assert machine.coverage.bounds[_compare_at(program, line).key] == reached
+    item = _boundary(program, [machine.coverage], what)
+    assert item.status == "infeasible" and item.reason.startswith(reason), item
+
+
 def _relation(program, line: int) -> tuple:
     return word_relations(program).get(_compare_at(program, line).key, (None, None))
 
@@ -363,10 +371,8 @@ def test_a_counting_loop_never_passes_its_limit_at_its_test(tmp_path: Path) -> N
         machine.state.write("W", 30, limit)
         machine.run_cycle(cycle, [])
     _bounds_inside(program, [machine.coverage])
-    cmp = _compare_at(program, 10)
-    assert machine.coverage.bounds[cmp.key] == {-1, 0}
-    item = _boundary(program, [machine.coverage], "boundary W6 < W30: W6 - W30 = +1")
-    assert item.status == "infeasible" and item.reason.startswith("W6 - W30 is at most 0 here, never +1"), item
+    _reached_and_claimed(program, machine, 10, {-1, 0}, "boundary W6 < W30: W6 - W30 = +1",
+                         "W6 - W30 is at most 0 here, never +1")
 
 
 @pytest.mark.parametrize("body, step, routines, why", [
@@ -433,10 +439,9 @@ def test_a_count_kept_beside_x_stays_within_the_loop_s_passes(tmp_path: Path) ->
             machine.state.write("M", 100 + bit, 1 if cycle == 1 else 0 if cycle == 2 else rng.randrange(2))
         machine.run_cycle(cycle, [])
     assert _bounds_inside(program, [machine.coverage]) > 0
-    cmp = _compare_at(program, 14)
-    assert machine.coverage.bounds[cmp.key] == {0, 1}     # c and c+1 reached, c-1 not
-    item = _boundary(program, [machine.coverage], "boundary W6 > K0: W6 = c-1 (-1)")
-    assert item.status == "infeasible" and item.reason.startswith("W6 holds only 0..8 here, not -1"), item
+    # c and c+1 reached, c-1 not
+    _reached_and_claimed(program, machine, 14, {0, 1}, "boundary W6 > K0: W6 = c-1 (-1)",
+                         "W6 holds only 0..8 here, not -1")
 
 
 @pytest.mark.parametrize("before, body, routines, why", [

@@ -39,7 +39,7 @@ entry are in the code of one other entry, that one too, up to _UP levels (the fa
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+from typing import Callable, Sequence
 
 from transpiler.exec.interp.decisions import BRACKET_GATES, GATES, KEEPS_LA, WORD_WRITERS, Decision
 from transpiler.exec.interp.gen_exprs import int32
@@ -977,6 +977,26 @@ _CONTROL = frozenset({"CALL", "CALLT", "CALLF", "CASE", "JP", "JPT", "JPF", "EM"
 _NO_MEMORY = frozenset({"PSL", "PSW", "PUSH", "PSX", "PLL", "PLW", "PLX", "KFIELD", "SUBM", "RPLY", "CAN"})
 
 
+def kept_between_cycles(program: Program, outside: set[Key]) -> Callable[[Key], bool]:
+    """Whether an operand keeps between two cycles what the program's cycle left in it: a marker or output bit, or
+    a byte, word or double word, that is no NC, interface, data-table or `outside` operand (what a scenario sets
+    after power-on). What a submitted job or a later op of the cycle writes, the caller looks at itself."""
+    profile = program.semantics.profile
+    itf = profile.interface
+    tables = {(row.kind, row.addr) for row in program.data_rows}
+    foreign_words = [k for k in (*outside, *tables, *NC_MODEL_OWNED) if k[0] in ("B", "W", "D")]
+
+    def kept(key: Key) -> bool:
+        if key in outside or key in tables or key in NC_MODEL_OWNED:
+            return False
+        if key[0] in ("B", "W", "D"):
+            span = range(key[1], key[1] + BYTES[key[0]])
+            return not any(b in itf.interface_bytes for b in span) and not any(
+                k[1] < span.stop and span.start < k[1] + BYTES[k[0]] for k in foreign_words)
+        return key[0] in ("M", "O") and not profile.is_interface(*key)
+    return kept
+
+
 def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation, ...]:
     """The relations between a marker and a word that hold at the start of every cycle after the first (see
     StartRelation): `L W` `rel K` `= M` (or `=N`) where control comes to the compare and the store only from the load,
@@ -987,9 +1007,7 @@ def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation,
     (operands scenarios set after power-on): between two cycles nothing but the program changes them."""
     if not followable(program):
         return ()
-    itf = program.semantics.profile.interface
-    profile = program.semantics.profile
-    tables = {(row.kind, row.addr) for row in program.data_rows}
+    kept = kept_between_cycles(program, outside)
     entries: set[tuple[int, int]] = set()
     for code in program.files:
         for op in code.ops:
@@ -1009,10 +1027,7 @@ def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation,
             if w is None or w.indexed or w.kind not in ("B", "W", "D") or k is None or k.kind != "K" or k.indexed:
                 continue
             word = (w.kind, w.addr)
-            span = range(w.addr, w.addr + BYTES[w.kind])
-            if any(b in itf.interface_bytes for b in span) or any(
-                    key[0] in ("B", "W", "D") and key[1] < span.stop and span.start < key[1] + BYTES[key[0]]
-                    for key in (*outside, *tables, *NC_MODEL_OWNED)):
+            if not kept(word):
                 continue
             if (f, i - 1) in targets or (f, i - 1) in entries:
                 continue                    # the compare entered from elsewhere: WA there need not be the word
@@ -1021,10 +1036,9 @@ def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation,
                 o = ops[j].operand
                 if (f, j) in targets or (f, j) in entries:
                     break
-                if o is not None and o.is_bit and not o.indexed and o.kind in ("M", "O"):
+                if o is not None and o.is_bit and not o.indexed:
                     flag = (o.kind, o.addr)
-                    if flag not in outside and flag not in tables and flag not in NC_MODEL_OWNED \
-                            and not profile.is_interface(*flag):
+                    if kept(flag):
                         rel = cmp.rel if ops[j].code == "ST" else _NEGATED_REL[cmp.rel]
                         found.append(((f, j), StartRelation(flag, word, rel, int32(k.addr),
                                                             f"{ops[j].span} {ops[j].mnemonic} {o.display()}",
@@ -1036,15 +1050,15 @@ def start_relations(program: Program, outside: set[Key]) -> tuple[StartRelation,
     if order is None:
         return ()
     ranges = index_ranges(program)
-    kept = []
+    holding = []
     for (f, j), rel in found:
         if not _always_runs(program, f, j, entries, ()):
             continue
         if any(_may_write(program, g, i, op, rel.flag, rel.word, ranges) and _after(order, (g, i), (f, j))
                for g, code in enumerate(program.files) for i, op in enumerate(code.ops)):
             continue
-        kept.append(rel)
-    return tuple(kept)
+        holding.append(rel)
+    return tuple(holding)
 
 
 _NEGATED_REL = {"==": "<>", "<>": "==", "<": ">=", ">=": "<", ">": "<=", "<=": ">"}

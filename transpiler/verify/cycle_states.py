@@ -28,8 +28,9 @@ import itertools
 from typing import Callable, Sequence
 
 from transpiler.exec.interp.decisions import Decision, DecisionTable
-from transpiler.ir import BYTES, Program
-from transpiler.verify.cycle_paths import _DEPTH, _RETURN, Runner, Word, _full, _GiveUp, _join, _Path, followable
+from transpiler.ir import Program
+from transpiler.verify.cycle_paths import (_DEPTH, _RETURN, Runner, Word, _full, _GiveUp, _join, _Path, followable,
+                                           kept_between_cycles)
 from transpiler.verify.nc_facts import NC_FACTS, NC_MODEL_OWNED, NcFact, applicable_facts
 
 Key = tuple[str, int]
@@ -73,26 +74,6 @@ class StartStates:
                 "and only what nothing but the program writes kept between cycles")
 
 
-def kept_between_cycles(program: Program, outside: set[Key]) -> Callable[[Key], bool]:
-    """Whether an operand keeps between two cycles what the program's cycle left in it: a marker or output bit, or
-    a byte, word or double word, that is no NC, interface, data-table or `outside` operand (what a scenario sets
-    after power-on) and that no submitted job writes (jobs are forgotten separately)."""
-    profile = program.semantics.profile
-    itf = profile.interface
-    tables = {(row.kind, row.addr) for row in program.data_rows}
-    foreign_words = [k for k in (*outside, *tables, *NC_MODEL_OWNED) if k[0] in _WORDS]
-
-    def kept(key: Key) -> bool:
-        if key in outside or key in tables or key in NC_MODEL_OWNED:
-            return False
-        if key[0] in _WORDS:
-            span = range(key[1], key[1] + BYTES[key[0]])
-            return not any(b in itf.interface_bytes for b in span) and not any(
-                k[1] < span.stop and span.start < k[1] + BYTES[k[0]] for k in foreign_words)
-        return key[0] in ("M", "O") and not profile.is_interface(*key)
-    return kept
-
-
 def step_words(program: Program, outside: set[Key]) -> list[Key]:
     """The words CASE dispatches on (not through the index register) that keep their value between cycles, in
     program order."""
@@ -119,14 +100,11 @@ def start_states(program: Program, keys: Sequence[Key], split: set[Key], outside
                                       for code in program.files for op in code.ops):
         return None
     keys = tuple(keys)
-    runner = Runner(program)
-    runner.fork_joined = True
-    runner.split = set(split) | {k for k in keys if k[0] not in _WORDS}
+    split = set(split) | {k for k in keys if k[0] not in _WORDS}
     kept = kept_between_cycles(program, outside)
-    facts = [f for f in applicable_facts(program, driven) if not f.bits or set(f.bits) & runner.split]
+    facts = [f for f in applicable_facts(program, driven) if not f.bits or set(f.bits) & split]
     # (a fact's bits are forked on at the start: runs keep them apart, or what the fact narrowed is lost at a join)
-    runner.split |= {k for f in facts for k in f.bits}
-    apart = keys + tuple(sorted(runner.split - set(keys)))
+    runner, apart = _keyed_runner(program, keys, split | {k for f in facts for k in f.bits})
     jobs = [op.call.key for code in program.files for op in code.ops
             if op.code == "SUBM" and op.call is not None and not op.call.is_module]
     marker = runner.first_cycle_marker()
@@ -183,11 +161,8 @@ def arrivals(program: Program, found: StartStates, points: Sequence[tuple[int, i
     guarantees; the paths kept apart as `found`'s were, and by the bits of `split` too; the ops of `reads` record
     the values they read (path.reads, by op index). None where a run gives up or `budget` runs out."""
     budget = budget or StepBudget()
-    runner = Runner(program)
-    runner.fork_joined = True
+    runner, apart = _keyed_runner(program, found.keys, set(found.split) | set(split))
     runner.max_steps = budget.left
-    runner.split = set(found.split) | set(split)
-    apart = found.keys + tuple(sorted(runner.split - set(found.keys)))
     marker = runner.first_cycle_marker()
     starts = [s.copy() for s in found.states] + _nc_cases([_Path({} if marker is None else {marker: 1}, {})],
                                                            found.facts)
@@ -201,6 +176,15 @@ def arrivals(program: Program, found: StartStates, points: Sequence[tuple[int, i
     finally:
         budget.spend(runner)
     return watch.found
+
+
+def _keyed_runner(program: Program, keys: tuple[Key, ...], split: set[Key]) -> tuple[Runner, tuple[Key, ...]]:
+    """A runner whose joined runs fork on `split`, and what its paths are kept apart by: the keys, then the forked
+    bits."""
+    runner = Runner(program)
+    runner.fork_joined = True
+    runner.split = split
+    return runner, keys + tuple(sorted(split - set(keys)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -374,63 +358,79 @@ _BIT_WRITES = frozenset({"ST", "STN", "SET", "RES", "SETN", "RESN"})
 _DECIDES = frozenset({"JPT", "JPF", "EMT", "EMF", "CALLT", "CALLF"})
 
 
-def item_keys(runner: Runner, table: DecisionTable, target: tuple[int, int], bits: Sequence[Key],
-              kept: Callable[[Key], bool]) -> list[tuple[tuple[Key, ...], frozenset[Key]]]:
-    """The key sets to try in turn, each with the bits to fork on, for the states an item at op `target` (file, op
-    index) that reads `bits` is judged with. Keys: the step words whose CASE leads to it; the item's bits that
-    carry a value from one cycle into the next (a subprogram reads them before writing them; a bit recomputed every
-    cycle stands for those it is computed from); those the chains deciding whether their writes run read (jumps,
-    module ends and conditional calls of the writing subprogram and its callers); then, first, the bits other
-    entries of a CASE write where an entry writes one of the item's bits (at most one entry runs a cycle) that the
-    item's writers read, and second, every carried bit those writers read. Forks: the NC operands and inputs the
-    keys' writers read, at most _MAX_FORKS (an NC fact's bits first, then those read directly). A set of more than
-    _MAX_KEYS bits is left out."""
-    program = runner.program
-    leading = runner._leading(target)
-    words = [k for k in step_words(program, set()) if kept(k) and any(
-        op.code == "CASE" and op.operand is not None and (op.operand.kind, op.operand.addr) == k
-        and any(t is not None and not t.is_module and t.key in leading for t in op.case_targets)
-        for code in program.files for op in code.ops)]
-    graph = _Feeds.of(runner, table)
-    carried = _carried(runner, table)
+@dataclasses.dataclass(frozen=True)
+class KeyChooser:
+    """What choosing an item's keys needs of a program, worked out once for all its items: who writes which bit
+    (_Feeds), the bits that carry a value from one cycle into the next, the words CASE dispatches on by their
+    entries."""
 
-    def sources(start: Sequence[Key]) -> list[Key]:
-        # the carried, NC and input bits `start` stands for: bits recomputed every cycle followed back
+    runner: Runner
+    kept: Callable[[Key], bool]
+    graph: _Feeds
+    carried: frozenset[Key]
+    dispatch: tuple[tuple[Key, frozenset[tuple[int, int]]], ...]      # (step word, the entries its CASEs call)
+
+    @staticmethod
+    def of(runner: Runner, table: DecisionTable, kept: Callable[[Key], bool]) -> KeyChooser:
+        program = runner.program
+        dispatch = tuple((word, frozenset(t.key for code in program.files for op in code.ops
+                                          if op.code == "CASE" and op.operand is not None
+                                          and (op.operand.kind, op.operand.addr) == word
+                                          for t in op.case_targets if t is not None and not t.is_module))
+                         for word in step_words(program, set()) if kept(word))
+        return KeyChooser(runner, kept, _Feeds.of(runner, table), frozenset(_carried(runner, table)), dispatch)
+
+    def keys(self, target: tuple[int, int], bits: Sequence[Key]) -> list[tuple[tuple[Key, ...], frozenset[Key]]]:
+        """The key sets to try in turn, each with the bits to fork on, for the states an item at op `target`
+        (file, op index) that reads `bits` is judged with. Keys: the step words whose CASE leads to it; the item's
+        bits that carry a value from one cycle into the next (a subprogram reads them before writing them; a bit
+        recomputed every cycle stands for those it is computed from); those the chains deciding whether their
+        writes run read (jumps, module ends and conditional calls of the writing subprogram and its callers);
+        then, first, the bits other entries of a CASE write where an entry writes one of the item's bits (at most
+        one entry runs a cycle) that the item's writers read, and second, every carried bit those writers read.
+        Forks: the NC operands and inputs the keys' writers read, at most _MAX_FORKS (an NC fact's bits first, then
+        those read directly). A set of more than _MAX_KEYS bits is left out."""
+        leading = self.runner._leading(target)
+        words = tuple(word for word, entries in self.dispatch if entries & leading)
+        graph, carried, kept = self.graph, self.carried, self.kept
+        own = [b for b in self.sources(bits) if b in carried and kept(b)]
+        deciding = [b for b in self.sources([c for b in own for c in graph.control.get(b, ())])
+                    if b in carried and kept(b)]
+        fed = [b for b in self.sources([c for b in own for c in graph.data.get(b, ())]) if b in carried and kept(b)]
+        alternatives = [b for b in fed if any(b in graph.siblings.get(a, ()) for a in own)]
+        tied = {k for fact in NC_FACTS for k in fact.bits}
+        found: list[tuple[tuple[Key, ...], frozenset[Key]]] = []
+        for chosen in (own + deciding + alternatives, own + deciding + fed):
+            keys = list(dict.fromkeys(chosen))
+            if len(keys) > _MAX_KEYS or any(words + tuple(keys) == f[0] for f in found):
+                continue
+            direct = [c for b in keys for c in graph.data.get(b, ())]
+            forks = [b for b in dict.fromkeys(self.sources(direct)) if b in NC_MODEL_OWNED or b[0] == "I"]
+            # (those an NC fact ties to other operands first, then those the writers read themselves)
+            forks.sort(key=lambda b: (b not in tied, b not in direct))
+            found.append((words + tuple(keys), frozenset(forks[:_MAX_FORKS])))
+        return found
+
+    def sources(self, start: Sequence[Key]) -> list[Key]:
+        """The carried, NC and input bits `start` stands for: bits recomputed every cycle followed back to what
+        they are computed from (_THROUGH writers at most)."""
         found: list[Key] = []
         level, seen = list(start), set(start)
         for _ in range(_THROUGH + 1):
             nxt: list[Key] = []
             for b in level:
-                if b in carried or b in NC_MODEL_OWNED or b[0] == "I":
+                if b in self.carried or b in NC_MODEL_OWNED or b[0] == "I":
                     found.append(b)
-                elif kept(b):
-                    nxt += [c for c in (*graph.data.get(b, ()), *graph.control.get(b, ())) if c not in seen]
+                elif self.kept(b):
+                    nxt += [c for c in (*self.graph.data.get(b, ()), *self.graph.control.get(b, ())) if c not in seen]
                     seen.update(nxt)
             level = nxt
         return found
 
-    own = [b for b in sources(bits) if b in carried and kept(b)]
-    deciding = [b for b in sources([c for b in own for c in graph.control.get(b, ())])
-                if b in carried and kept(b)]
-    fed = [b for b in sources([c for b in own for c in graph.data.get(b, ())]) if b in carried and kept(b)]
-    alternatives = [b for b in fed if any(b in graph.siblings.get(a, ()) for a in own)]
-    tied = {k for fact in NC_FACTS for k in fact.bits}
-    found: list[tuple[tuple[Key, ...], frozenset[Key]]] = []
-    for chosen in (own + deciding + alternatives, own + deciding + fed):
-        keys = list(dict.fromkeys(chosen))
-        if len(keys) > _MAX_KEYS or any(tuple(words) + tuple(keys) == f[0] for f in found):
-            continue
-        direct = [c for b in keys for c in graph.data.get(b, ())]
-        forks = [b for b in dict.fromkeys(sources(direct)) if b in NC_MODEL_OWNED or b[0] == "I"]
-        # (those an NC fact ties to other operands first, then those the writers read themselves)
-        forks.sort(key=lambda b: (b not in tied, b not in direct))
-        found.append((tuple(words) + tuple(keys), frozenset(forks[:_MAX_FORKS])))
-    return found
-
 
 def merged_keys(needs: Sequence[tuple[tuple[Key, ...], frozenset[Key]]]
                 ) -> list[tuple[tuple[Key, ...], frozenset[Key]]]:
-    """`needs` (item_keys of several items) with those that share their step words merged into one search (their
+    """`needs` (KeyChooser.keys of several items) with those that share their step words merged into one search (their
     bits and forks together) where the merged bits stay within _MAX_KEYS: one search then judges them all."""
     groups: dict[tuple[Key, ...], tuple[list[Key], set[Key]]] = {}
     for keys, split in needs:

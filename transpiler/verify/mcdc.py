@@ -48,10 +48,10 @@ from transpiler.verify.scenario import is_glob
 from transpiler.verify.nc_facts import NC_MODEL_OWNED, NcFact, applicable_facts
 from transpiler.verify.implication import CycleOrder, Invariant, Tied, consumed_start_zero, cycle_order, \
     inductive_invariants, program_entries, tied_vectors, write_sites
-from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, condition_vectors, followable, seen_vectors,
-                                          start_name, start_relations)
-from transpiler.verify.cycle_states import (StartStates, StepBudget, arrivals, chain_bits, item_keys,
-                                           kept_between_cycles, merged_keys, start_states)
+from transpiler.verify.cycle_paths import (Runner, Seen, StartRelation, condition_vectors, followable,
+                                          kept_between_cycles, seen_vectors, start_name, start_relations)
+from transpiler.verify.cycle_states import (KeyChooser, StartStates, StepBudget, arrivals, chain_bits, merged_keys,
+                                           start_states)
 from transpiler.verify.index_range import XValues, index_ranges, index_values
 from transpiler.verify.string_values import StringCompares
 from transpiler.verify.word_relations import word_bounds, word_relations
@@ -828,8 +828,8 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
     if not todo or len(todo) > _MAX_ITEMS_FOR_STATES or not followable(program):
         return
     outside = driven - power_on
-    kept = kept_between_cycles(program, outside)
     base = Runner(program)
+    chooser = KeyChooser.of(base, table, kept_between_cycles(program, outside))
     candidates: list[tuple[list, list, int]] = []       # (the key sets to try in turn, items, index)
     for items, k in todo:
         item = items[k]
@@ -842,7 +842,7 @@ def _explain_by_states(program: Program, table: DecisionTable, conditions: list[
         else:
             target, bits = item.compare.key, []
         if base.starts(*target)[:1] == [(0, 0)]:
-            candidates.append((item_keys(base, table, target, bits, kept), items, k))
+            candidates.append((chooser.keys(target, bits), items, k))
     budget = StepBudget(_STATES_BUDGET)
     for turn in range(max((len(c[0]) for c in candidates), default=0)):
         # the items still missing try their next key set (the narrow one first, then a wider one)
